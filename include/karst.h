@@ -1,0 +1,17 @@
+/**
+ * @file karst.h
+ * @brief Umbrella header of the karst library: include this one.
+ *
+ * The pipeline, in the order of the folders under src/:
+ * scenario -> sampling -> graph -> paths -> skeleton -> amplification ->
+ * classification -> export / metrics -> implicit geometry.
+ */
+#ifndef KARST_H
+#define KARST_H
+
+#include "karst/common.h"
+#include "karst/io.h"
+#include "karst/network.h"
+#include "karst/scenario.h"
+
+#endif

@@ -1,0 +1,185 @@
+/**
+ * @file scenario.h
+ * @brief Everything the generation pipeline of Paris et al. 2021 (§3–5)
+ *        needs, read from a YAML scenario file. Every key, unit and default
+ *        is documented in docs/scenario.md. Lengths are metres, angles degrees.
+ */
+#ifndef KARST_SCENARIO_H
+#define KARST_SCENARIO_H
+
+#include "karst/common.h"
+#include "karst/network.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum { KARST_KEYPOINT_SINK = 0, KARST_KEYPOINT_SPRING = 1, KARST_KEYPOINT_WAYPOINT = 2 } karst_keypoint_type_t;
+
+typedef struct karst_keypoint {
+  char name[64];               /**< unique; generated ("sink1", ...) when the file gives none */
+  karst_keypoint_type_t type;
+  double p[3];
+  int line;                    /**< line of the entry in the scenario file (for messages), 0 if built in code */
+} karst_keypoint_t;
+
+/** Terrain: flat, or an ESRI ASCII grid heightfield (bilinear interpolation). */
+typedef struct karst_terrain {
+  int is_grid;                 /**< 0: flat at @c elevation; 1: heightfield */
+  double elevation;            /**< flat elevation (m) */
+  char *path;                  /**< heightfield file as resolved (relative to the scenario), or NULL */
+  karst_int_t ncols, nrows;
+  double xll, yll, cellsize;   /**< lower-left corner of the grid (cell centres, ESRI "xllcenter" convention after reading) */
+  double *z;                   /**< nrows*ncols elevations, row 0 = southernmost row */
+  double zmin, zmax;           /**< range of the heightfield */
+  double lipschitz;            /**< max slope |grad h| of the bilinear surface (for implicit terrain, Appendix A) */
+} karst_terrain_t;
+
+/** Inception horizon (§4.2): plane z = elevation at @c origin, tilted by dip towards dip_direction. */
+typedef struct karst_horizon {
+  double elevation;            /**< elevation at origin (m) */
+  double dip;                  /**< degrees, [0, 90) */
+  double dip_direction;        /**< degrees clockwise from north, [0, 360) */
+  double origin[2];            /**< (x, y) where the elevation is given; default: domain centre */
+  double radius;               /**< influence radius r of the smooth step (m), > 0 */
+  int line;
+} karst_horizon_t;
+
+/** Fracture family (§4.2): plane orientation and weight w_k. */
+typedef struct karst_fracture {
+  double dip_direction;        /**< degrees clockwise from north, [0, 360) */
+  double dip;                  /**< degrees, [0, 90] */
+  double weight;               /**< w_k >= 0 */
+  int line;
+} karst_fracture_t;
+
+/** Permeability construction tree (§4.2): leaves are primitives, inner nodes combine children. */
+typedef enum {
+  KARST_PERM_SPHERE = 0,       /**< resistance inside a sphere, smooth falloff to the outside value */
+  KARST_PERM_STRATUM = 1,      /**< resistance between two elevations */
+  KARST_PERM_UNION = 2,        /**< min of children (most permeable wins) */
+  KARST_PERM_INTERSECTION = 3, /**< max of children */
+  KARST_PERM_BLEND = 4         /**< weighted mean of children (weights = child weight) */
+} karst_perm_kind_t;
+
+typedef struct karst_perm_node {
+  karst_perm_kind_t kind;
+  double resistance;           /**< leaf value in [0, 1] */
+  double center[3], radius;    /**< sphere */
+  double falloff;              /**< sphere: width (m) of the smooth transition outside the radius (>= 0) */
+  double bottom, top;          /**< stratum elevations (m), bottom < top */
+  double weight;               /**< weight of this node inside a blend (> 0, default 1) */
+  int n_children;
+  struct karst_perm_node *children;
+  int line;
+} karst_perm_node_t;
+
+typedef struct karst_permeability {
+  double background;           /**< resistance where no primitive applies, [0, 1], default 1 */
+  karst_perm_node_t *root;     /**< NULL: uniform background */
+} karst_permeability_t;
+
+/** Prescribed path (§4.2): a pair of key points whose connecting edges get a low cost. */
+typedef struct karst_prescribed_path {
+  int a, b;                    /**< indices into key_points */
+  int line;
+} karst_prescribed_path_t;
+
+/** Cost weights of c(p, d) = w0 + wL cL(p) + wF cF(d) + wπ cπ(p) (§4.2). */
+typedef struct karst_cost_weights {
+  double w0;                   /**< base cost per metre, > 0 (keeps A* admissible and paths finite) */
+  double horizon;              /**< wL >= 0 */
+  double fracture;             /**< wF >= 0 */
+  double permeability;         /**< wπ >= 0 */
+  double prescribed;           /**< cost per metre multiplier on prescribed paths, in (0, 1] */
+} karst_cost_weights_t;
+
+typedef struct karst_sampling {
+  double fill_radius;          /**< Poisson radius of the fill samples (m), > 0 */
+  double feature_radius;       /**< Poisson radius on horizons, water table, permeable zones (m), > 0 */
+  double permeable_threshold;  /**< resistance below which space is sampled at feature radius, [0,1] */
+  double feature_band;         /**< half-thickness of the sampled layer around horizons/water table (m) */
+  int k;                       /**< neighbours in the kNN graph, >= 1, default 40 */
+  karst_int_t max_samples;     /**< safety cap, default 5e6 */
+} karst_sampling_t;
+
+typedef struct karst_amplification {
+  int steps;                   /**< >= 0 */
+  int points;                  /**< new points per step, >= 0 */
+  double dead_end_fraction;    /**< [0, 1] */
+} karst_amplification_t;
+
+/** Radius range per tunnel type (uniform draw in [min, max]). */
+typedef struct karst_radius_range {
+  double min, max;
+} karst_radius_range_t;
+
+typedef struct karst_classification {
+  double vertical_angle;       /**< segments steeper than this (degrees) are vertical, default 60 */
+  double water_table_band;     /**< |z - water table| below this (m) counts as "at the water table", default 5 */
+  double epikarst_depth;       /**< depth below terrain (m) of the epikarst zone, default 10 */
+  double chamber_resistance;   /**< resistance below this makes a chamber, default 0.05 */
+  karst_radius_range_t radius[KARST_TUNNEL_TYPE_COUNT]; /**< indexed by karst_tunnel_type_t */
+} karst_classification_t;
+
+typedef struct karst_scenario {
+  char *path;                  /**< file the scenario was read from (NULL if built in code) */
+  char *name;
+  double domain_min[3], domain_max[3];
+  karst_terrain_t terrain;
+  double water_table;          /**< elevation (m) */
+  int n_horizons;
+  karst_horizon_t *horizons;
+  int n_fractures;
+  karst_fracture_t *fractures;
+  karst_permeability_t permeability;
+  int n_key_points;
+  karst_keypoint_t *key_points;
+  int n_prescribed;
+  karst_prescribed_path_t *prescribed;
+  karst_cost_weights_t cost;
+  karst_sampling_t sampling;
+  double gamma;                /**< γ-skeleton parameter, > 0 (§5.1) */
+  karst_amplification_t amplification;
+  double tortuosity;           /**< θ in [0, 1] (§5.2) */
+  karst_classification_t classification;
+  uint64_t seed;
+  int realisations;            /**< >= 1 */
+} karst_scenario_t;
+
+/** Fill @p sc with every documented default (empty key-point list, flat terrain at 0). */
+void karst_scenario_init(karst_scenario_t *sc);
+/** Release what a scenario holds. */
+void karst_scenario_destroy(karst_scenario_t *sc);
+
+/**
+ * Read and validate a YAML scenario. On failure returns an error code and
+ * ctx->errmsg holds "FILE:LINE:COLUMN: message" naming the field and value.
+ */
+karst_error_t karst_scenario_load(karst_ctx_t *ctx, const char *path, karst_scenario_t *sc);
+
+/** Check the cross-field rules (key points inside the domain and below the terrain, a spring present ...). */
+karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc);
+
+/** Terrain elevation at (x, y) (bilinear on the grid, clamped at its border). */
+double karst_terrain_height(const karst_terrain_t *t, double x, double y);
+
+/** Read an ESRI ASCII grid (.asc) into @p t; errors name the file, line and field. */
+karst_error_t karst_terrain_load_grid(karst_ctx_t *ctx, const char *path, karst_terrain_t *t);
+
+/** Elevation of horizon @p h at (x, y). */
+double karst_horizon_elevation(const karst_horizon_t *h, double x, double y);
+
+/** Unit normal (x east, y north, z up) of a plane given by dip direction and dip (degrees). */
+void karst_plane_normal(double dip_direction, double dip, double n[3]);
+
+/** Resistance π(p) in [0, 1] from the permeability tree (§4.2). */
+double karst_permeability_eval(const karst_permeability_t *perm, const double p[3]);
+
+/** Stable hash (FNV-1a 64) of a file's bytes, as 16 hex digits in @p out (17 bytes). */
+karst_error_t karst_file_hash(karst_ctx_t *ctx, const char *path, char out[17]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* KARST_SCENARIO_H */

@@ -1,0 +1,144 @@
+/* Terminal logging, progress display, interruption and argument parsing for the CLI. */
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli.h"
+
+static volatile int interrupt_flag;
+static void on_signal(int sig) {
+  (void)sig;
+  interrupt_flag = 1;
+}
+
+static void log_stderr(void *user, karst_log_level_t level, const char *msg) {
+  (void)user;
+  static const char *const tag[] = {"error", "warning", "info", "debug"};
+  fprintf(stderr, "karst: %s: %s\n", tag[level], msg);
+}
+
+typedef struct {
+  int tty;
+  double t0, last;
+  char stage[64];
+} progress_state_t;
+static progress_state_t progress_state;
+
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* On a terminal: one redrawn bar with rate and time left. Elsewhere: silent. */
+static void progress_terminal(void *user, const char *stage, double done, double total) {
+  progress_state_t *ps = user;
+  double t = now_s();
+  if (strncmp(ps->stage, stage, sizeof ps->stage - 1) != 0) {
+    snprintf(ps->stage, sizeof ps->stage, "%s", stage);
+    ps->t0 = t;
+    ps->last = 0;
+  }
+  int finished = total > 0 && done >= total;
+  if (!finished && t - ps->last < 0.1) return;
+  ps->last = t;
+  double frac = total > 0 ? done / total : 0;
+  if (frac > 1) frac = 1;
+  int width = 30, filled = (int)(frac * width);
+  char bar[64];
+  for (int i = 0; i < width; i++) bar[i] = i < filled ? '#' : '.';
+  bar[width] = '\0';
+  double el = t - ps->t0, left = frac > 0 ? el * (1 - frac) / frac : NAN;
+  fprintf(stderr, "\r%-16s [%s] %5.1f%%  %6.0fs left ", stage, bar, 100 * frac,
+          isfinite(left) ? left : 0.0);
+  if (finished) fputc('\n', stderr);
+  fflush(stderr);
+}
+
+void cli_ctx_init(karst_ctx_t *ctx, int quiet, int verbose) {
+  karst_ctx_init(ctx);
+  ctx->log = log_stderr;
+  ctx->verbosity = quiet ? KARST_LOG_ERROR : (verbose ? KARST_LOG_DEBUG : KARST_LOG_WARNING);
+  long n = sysconf(_SC_NPROCESSORS_ONLN);
+  ctx->nthreads = n > 0 ? (int)n : 1;
+  memset(&progress_state, 0, sizeof progress_state);
+  progress_state.tty = isatty(STDERR_FILENO);
+  if (!quiet && progress_state.tty) {
+    ctx->progress = progress_terminal;
+    ctx->progress_user = &progress_state;
+  }
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, NULL);
+  sigaction(SIGTERM, &sa, NULL);
+  ctx->interrupt = &interrupt_flag;
+}
+
+int cli_fail(const char *cmd, const karst_ctx_t *ctx, karst_error_t err) {
+  if (ctx && ctx->errmsg[0])
+    fprintf(stderr, "karst %s: %s\n", cmd, ctx->errmsg);
+  else
+    fprintf(stderr, "karst %s: %s\n", cmd, karst_strerror(err));
+  return CLI_ERROR;
+}
+
+int cli_usage_error(const char *cmd, const char *fmt, ...) {
+  fprintf(stderr, "karst %s: ", cmd);
+  va_list ap;
+  va_start(ap, fmt);
+  vfprintf(stderr, fmt, ap);
+  va_end(ap);
+  fputc('\n', stderr);
+  const cli_command_t *c = cli_find_command(cmd);
+  if (c) {
+    const char *nl = strchr(c->usage, '\n');
+    fprintf(stderr, "%.*s\n", nl ? (int)(nl - c->usage) : (int)strlen(c->usage), c->usage);
+  }
+  fprintf(stderr, "Run 'karst help %s' for details.\n", cmd);
+  return CLI_USAGE;
+}
+
+void cli_print_help(const cli_command_t *cmd) {
+  printf("karst %s: %s\n\n%s", cmd->name, cmd->summary, cmd->usage);
+}
+
+int cli_is_help(const char *arg) { return strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0; }
+
+int cli_parse_u64(const char *s, uint64_t *out) {
+  if (!s || !*s || *s == '-') return -1;
+  char *end;
+  errno = 0;
+  unsigned long long v = strtoull(s, &end, 10);
+  if (errno || *end) return -1;
+  *out = (uint64_t)v;
+  return 0;
+}
+
+int cli_parse_int(const char *s, int *out) {
+  if (!s || !*s) return -1;
+  char *end;
+  errno = 0;
+  long v = strtol(s, &end, 10);
+  if (errno || *end || v < -2147483647L || v > 2147483647L) return -1;
+  *out = (int)v;
+  return 0;
+}
+
+int cli_parse_double(const char *s, double *out) {
+  if (!s || !*s) return -1;
+  char *end;
+  errno = 0;
+  double v = strtod(s, &end);
+  if (errno || *end || !isfinite(v)) return -1;
+  *out = v;
+  return 0;
+}

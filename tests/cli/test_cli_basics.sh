@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# The command-line contract: help, version, exit codes 0 / 1 / 2.
+set -u
+KARST=$1
+fail=0
+check() { # expected-exit description command...
+  local want=$1 what=$2; shift 2
+  "$@" >/tmp/karst_cli_out.$$ 2>&1; local got=$?
+  if [ "$got" != "$want" ]; then echo "FAIL: $what: exit $got, expected $want"; cat /tmp/karst_cli_out.$$; fail=1; else echo "ok: $what"; fi
+}
+check 0 "--help" "$KARST" --help
+check 0 "--version" "$KARST" --version
+"$KARST" --version | grep -Eq '^karst [0-9]+\.[0-9]+\.[0-9]+$' || { echo "FAIL: version format"; fail=1; }
+check 0 "help validate" "$KARST" help validate
+"$KARST" help validate | grep -q "FILE:LINE:COLUMN" || { echo "FAIL: help validate text"; fail=1; }
+check 2 "no command" "$KARST"
+check 2 "unknown command" "$KARST" frobnicate
+check 2 "help unknown" "$KARST" help frobnicate
+check 2 "validate without file" "$KARST" validate
+check 2 "validate bad option" "$KARST" validate --frob x.yaml
+check 1 "validate missing file" "$KARST" validate /nonexistent/scenario.yaml
+for c in validate generate metrics ensemble compare report mesh; do
+  "$KARST" --help | grep -q "^  $c " || { echo "FAIL: $c not listed in --help"; fail=1; }
+done
+rm -f /tmp/karst_cli_out.$$
+exit $fail

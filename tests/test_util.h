@@ -1,0 +1,27 @@
+/* Helpers shared by the unit tests (cmocka 1.1.5 has no floating-point asserts). */
+#ifndef KARST_TEST_UTIL_H
+#define KARST_TEST_UTIL_H
+#include <math.h>
+#include <stdio.h>
+
+/* |a - b| <= tol, printing both values on failure. */
+#define assert_close(a, b, tol)                                                                   \
+  do {                                                                                            \
+    double a_ = (a), b_ = (b), t_ = (tol);                                                        \
+    if (!(fabs(a_ - b_) <= t_)) {                                                                 \
+      print_error("%s = %.17g, expected %s = %.17g (tolerance %g)\n", #a, a_, #b, b_, t_);        \
+      fail();                                                                                     \
+    }                                                                                             \
+  } while (0)
+
+/* Relative agreement: |a - b| <= rel * max(|a|, |b|) (exact when both are 0). */
+#define assert_rel(a, b, rel)                                                                     \
+  do {                                                                                            \
+    double a_ = (a), b_ = (b), r_ = (rel);                                                        \
+    double m_ = fmax(fabs(a_), fabs(b_));                                                         \
+    if (!(fabs(a_ - b_) <= r_ * m_)) {                                                            \
+      print_error("%s = %.17g, expected %s = %.17g (relative tolerance %g)\n", #a, a_, #b, b_, r_); \
+      fail();                                                                                     \
+    }                                                                                             \
+  } while (0)
+#endif

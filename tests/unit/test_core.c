@@ -1,0 +1,161 @@
+/* Core conventions: error list, context, random streams, atomic output, network storage. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "karst.h"
+#include "test_util.h"
+
+static void test_error_list(void **state) {
+  (void)state;
+  assert_string_equal(karst_strerror(KARST_SUCCESS), "success");
+  assert_string_equal(karst_error_name(KARST_EPARSE), "KARST_EPARSE");
+  assert_string_equal(karst_strerror((karst_error_t)9999), "unknown error");
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  assert_int_equal(karst_set_error(&ctx, KARST_ERANGE, "f.yaml:%d:%d: dip %g", 3, 5, 135.0),
+                   KARST_ERANGE);
+  assert_string_equal(ctx.errmsg, "f.yaml:3:5: dip 135");
+  assert_int_equal(ctx.errcode, KARST_ERANGE);
+  assert_int_equal(karst_set_error(NULL, KARST_EIO, "x"), KARST_EIO);
+}
+
+/* Same (seed, stream) gives the same sequence; another stream or seed differs. */
+static void test_rng_streams(void **state) {
+  (void)state;
+  karst_rng_t a, b, c, d;
+  karst_rng_init(&a, 42, 7);
+  karst_rng_init(&b, 42, 7);
+  karst_rng_init(&c, 42, 8);
+  karst_rng_init(&d, 43, 7);
+  int same_c = 0, same_d = 0;
+  for (int i = 0; i < 1000; i++) {
+    uint64_t x = karst_rng_u64(&a);
+    assert_true(x == karst_rng_u64(&b));
+    same_c += x == karst_rng_u64(&c);
+    same_d += x == karst_rng_u64(&d);
+  }
+  assert_int_equal(same_c, 0);
+  assert_int_equal(same_d, 0);
+}
+
+/* Moments of the uniform and Gaussian variates against their exact values,
+ * with 5-sigma tolerances for n = 200000 draws. */
+static void test_rng_moments(void **state) {
+  (void)state;
+  karst_rng_t r;
+  karst_rng_init(&r, 1, 0);
+  const int n = 200000;
+  double su = 0, su2 = 0, sg = 0, sg2 = 0;
+  for (int i = 0; i < n; i++) {
+    double u = karst_rng_uniform(&r);
+    assert_true(u >= 0 && u < 1);
+    su += u;
+    su2 += u * u;
+    double g = karst_rng_gaussian(&r);
+    sg += g;
+    sg2 += g * g;
+  }
+  /* uniform: mean 1/2 (sd 1/sqrt(12 n)), E[u^2] = 1/3 */
+  assert_true(fabs(su / n - 0.5) < 5 * sqrt(1.0 / 12 / n));
+  assert_true(fabs(su2 / n - 1.0 / 3) < 0.003);
+  /* standard normal: mean 0 (sd 1/sqrt(n)), variance 1 (sd sqrt(2/n)) */
+  assert_true(fabs(sg / n) < 5 / sqrt(n));
+  assert_true(fabs(sg2 / n - 1) < 5 * sqrt(2.0 / n));
+  /* below(n): every value of [0, 6) appears with frequency 1/6 within 5 sigma */
+  int cnt[6] = {0};
+  for (int i = 0; i < 60000; i++) {
+    uint64_t k = karst_rng_below(&r, 6);
+    assert_true(k < 6);
+    cnt[k]++;
+  }
+  for (int k = 0; k < 6; k++) assert_true(fabs(cnt[k] - 10000.0) < 5 * sqrt(60000 * (1 / 6.0) * (5 / 6.0)));
+  /* unit vectors have norm 1 */
+  for (int i = 0; i < 100; i++) {
+    double v[3];
+    karst_rng_unit_vector(&r, v);
+    assert_true(fabs(v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - 1) < 1e-12);
+  }
+}
+
+static void test_network_storage(void **state) {
+  (void)state;
+  karst_network_t net;
+  karst_network_init(&net);
+  double *radius;
+  assert_int_equal(karst_network_attr_add(&net, KARST_ATTR_EDGE, "radius", 1, 0, &radius), 0);
+  for (int i = 0; i < 200; i++) assert_int_equal(karst_network_add_node(&net, i, 0, 0, NULL), 0);
+  for (int i = 0; i < 199; i++) {
+    karst_int_t e;
+    assert_int_equal(karst_network_add_edge(&net, i, i + 1, &e), 0);
+    karst_network_attr_find(&net, KARST_ATTR_EDGE, "radius")->data[e] = 0.5 * i;
+  }
+  assert_int_equal(karst_network_add_edge(&net, 0, 200, NULL), KARST_EINVAL);
+  assert_int_equal(karst_network_set_label(&net, 3, "st3"), 0);
+  assert_int_equal(karst_network_set_crs(&net, "EPSG:7405"), 0);
+  karst_network_t copy;
+  assert_int_equal(karst_network_copy(&copy, &net), 0);
+  karst_network_destroy(&net);
+  assert_int_equal(copy.n_nodes, 200);
+  assert_int_equal(copy.n_edges, 199);
+  assert_close(karst_network_attr_find(&copy, KARST_ATTR_EDGE, "radius")->data[198], 99.0, 0);
+  assert_close(karst_network_edge_length(&copy, 10), 1.0, 1e-15);
+  assert_string_equal(copy.node_labels[3], "st3");
+  assert_null(copy.node_labels[4]);
+  assert_string_equal(copy.crs, "EPSG:7405");
+  assert_int_equal(karst_tunnel_type_from_name("keyhole"), KARST_TUNNEL_KEYHOLE);
+  assert_int_equal(karst_tunnel_type_from_name("cave"), -1);
+  karst_network_destroy(&copy);
+}
+
+/* An aborted atomic write leaves nothing; a committed one leaves exactly the file. */
+static void test_atomic_file(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  char dir[] = "/tmp/karst_atomic_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  char path[256];
+  snprintf(path, sizeof path, "%s/sub/out.txt", dir);
+  char sub[256];
+  snprintf(sub, sizeof sub, "%s/sub", dir);
+  assert_int_equal(karst_mkdir_p(&ctx, sub), 0);
+  karst_atomic_file_t f;
+  assert_int_equal(karst_atomic_open(&ctx, &f, path, "w"), 0);
+  fputs("half", f.fp);
+  karst_atomic_abort(&f);
+  assert_int_not_equal(access(path, F_OK), 0);
+  assert_int_equal(karst_atomic_open(&ctx, &f, path, "w"), 0);
+  fputs("whole\n", f.fp);
+  assert_int_equal(karst_atomic_commit(&ctx, &f), 0);
+  FILE *in = fopen(path, "r");
+  assert_non_null(in);
+  char buf[16] = {0};
+  assert_non_null(fgets(buf, sizeof buf, in));
+  fclose(in);
+  assert_string_equal(buf, "whole\n");
+  /* nothing else is left in the directory */
+  char cmd[600];
+  snprintf(cmd, sizeof cmd, "test $(ls -A %s | wc -l) -eq 1", sub);
+  assert_int_equal(system(cmd), 0);
+  assert_int_equal(karst_atomic_open(&ctx, &f, "/nonexistent-dir/x.txt", "w"), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "/nonexistent-dir/x.txt"));
+  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+  assert_int_equal(system(cmd), 0);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_error_list),     cmocka_unit_test(test_rng_streams),
+      cmocka_unit_test(test_rng_moments),    cmocka_unit_test(test_network_storage),
+      cmocka_unit_test(test_atomic_file),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
