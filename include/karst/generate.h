@@ -1,0 +1,61 @@
+/**
+ * @file generate.h
+ * @brief One realisation of the generation pipeline of Paris et al. 2021
+ *        (§4–5): scenario -> sampling -> graph -> paths -> skeleton ->
+ *        amplification -> classification -> network.
+ */
+#ifndef KARST_GENERATE_H
+#define KARST_GENERATE_H
+
+#include "karst/common.h"
+#include "karst/graph.h"
+#include "karst/network.h"
+#include "karst/scenario.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum {
+  KARST_STAGE_SAMPLING,
+  KARST_STAGE_GRAPH,
+  KARST_STAGE_COST,
+  KARST_STAGE_PATHS,
+  KARST_STAGE_SKELETON,
+  KARST_STAGE_AMPLIFICATION,
+  KARST_STAGE_CLASSIFICATION,
+  KARST_STAGE_COUNT
+};
+
+/** What a realisation produced besides the network: counts and per-stage wall times. */
+typedef struct karst_generate_stats {
+  karst_int_t n_samples, n_graph_edges, n_key_points, n_skeleton_paths;
+  karst_int_t n_nodes, n_edges;
+  double total_length;
+  double stage_seconds[KARST_STAGE_COUNT];
+  size_t peak_bytes; /**< peak resident memory of the process (getrusage), for benchmarks */
+} karst_generate_stats_t;
+
+/**
+ * Generate realisation @p realisation of @p sc with base seed @p seed.
+ * Every random draw comes from streams derived from (seed, realisation), so
+ * the result does not depend on threads or processes. On success @p net
+ * (initialised by the caller) holds the network with node attributes
+ * "kind" (karst_node_kind_t), "water_table_distance" (m, positive above),
+ * and edge attributes "tunnel_type", "radius", "cost", "vadose" (1 above the
+ * water table), "branch_id", "amplification_step". When @p samples is not
+ * NULL it receives the sample cloud. @p stats may be NULL.
+ * A key point that cannot be connected fails with KARST_EUNREACHABLE and
+ * names the key point in ctx->errmsg.
+ */
+karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint64_t seed,
+                             uint64_t realisation, karst_network_t *net, karst_samples_t *samples,
+                             karst_generate_stats_t *stats);
+
+/** Name of a stage ("sampling", "graph", ...). */
+const char *karst_stage_name(int stage);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

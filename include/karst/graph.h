@@ -1,0 +1,78 @@
+/**
+ * @file graph.h
+ * @brief Sampling of the bedrock and the geometric graph on the samples
+ *        (Paris et al. 2021, §4.1–4.2): the structures passed between the
+ *        sampling, graph, cost and paths stages.
+ */
+#ifndef KARST_GRAPH_H
+#define KARST_GRAPH_H
+
+#include "karst/common.h"
+#include "karst/scenario.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Which feature produced a sample (written as point data in samples.vtp). */
+#define KARST_SAMPLE_SOURCE_LIST(X)                                            \
+  X(KARST_SAMPLE_KEYPOINT, "key_point")                                        \
+  X(KARST_SAMPLE_HORIZON, "horizon")                                           \
+  X(KARST_SAMPLE_WATER_TABLE, "water_table")                                   \
+  X(KARST_SAMPLE_PERMEABILITY, "permeability")                                 \
+  X(KARST_SAMPLE_FILL, "fill")                                                 \
+  X(KARST_SAMPLE_AMPLIFICATION, "amplification")
+
+typedef enum {
+#define KARST_X_ENUM(code, name) code,
+  KARST_SAMPLE_SOURCE_LIST(KARST_X_ENUM)
+#undef KARST_X_ENUM
+      KARST_SAMPLE_SOURCE_COUNT
+} karst_sample_source_t;
+
+const char *karst_sample_source_name(karst_sample_source_t s);
+
+/** A point cloud in the bedrock. Samples 0 .. n_key_points-1 are the scenario's key points, in order. */
+typedef struct karst_samples {
+  karst_int_t n, cap;
+  double *xyz;           /**< 3 * n */
+  unsigned char *source; /**< karst_sample_source_t per sample */
+  karst_int_t n_key_points;
+} karst_samples_t;
+
+void karst_samples_init(karst_samples_t *s);
+void karst_samples_destroy(karst_samples_t *s);
+karst_error_t karst_samples_add(karst_samples_t *s, const double p[3], karst_sample_source_t src);
+
+/**
+ * Undirected weighted graph in compressed sparse row form: the neighbours of
+ * vertex v are adj[offsets[v] .. offsets[v+1]-1] and the cost of the arc
+ * v -> adj[i] is cost[i]. Every edge appears in both directions with the
+ * same cost (the line integral of Paris et al. 2021, §4, is symmetric
+ * because c_F depends on (n·d)^2). A cost of INFINITY marks an excluded edge.
+ */
+typedef struct karst_graph {
+  karst_int_t n;          /**< vertices */
+  karst_int_t n_arcs;     /**< directed arcs = 2 * undirected edges */
+  const double *xyz;      /**< vertex positions (3 * n), borrowed from the samples */
+  karst_int_t *offsets;   /**< n + 1 */
+  karst_int_t *adj;       /**< n_arcs */
+  double *cost;           /**< n_arcs */
+} karst_graph_t;
+
+void karst_graph_init(karst_graph_t *g);
+void karst_graph_destroy(karst_graph_t *g);
+
+/**
+ * Build a CSR graph from an undirected edge list (u[i], v[i], cost[i]),
+ * dropping self-loops and keeping the cheaper of duplicated edges.
+ * O(n + m log m).
+ */
+karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
+                                     const double *xyz, karst_int_t m, const karst_int_t *u,
+                                     const karst_int_t *v, const double *cost);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

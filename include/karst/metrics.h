@@ -1,0 +1,63 @@
+/**
+ * @file metrics.h
+ * @brief Metrics of Collon et al. 2017 exactly as Karstnet 1.2.0 computes
+ *        them (docs/metrics.md), plus reduced- and full-graph counts.
+ */
+#ifndef KARST_METRICS_H
+#define KARST_METRICS_H
+
+#include "karst/common.h"
+#include "karst/network.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Every value; undefined ones are NAN (printed as null / empty). */
+typedef struct karst_metrics {
+  /* full graph */
+  karst_int_t nodes, edges;
+  double total_length;        /**< sum of 3-D edge lengths (m) */
+  double vertical_extent;     /**< max z - min z (m) */
+  /* the ten metrics, names as Karstnet prints them */
+  double mean_length;
+  double cv_length;
+  double length_entropy;
+  double tortuosity;
+  double orientation_entropy;
+  double aspl;
+  double cpd;
+  double mean_degree;
+  double cv_degree;
+  double correlation_vertex_degree;
+  /* reduced graph Gs */
+  karst_int_t reduced_nodes, reduced_edges, components, cycles, extremities, junctions;
+  karst_int_t branches;
+  double howard_alpha, howard_beta, howard_gamma;
+} karst_metrics_t;
+
+typedef struct karst_metrics_options {
+  double azimuth_rotation;    /**< degrees added to every azimuth before the orientation entropy (e.g. meridian convergence for --true-north); default 0 */
+} karst_metrics_options_t;
+
+void karst_metrics_options_init(karst_metrics_options_t *opt);
+
+/** Compute every metric of @p net (see docs/metrics.md). */
+karst_error_t karst_metrics_compute(karst_ctx_t *ctx, const karst_network_t *net,
+                                    const karst_metrics_options_t *opt, karst_metrics_t *out);
+
+/** Metric table: name (JSON/CSV key), offset in karst_metrics_t, integer or double. */
+typedef struct karst_metric_field {
+  const char *key;
+  size_t offset;
+  int is_int;
+} karst_metric_field_t;
+/** The fields in output order; *n receives the count. */
+const karst_metric_field_t *karst_metric_fields(int *n);
+/** Value of a field as a double (integers converted). */
+double karst_metric_value(const karst_metrics_t *m, const karst_metric_field_t *f);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,64 @@
+/**
+ * @file vtk.h
+ * @brief VTK XML files for ParaView (thin C interface over VTK in
+ *        src/io/vtk_shim.cpp). Files are written with inline binary data
+ *        (ParaView 5.11 on Debian reads 0 points from appended mode), to a
+ *        temporary name and renamed into place.
+ */
+#ifndef KARST_VTK_H
+#define KARST_VTK_H
+
+#include "karst/common.h"
+#include "karst/graph.h"
+#include "karst/network.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/**
+ * Write a network as .vtp polylines (one line cell per edge), with every
+ * node attribute as point data and every edge attribute as cell data
+ * (integer attributes as Int32), node labels as a string array "label" when
+ * present, and the CRS / title as field data.
+ */
+karst_error_t karst_vtk_write_network(karst_ctx_t *ctx, const char *path,
+                                      const karst_network_t *net);
+/** Read a .vtp written by karst (or any PolyData with lines) back into @p net. */
+karst_error_t karst_vtk_read_network(karst_ctx_t *ctx, const char *path, karst_network_t *net);
+
+/** Write a sample cloud as .vtp vertices with a "source" point array (karst_sample_source_t). */
+karst_error_t karst_vtk_write_samples(karst_ctx_t *ctx, const char *path,
+                                      const karst_samples_t *s);
+
+/** A triangle mesh with optional per-triangle and per-vertex integer/double arrays. */
+typedef struct karst_mesh {
+  karst_int_t n_vertices, n_triangles;
+  double *xyz;          /**< 3 * n_vertices */
+  karst_int_t *tri;     /**< 3 * n_triangles, counter-clockwise seen from outside */
+  int *tri_label;       /**< per-triangle label (e.g. tunnel type) or NULL */
+  const char *tri_label_name; /**< name of that cell array (e.g. "tunnel_type") */
+} karst_mesh_t;
+
+/** Write a triangle mesh as .vtp polygons. */
+karst_error_t karst_vtk_write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m);
+
+/**
+ * Write a scalar field on a regular grid as .vti image data: dims[3] points,
+ * origin and spacing in metres, values x fastest, named @p name.
+ */
+karst_error_t karst_vtk_write_image(karst_ctx_t *ctx, const char *path, const int dims[3],
+                                    const double origin[3], const double spacing[3],
+                                    const float *values, const char *name);
+
+/**
+ * Write a ParaView collection (.pvd) listing @p n files (paths relative to
+ * the .pvd) as time steps 0 .. n-1.
+ */
+karst_error_t karst_vtk_write_pvd(karst_ctx_t *ctx, const char *path, int n,
+                                  const char *const *files);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
