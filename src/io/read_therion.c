@@ -456,7 +456,7 @@ karst_error_t karst_read_therion_sql(karst_ctx_t *ctx, const char *path, karst_n
                             path, a > b ? a : b, (long long)tb.st[i].id, a > b ? b : a);
       goto cleanup;
     }
-  qsort(tb.flagged, tb.n_fl, sizeof *tb.flagged, cmp_i64);
+  if (tb.n_fl) qsort(tb.flagged, tb.n_fl, sizeof *tb.flagged, cmp_i64);
   for (size_t i = 0; i < tb.n_sh; i++) {
     const shot_t *s = &tb.sh[i];
     const station_t *a = find_station(&tb, s->from), *b = find_station(&tb, s->to);
@@ -466,7 +466,7 @@ karst_error_t karst_read_therion_sql(karst_ctx_t *ctx, const char *path, karst_n
                             (long long)(a ? s->to : s->from));
       goto cleanup;
     }
-    if (bsearch(&s->id, tb.flagged, tb.n_fl, sizeof *tb.flagged, cmp_i64)) {
+    if (tb.n_fl && bsearch(&s->id, tb.flagged, tb.n_fl, sizeof *tb.flagged, cmp_i64)) {
       n_flag++;
       continue;
     }
