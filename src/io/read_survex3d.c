@@ -157,8 +157,8 @@ static char *dup_n(const char *s, size_t n) {
 /* Header: id line, "v8", title\0cs[\0separator], timestamp, file-wide flags byte. */
 static karst_error_t read_header(reader_t *r, karst_network_t *net) {
   karst_error_t err;
-  const char *s;
-  size_t len;
+  const char *s = NULL;
+  size_t len = 0;
   if (r->n < sizeof MAGIC - 1 || memcmp(r->b, MAGIC, sizeof MAGIC - 1) != 0) {
     if (r->n < sizeof MAGIC - 1 && memcmp(r->b, MAGIC, r->n) == 0)
       return fail(r, r->n, KARST_EPARSE, "truncated file: it ends inside the file identifier");
