@@ -77,7 +77,17 @@ typedef struct karst_metrics_observed {
   int n_caves;
   double min[KARST_METRIC_FIELDS_MAX];
   double max[KARST_METRIC_FIELDS_MAX];
+  /** Half a unit in the last printed digit of min / max: the table is rounded. */
+  double min_rounding[KARST_METRIC_FIELDS_MAX];
+  double max_rounding[KARST_METRIC_FIELDS_MAX];
 } karst_metrics_observed_t;
+
+/**
+ * Non-zero when @p value of field @p k lies outside the observed range by more
+ * than the rounding of the printed bound (so a published cave is never outside
+ * its own range). 0 for NAN values or fields without a range.
+ */
+int karst_metrics_observed_outside(const karst_metrics_observed_t *obs, int k, double value);
 
 /**
  * Read the published table (CSV with '#' comment lines, a header, quoted
