@@ -36,9 +36,9 @@ void karst_i_csr_destroy(karst_i_csr_t *g);
  * @param dist_sum   n values (may be NULL): for source s, the sum of hop
  *        distances from s to every node it reaches.
  *
- * Sources are cut into blocks whose size depends only on n; threads
- * (ctx->nthreads) work on consecutive blocks and the block results are added
- * in block order, so the result is the same for every thread count.
+ * Sources are cut into blocks whose size depends only on n; the threads
+ * (ctx->nthreads) claim blocks of a wave dynamically, and the block results are
+ * added in block order, so the result is the same for every thread count.
  * Time O(n·(n+m)), memory O(nthreads·n).
  * Brandes U. (2001) A faster algorithm for betweenness centrality, J. Math.
  * Sociol. 25(2):163-177, Algorithm 1.

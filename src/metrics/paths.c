@@ -5,6 +5,7 @@
  * two passes (igraph_betweenness + igraph_distances); and because igraph's
  * betweenness is sequential. bench/bench_metrics.c measures both. */
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -56,19 +57,30 @@ typedef struct {
   const karst_i_csr_t *g;
   karst_int_t *dist, *queue;
   double *sigma, *delta;
-  double *part;       /* betweenness of the current block */
-  karst_int_t *dsum;  /* shared dist_sum (each source written by one thread) */
-  karst_int_t s0, s1; /* sources of the current block */
+  karst_int_t *dsum; /* shared dist_sum (each source written by one thread) */
 } worker_t;
 
-/* Brandes' Algorithm 1 for unweighted graphs; predecessors are found again by
- * scanning neighbours at distance d-1 instead of storing lists. */
-static void bfs_block(worker_t *w) {
+/* One wave: blocks first .. first+count-1, claimed by the threads one at a time. */
+typedef struct {
+  karst_int_t first, count, bs, n;
+  double **part; /* count arrays of n: the betweenness of each block */
+  atomic_llong next;
+} wave_t;
+
+typedef struct {
+  worker_t *w;
+  wave_t *wave;
+} thread_arg_t;
+
+/* Brandes' Algorithm 1 for unweighted graphs on sources s0..s1-1, adding into @p part;
+ * predecessors are found again by scanning neighbours at distance d-1 instead of being
+ * stored. */
+static void bfs_block(worker_t *w, karst_int_t s0, karst_int_t s1, double *part) {
   const karst_int_t *off = w->g->off, *adj = w->g->adj;
   karst_int_t *dist = w->dist, *q = w->queue;
   double *sigma = w->sigma, *delta = w->delta;
-  memset(w->part, 0, (size_t)w->g->n * sizeof *w->part);
-  for (karst_int_t s = w->s0; s < w->s1; s++) {
+  memset(part, 0, (size_t)w->g->n * sizeof *part);
+  for (karst_int_t s = s0; s < s1; s++) {
     karst_int_t head = 0, tail = 0, sum = 0;
     dist[s] = 0;
     sigma[s] = 1.0;
@@ -95,7 +107,7 @@ static void bfs_block(worker_t *w) {
         karst_int_t v = adj[k];
         if (dist[v] == dp) delta[v] += sigma[v] * coeff;
       }
-      w->part[x] += delta[x];
+      part[x] += delta[x];
     }
     for (karst_int_t i = 0; i < tail; i++) {
       karst_int_t x = q[i];
@@ -107,7 +119,15 @@ static void bfs_block(worker_t *w) {
 }
 
 static void *bfs_thread(void *arg) {
-  bfs_block(arg);
+  thread_arg_t *a = arg;
+  wave_t *wv = a->wave;
+  for (;;) {
+    long long i = atomic_fetch_add(&wv->next, 1);
+    if (i >= wv->count) break;
+    karst_int_t s0 = (wv->first + i) * wv->bs;
+    karst_int_t s1 = s0 + wv->bs < wv->n ? s0 + wv->bs : wv->n;
+    bfs_block(a->w, s0, s1, wv->part[i]);
+  }
   return NULL;
 }
 
@@ -119,6 +139,10 @@ static karst_int_t block_size(karst_int_t n) {
   return b < 32 ? 32 : b;
 }
 
+/* Blocks per thread and wave: threads claim blocks dynamically inside a wave, so a
+ * thread slowed down by another process does not hold the others back. */
+enum { BLOCKS_PER_THREAD = 4 };
+
 karst_error_t karst_i_paths_all_sources(karst_ctx_t *ctx, const karst_i_csr_t *g,
                                         double *betweenness, karst_int_t *dist_sum) {
   karst_error_t err = KARST_SUCCESS;
@@ -127,45 +151,53 @@ karst_error_t karst_i_paths_all_sources(karst_ctx_t *ctx, const karst_i_csr_t *g
   const karst_int_t bs = block_size(n);
   const karst_int_t nblocks = (n + bs - 1) / bs;
   if (nt > nblocks) nt = nblocks > 0 ? (int)nblocks : 1;
+  const karst_int_t wmax = (karst_int_t)nt * BLOCKS_PER_THREAD;
+  size_t nn = (size_t)(n > 0 ? n : 1);
   worker_t *w = calloc((size_t)nt, sizeof *w);
+  thread_arg_t *args = calloc((size_t)nt, sizeof *args);
   pthread_t *tid = calloc((size_t)nt, sizeof *tid);
-  if (!w || !tid) goto nomem;
+  double **part = calloc((size_t)wmax, sizeof *part);
+  wave_t wave;
+  if (!w || !args || !tid || !part) goto nomem;
+  for (karst_int_t i = 0; i < wmax; i++)
+    if (!(part[i] = malloc(nn * sizeof **part))) goto nomem;
   for (int t = 0; t < nt; t++) {
-    size_t nn = (size_t)(n > 0 ? n : 1);
     w[t].g = g;
     w[t].dist = malloc(nn * sizeof *w[t].dist);
     w[t].queue = malloc(nn * sizeof *w[t].queue);
     w[t].sigma = calloc(nn, sizeof *w[t].sigma);
     w[t].delta = calloc(nn, sizeof *w[t].delta);
-    w[t].part = calloc(nn, sizeof *w[t].part);
     w[t].dsum = dist_sum;
-    if (!w[t].dist || !w[t].queue || !w[t].sigma || !w[t].delta || !w[t].part) goto nomem;
+    if (!w[t].dist || !w[t].queue || !w[t].sigma || !w[t].delta) goto nomem;
     for (karst_int_t v = 0; v < n; v++)
       w[t].dist[v] = -1;
+    args[t].w = &w[t];
+    args[t].wave = &wave;
   }
   memset(betweenness, 0, (size_t)n * sizeof *betweenness);
-  for (karst_int_t b0 = 0; b0 < nblocks; b0 += nt) {
+  wave.bs = bs;
+  wave.n = n;
+  wave.part = part;
+  for (karst_int_t b0 = 0; b0 < nblocks; b0 += wmax) {
     if (karst_interrupted(ctx)) {
       err = karst_set_error(ctx, KARST_EINTERRUPTED, "shortest paths: interrupted");
       goto cleanup;
     }
-    int active = 0, started = 0;
-    for (int t = 0; t < nt && b0 + t < nblocks; t++, active++) {
-      w[t].s0 = (b0 + t) * bs;
-      w[t].s1 = w[t].s0 + bs < n ? w[t].s0 + bs : n;
-    }
-    /* Thread 0 works in the calling thread; the others are started per wave. */
-    for (int t = 1; t < active; t++, started++)
-      if (pthread_create(&tid[t], NULL, bfs_thread, &w[t]) != 0) break;
-    bfs_block(&w[0]);
+    wave.first = b0;
+    wave.count = nblocks - b0 < wmax ? nblocks - b0 : wmax;
+    atomic_store(&wave.next, 0);
+    /* The calling thread works too; the others are started per wave. If a thread
+     * cannot be started the remaining ones simply claim more blocks. */
+    int started = 0;
+    for (int t = 1; t < nt; t++, started++)
+      if (pthread_create(&tid[t], NULL, bfs_thread, &args[t]) != 0) break;
+    bfs_thread(&args[0]);
     for (int t = 1; t <= started; t++)
       pthread_join(tid[t], NULL);
-    for (int t = started + 1; t < active; t++)
-      bfs_block(&w[t]); /* could not start a thread */
-    for (int t = 0; t < active; t++)
+    for (karst_int_t i = 0; i < wave.count; i++) /* fixed block order: deterministic sums */
       for (karst_int_t v = 0; v < n; v++)
-        betweenness[v] += w[t].part[v];
-    karst_progress(ctx, "shortest paths", (double)(b0 + active), (double)nblocks);
+        betweenness[v] += part[i][v];
+    karst_progress(ctx, "shortest paths", (double)(b0 + wave.count), (double)nblocks);
   }
   goto cleanup;
 nomem:
@@ -179,9 +211,13 @@ cleanup:
       free(w[t].queue);
       free(w[t].sigma);
       free(w[t].delta);
-      free(w[t].part);
     }
+  if (part)
+    for (karst_int_t i = 0; i < wmax; i++)
+      free(part[i]);
+  free(part);
   free(w);
+  free(args);
   free(tid);
   return err;
 }
