@@ -17,8 +17,8 @@ extern "C" {
 typedef struct karst_metrics {
   /* full graph */
   karst_int_t nodes, edges;
-  double total_length;        /**< sum of 3-D edge lengths (m) */
-  double vertical_extent;     /**< max z - min z (m) */
+  double total_length;    /**< sum of 3-D edge lengths (m) */
+  double vertical_extent; /**< max z - min z (m) */
   /* the ten metrics, names as Karstnet prints them */
   double mean_length;
   double cv_length;
