@@ -28,15 +28,14 @@ karst_error_t karst_vtk_write_network(karst_ctx_t *ctx, const char *path,
 karst_error_t karst_vtk_read_network(karst_ctx_t *ctx, const char *path, karst_network_t *net);
 
 /** Write a sample cloud as .vtp vertices with a "source" point array (karst_sample_source_t). */
-karst_error_t karst_vtk_write_samples(karst_ctx_t *ctx, const char *path,
-                                      const karst_samples_t *s);
+karst_error_t karst_vtk_write_samples(karst_ctx_t *ctx, const char *path, const karst_samples_t *s);
 
 /** A triangle mesh with optional per-triangle and per-vertex integer/double arrays. */
 typedef struct karst_mesh {
   karst_int_t n_vertices, n_triangles;
-  double *xyz;          /**< 3 * n_vertices */
-  karst_int_t *tri;     /**< 3 * n_triangles, counter-clockwise seen from outside */
-  int *tri_label;       /**< per-triangle label (e.g. tunnel type) or NULL */
+  double *xyz;                /**< 3 * n_vertices */
+  karst_int_t *tri;           /**< 3 * n_triangles, counter-clockwise seen from outside */
+  int *tri_label;             /**< per-triangle label (e.g. tunnel type) or NULL */
   const char *tri_label_name; /**< name of that cell array (e.g. "tunnel_type") */
 } karst_mesh_t;
 
