@@ -7,6 +7,7 @@
  */
 #include <fcntl.h>
 #include <math.h>
+#include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -641,6 +642,52 @@ static void test_python_independent(void **state) {
   assert_int_equal(system(cmd), 0);
 }
 
+/* Two threads writing and reading their own files at once (karst ensemble -j 2). */
+typedef struct {
+  const fixture_t *f;
+  int id, failures;
+  char msg[KARST_ERRMSG_MAX];
+} worker_t;
+
+static void *worker(void *arg) {
+  worker_t *w = arg;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_network_t a, b;
+  make_fixture(&a);
+  karst_network_init(&b);
+  for (int round = 0; round < 20; round++) {
+    char path[256];
+    snprintf(path, sizeof path, "%s/t%d_%d.vtp", w->f->dir, w->id, round);
+    a.xyz[0] = w->id * 1000 + round; /* each file different */
+    if (karst_vtk_write_network(&ctx, path, &a) || karst_vtk_read_network(&ctx, path, &b) ||
+        b.n_nodes != a.n_nodes || b.xyz[0] != a.xyz[0] || b.n_edge_attrs != 3) {
+      w->failures++;
+      snprintf(w->msg, sizeof w->msg, "%s", ctx.errmsg);
+    }
+  }
+  karst_network_destroy(&a);
+  karst_network_destroy(&b);
+  return NULL;
+}
+
+static void test_threads(void **state) {
+  fixture_t *f = *state;
+  pthread_t th[2];
+  worker_t w[2];
+  for (int i = 0; i < 2; i++) {
+    w[i] = (worker_t){.f = f, .id = i};
+    assert_int_equal(pthread_create(&th[i], NULL, worker, &w[i]), 0);
+  }
+  for (int i = 0; i < 2; i++)
+    assert_int_equal(pthread_join(th[i], NULL), 0);
+  for (int i = 0; i < 2; i++) {
+    if (w[i].failures) print_error("thread %d: %s\n", i, w[i].msg);
+    assert_int_equal(w[i].failures, 0);
+  }
+  assert_int_equal(count_entries(f->dir), 40);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup_teardown(test_roundtrip, setup, teardown),
@@ -648,6 +695,7 @@ int main(void) {
       cmocka_unit_test_setup_teardown(test_write_errors, setup, teardown),
       cmocka_unit_test_setup_teardown(test_read_errors, setup, teardown),
       cmocka_unit_test_setup_teardown(test_read_polylines, setup, teardown),
+      cmocka_unit_test_setup_teardown(test_threads, setup, teardown),
       cmocka_unit_test_setup_teardown(test_python_independent, setup, teardown),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
