@@ -1,0 +1,677 @@
+/* Adaptive Poisson-sphere sampling of the bedrock (Paris et al. 2021, §4.1).
+ *
+ * Method: grid-accelerated dart throwing with a bounded number of darts per
+ * cell (in the spirit of Dunbar & Humphreys 2006 and Gamito & Maddock 2009,
+ * "Accurate multidimensional Poisson-disk sampling"): the background grid has
+ * cells of size r/√3, whose diagonal is r, so a cell holds at most one sample
+ * of radius r and a conflict can only come from the 117 cells whose distance
+ * to the cell is below r. Cells are visited in one random order, for
+ * KARST_SAMPLING_DART_PASSES passes, one dart per empty cell per pass, which
+ * makes the whole sampling O(cells) = O(volume / r^3).
+ *
+ * Two radii: feature samples (key points, prescribed paths, horizons, water
+ * table, permeable volumes) keep sampling.feature_radius r_f from one another
+ * and live in a sparse hash grid (they occupy thin layers or small volumes);
+ * fill samples keep sampling.fill_radius r_c from one another and
+ * min(r_f, r_c) from feature samples, and live in a dense grid over the box.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cost/cost_internal.h"
+#include "karst/sampling.h"
+
+/* Largest background grid (cells) that may be allocated: 2^31 (8 GiB of
+ * indices) is far beyond what max_samples allows; it only guards overflow. */
+#define MAX_GRID_CELLS ((double)INT32_MAX)
+
+/* ------------------------------------------------------------------------ */
+/* Sparse hash grid of feature samples (chained per cell)                    */
+/* ------------------------------------------------------------------------ */
+typedef struct hgrid {
+  double cell, origin[3];
+  int64_t dims[3];
+  uint64_t *keys; /* open addressing; UINT64_MAX = empty slot */
+  int32_t *heads; /* first entry of the cell */
+  size_t cap, used;
+  double *xyz; /* entries */
+  int32_t *next;
+  size_t n, ncap;
+} hgrid_t;
+
+static uint64_t mix64(uint64_t x) {
+  x ^= x >> 30, x *= 0xbf58476d1ce4e5b9ULL;
+  x ^= x >> 27, x *= 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+static int hgrid_init(hgrid_t *g, double cell, const double origin[3], const int64_t dims[3]) {
+  memset(g, 0, sizeof *g);
+  g->cell = cell;
+  memcpy(g->origin, origin, sizeof g->origin);
+  memcpy(g->dims, dims, sizeof g->dims);
+  g->cap = 1024;
+  g->keys = malloc(sizeof(uint64_t) * g->cap);
+  g->heads = malloc(sizeof(int32_t) * g->cap);
+  if (!g->keys || !g->heads) return 0;
+  memset(g->keys, 0xff, sizeof(uint64_t) * g->cap);
+  return 1;
+}
+
+static void hgrid_destroy(hgrid_t *g) {
+  free(g->keys), free(g->heads), free(g->xyz), free(g->next);
+  memset(g, 0, sizeof *g);
+}
+
+static uint64_t hgrid_key(const hgrid_t *g, int64_t i, int64_t j, int64_t k) {
+  return (uint64_t)(i + g->dims[0] * (j + g->dims[1] * k));
+}
+
+static void hgrid_cell_of(const hgrid_t *g, const double p[3], int64_t c[3]) {
+  for (int a = 0; a < 3; a++) {
+    double f = floor((p[a] - g->origin[a]) / g->cell);
+    c[a] = f < 0 ? 0 : (f >= (double)g->dims[a] ? g->dims[a] - 1 : (int64_t)f);
+  }
+}
+
+static int32_t hgrid_head(const hgrid_t *g, uint64_t key) {
+  size_t mask = g->cap - 1, h = (size_t)mix64(key) & mask;
+  while (g->keys[h] != UINT64_MAX) {
+    if (g->keys[h] == key) return g->heads[h];
+    h = (h + 1) & mask;
+  }
+  return -1;
+}
+
+static size_t hgrid_slot(uint64_t *keys, size_t cap, uint64_t key) {
+  size_t mask = cap - 1, h = (size_t)mix64(key) & mask;
+  while (keys[h] != UINT64_MAX && keys[h] != key) h = (h + 1) & mask;
+  return h;
+}
+
+static int hgrid_insert(hgrid_t *g, const double p[3]) {
+  if (g->n == g->ncap) {
+    size_t nc = g->ncap ? 2 * g->ncap : 1024;
+    double *xyz = realloc(g->xyz, sizeof(double) * 3 * nc);
+    if (!xyz) return 0;
+    g->xyz = xyz;
+    int32_t *next = realloc(g->next, sizeof(int32_t) * nc);
+    if (!next) return 0;
+    g->next = next, g->ncap = nc;
+  }
+  if (2 * (g->used + 1) > g->cap) { /* keep the load below 1/2 */
+    size_t nc = 2 * g->cap;
+    uint64_t *keys = malloc(sizeof(uint64_t) * nc);
+    int32_t *heads = malloc(sizeof(int32_t) * nc);
+    if (!keys || !heads) {
+      free(keys), free(heads);
+      return 0;
+    }
+    memset(keys, 0xff, sizeof(uint64_t) * nc);
+    for (size_t i = 0; i < g->cap; i++)
+      if (g->keys[i] != UINT64_MAX) {
+        size_t s = hgrid_slot(keys, nc, g->keys[i]);
+        keys[s] = g->keys[i], heads[s] = g->heads[i];
+      }
+    free(g->keys), free(g->heads);
+    g->keys = keys, g->heads = heads, g->cap = nc;
+  }
+  int64_t c[3];
+  hgrid_cell_of(g, p, c);
+  uint64_t key = hgrid_key(g, c[0], c[1], c[2]);
+  size_t s = hgrid_slot(g->keys, g->cap, key);
+  int32_t e = (int32_t)g->n++;
+  memcpy(g->xyz + 3 * e, p, 3 * sizeof(double));
+  if (g->keys[s] == UINT64_MAX) {
+    g->keys[s] = key, g->used++;
+    g->next[e] = -1;
+  } else {
+    g->next[e] = g->heads[s];
+  }
+  g->heads[s] = e;
+  return 1;
+}
+
+/* Whether some entry lies closer than r to p. */
+static int hgrid_conflict(const hgrid_t *g, const double p[3], double r) {
+  if (g->n == 0) return 0;
+  int64_t lo[3], hi[3];
+  double plo[3] = {p[0] - r, p[1] - r, p[2] - r}, phi[3] = {p[0] + r, p[1] + r, p[2] + r};
+  hgrid_cell_of(g, plo, lo);
+  hgrid_cell_of(g, phi, hi);
+  double r2 = r * r;
+  for (int64_t k = lo[2]; k <= hi[2]; k++)
+    for (int64_t j = lo[1]; j <= hi[1]; j++)
+      for (int64_t i = lo[0]; i <= hi[0]; i++)
+        for (int32_t e = hgrid_head(g, hgrid_key(g, i, j, k)); e >= 0; e = g->next[e]) {
+          const double *q = g->xyz + 3 * e;
+          double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+          if (dx * dx + dy * dy + dz * dz < r2) return 1;
+        }
+  return 0;
+}
+
+/* ------------------------------------------------------------------------ */
+/* The sampler                                                               */
+/* ------------------------------------------------------------------------ */
+typedef struct sampler {
+  karst_ctx_t *ctx;
+  const karst_scenario_t *sc;
+  karst_rng_t *rng;
+  karst_samples_t *s;
+  double rf, rc, rm; /* feature radius, fill radius, min of both */
+  double lo[3], hi[3];
+  hgrid_t feat;
+  /* dense fill grid */
+  double cc;
+  int64_t cd[3];
+  int32_t *fill;         /* sample index per cell, -1 = empty */
+  unsigned char *near;   /* 1 if a feature sample lies within rm of the cell */
+  int n_off;
+  int off[125][3];       /* neighbour offsets that can hold a conflicting fill sample */
+  const char *stage;     /* for messages */
+} sampler_t;
+
+static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
+  if (S->s->n >= S->sc->sampling.max_samples)
+    return karst_set_error(S->ctx, KARST_ERANGE,
+                           "sampling needs more than sampling.max_samples = %lld samples "
+                           "(reached while placing %s samples); increase fill_radius or "
+                           "feature_radius, shrink the domain, or raise max_samples",
+                           (long long)S->sc->sampling.max_samples, S->stage);
+  if (karst_samples_add(S->s, p, src) != KARST_SUCCESS)
+    return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for %lld samples",
+                           (long long)S->s->n + 1);
+  if (src == KARST_SAMPLE_FILL) return KARST_SUCCESS;
+  if (!hgrid_insert(&S->feat, p))
+    return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the feature sample grid");
+  /* Mark the fill cells a later fill dart would have to check against p. */
+  int64_t lo[3], hi[3];
+  for (int a = 0; a < 3; a++) {
+    double l = floor((p[a] - S->rm - S->lo[a]) / S->cc), h = floor((p[a] + S->rm - S->lo[a]) / S->cc);
+    lo[a] = l < 0 ? 0 : (int64_t)l;
+    hi[a] = h >= (double)S->cd[a] ? S->cd[a] - 1 : (int64_t)h;
+  }
+  for (int64_t k = lo[2]; k <= hi[2]; k++)
+    for (int64_t j = lo[1]; j <= hi[1]; j++)
+      for (int64_t i = lo[0]; i <= hi[0]; i++) S->near[i + S->cd[0] * (j + S->cd[1] * k)] = 1;
+  return KARST_SUCCESS;
+}
+
+static void shuffle(karst_rng_t *rng, int64_t *v, size_t n) {
+  for (size_t i = n; i > 1; i--) {
+    size_t j = (size_t)karst_rng_below(rng, (uint64_t)i);
+    int64_t t = v[i - 1];
+    v[i - 1] = v[j], v[j] = t;
+  }
+}
+
+typedef struct cells {
+  int64_t *v;
+  size_t n, cap;
+} cells_t;
+
+static int cells_push(cells_t *c, int64_t x) {
+  if (c->n == c->cap) {
+    size_t nc = c->cap ? 2 * c->cap : 4096;
+    int64_t *v = realloc(c->v, sizeof(int64_t) * nc);
+    if (!v) return 0;
+    c->v = v, c->cap = nc;
+  }
+  c->v[c->n++] = x;
+  return 1;
+}
+
+/* A region sampled at the feature radius: a layer |z − L(x, y)| <= band
+ * around a horizon (or the water table), or the permeable volume. */
+typedef struct region {
+  karst_sample_source_t src;
+  const karst_horizon_t *layer; /* NULL for the permeable volume */
+  double band;
+} region_t;
+
+static int region_contains(const sampler_t *S, const region_t *R, const double p[3]) {
+  if (R->layer) return fabs(p[2] - karst_horizon_elevation(R->layer, p[0], p[1])) <= R->band;
+  return karst_permeability_eval(&S->sc->permeability, p) < S->sc->sampling.permeable_threshold;
+}
+
+/* Layer elevation range over a column rectangle (a plane: extremes at corners). */
+static void layer_range(const karst_horizon_t *L, double x0, double x1, double y0, double y1,
+                        double *zlo, double *zhi) {
+  double z[4] = {karst_horizon_elevation(L, x0, y0), karst_horizon_elevation(L, x1, y0),
+                 karst_horizon_elevation(L, x0, y1), karst_horizon_elevation(L, x1, y1)};
+  *zlo = fmin(fmin(z[0], z[1]), fmin(z[2], z[3]));
+  *zhi = fmax(fmax(z[0], z[1]), fmax(z[2], z[3]));
+}
+
+/* Conservative bounding box of {p : node value < t} ("all" = whole space). */
+typedef struct aabb {
+  double lo[3], hi[3];
+  int empty;
+} aabb_t;
+
+static aabb_t aabb_all(void) {
+  aabb_t b = {{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}, 0};
+  return b;
+}
+static aabb_t aabb_none(void) {
+  aabb_t b = {{0, 0, 0}, {0, 0, 0}, 1};
+  return b;
+}
+
+static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
+  if (n->kind == KARST_PERM_SPHERE || n->kind == KARST_PERM_STRATUM) {
+    if (bg < t) return aabb_all();
+    if (!(n->resistance < t)) return aabb_none();
+    aabb_t b = aabb_all();
+    if (n->kind == KARST_PERM_SPHERE) {
+      double r = n->radius + (n->falloff > 0 ? n->falloff : 0.0);
+      for (int a = 0; a < 3; a++) b.lo[a] = n->center[a] - r, b.hi[a] = n->center[a] + r;
+    } else {
+      b.lo[2] = n->bottom, b.hi[2] = n->top;
+    }
+    return b;
+  }
+  if (n->n_children == 0) return bg < t ? aabb_all() : aabb_none();
+  aabb_t acc = perm_region(&n->children[0], bg, t);
+  for (int i = 1; i < n->n_children; i++) {
+    aabb_t c = perm_region(&n->children[i], bg, t);
+    if (n->kind == KARST_PERM_INTERSECTION) { /* max < t iff all children < t */
+      if (acc.empty || c.empty) return aabb_none();
+      for (int a = 0; a < 3; a++) acc.lo[a] = fmax(acc.lo[a], c.lo[a]), acc.hi[a] = fmin(acc.hi[a], c.hi[a]);
+      for (int a = 0; a < 3; a++)
+        if (acc.lo[a] > acc.hi[a]) return aabb_none();
+    } else { /* min (union) or weighted mean (blend) < t needs some child < t */
+      if (c.empty) continue;
+      if (acc.empty) {
+        acc = c;
+        continue;
+      }
+      for (int a = 0; a < 3; a++) acc.lo[a] = fmin(acc.lo[a], c.lo[a]), acc.hi[a] = fmax(acc.hi[a], c.hi[a]);
+    }
+  }
+  return acc;
+}
+
+/* Feature-grid cells (i, j, k) overlapping the region's bounds, in the box
+ * and not entirely above the terrain. */
+static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out) {
+  const hgrid_t *g = &S->feat;
+  aabb_t box = aabb_all();
+  if (!R->layer) {
+    const karst_permeability_t *pm = &S->sc->permeability;
+    box = pm->root ? perm_region(pm->root, pm->background, S->sc->sampling.permeable_threshold)
+                   : (pm->background < S->sc->sampling.permeable_threshold ? aabb_all() : aabb_none());
+    if (box.empty) return KARST_SUCCESS;
+  }
+  int64_t lo[3], hi[3];
+  for (int a = 0; a < 3; a++) {
+    double l = fmax(box.lo[a], S->lo[a]), h = fmin(box.hi[a], S->hi[a]);
+    if (l > h) return KARST_SUCCESS;
+    double pl[3] = {0}, ph[3] = {0};
+    pl[a] = l, ph[a] = h;
+    int64_t cl[3], ch[3];
+    hgrid_cell_of(g, pl, cl);
+    hgrid_cell_of(g, ph, ch);
+    lo[a] = cl[a], hi[a] = ch[a];
+  }
+  double limit = (double)KARST_SAMPLING_MAX_CELLS_PER_SAMPLE * (double)S->sc->sampling.max_samples;
+  for (int64_t j = lo[1]; j <= hi[1]; j++)
+    for (int64_t i = lo[0]; i <= hi[0]; i++) {
+      double x0 = fmax(S->lo[0], g->origin[0] + i * g->cell);
+      double x1 = fmin(S->hi[0], g->origin[0] + (i + 1) * g->cell);
+      double y0 = fmax(S->lo[1], g->origin[1] + j * g->cell);
+      double y1 = fmin(S->hi[1], g->origin[1] + (j + 1) * g->cell);
+      double ztop = karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1);
+      double zlo = S->lo[2], zhi = fmin(S->hi[2], ztop);
+      if (R->layer) {
+        double llo, lhi;
+        layer_range(R->layer, x0, x1, y0, y1, &llo, &lhi);
+        zlo = fmax(zlo, llo - R->band), zhi = fmin(zhi, lhi + R->band);
+      }
+      if (zlo > zhi) continue;
+      double k0 = floor((zlo - g->origin[2]) / g->cell), k1 = floor((zhi - g->origin[2]) / g->cell);
+      for (int64_t k = (int64_t)fmax(k0, (double)lo[2]); k <= (int64_t)fmin(k1, (double)hi[2]); k++) {
+        if ((double)out->n >= limit)
+          return karst_set_error(S->ctx, KARST_ERANGE,
+                                 "the %s samples need more than %.0f grid cells of %g m "
+                                 "(%d per allowed sample, sampling.max_samples = %lld): they "
+                                 "would exceed max_samples; increase feature_radius or max_samples",
+                                 S->stage, limit, g->cell, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
+                                 (long long)S->sc->sampling.max_samples);
+        if (!cells_push(out, (int64_t)hgrid_key(g, i, j, k)))
+          return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells",
+                                 S->stage);
+      }
+    }
+  return KARST_SUCCESS;
+}
+
+/* Uniform point in cell (i, j, k) of a grid, clipped to [zlo, zhi] and to the box. */
+static int dart_in_cell(sampler_t *S, const double origin[3], double cell, const int64_t c[3],
+                        double zlo, double zhi, double p[3]) {
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; a++) {
+    lo[a] = fmax(S->lo[a], origin[a] + c[a] * cell);
+    hi[a] = fmin(S->hi[a], origin[a] + (c[a] + 1) * cell);
+  }
+  lo[2] = fmax(lo[2], zlo), hi[2] = fmin(hi[2], zhi);
+  for (int a = 0; a < 3; a++)
+    if (lo[a] > hi[a]) return 0;
+  for (int a = 0; a < 3; a++) p[a] = karst_rng_uniform_range(S->rng, lo[a], hi[a]);
+  return 1;
+}
+
+static karst_error_t sample_region(sampler_t *S, const region_t *R) {
+  cells_t cells = {0};
+  karst_error_t err = region_cells(S, R, &cells);
+  if (err != KARST_SUCCESS) goto cleanup;
+  shuffle(S->rng, cells.v, cells.n);
+  hgrid_t *g = &S->feat;
+  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES; pass++) {
+    if (karst_interrupted(S->ctx)) {
+      err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
+      goto cleanup;
+    }
+    for (size_t q = 0; q < cells.n; q++) {
+      uint64_t key = (uint64_t)cells.v[q];
+      if (hgrid_head(g, key) >= 0) continue; /* a cell holds at most one feature sample */
+      int64_t c[3] = {(int64_t)(key % (uint64_t)g->dims[0]),
+                      (int64_t)(key / (uint64_t)g->dims[0] % (uint64_t)g->dims[1]),
+                      (int64_t)(key / (uint64_t)g->dims[0] / (uint64_t)g->dims[1])};
+      double zlo = -INFINITY, zhi = INFINITY, p[3];
+      if (R->layer) {
+        double x0 = g->origin[0] + c[0] * g->cell, y0 = g->origin[1] + c[1] * g->cell;
+        layer_range(R->layer, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
+        zlo -= R->band, zhi += R->band;
+      }
+      if (!dart_in_cell(S, g->origin, g->cell, c, zlo, zhi, p)) continue;
+      if (!region_contains(S, R, p) || !karst_cost_in_bedrock(S->sc, p)) continue;
+      if (hgrid_conflict(g, p, S->rf)) continue;
+      if ((err = add_sample(S, p, R->src)) != KARST_SUCCESS) goto cleanup;
+    }
+  }
+cleanup:
+  free(cells.v);
+  return err;
+}
+
+static int fill_conflict(const sampler_t *S, const double p[3], const int64_t c[3]) {
+  const double *xyz = S->s->xyz;
+  double r2 = S->rc * S->rc;
+  for (int o = 0; o < S->n_off; o++) {
+    int64_t i = c[0] + S->off[o][0], j = c[1] + S->off[o][1], k = c[2] + S->off[o][2];
+    if (i < 0 || j < 0 || k < 0 || i >= S->cd[0] || j >= S->cd[1] || k >= S->cd[2]) continue;
+    int32_t e = S->fill[i + S->cd[0] * (j + S->cd[1] * k)];
+    if (e < 0) continue;
+    const double *q = xyz + 3 * (int64_t)e;
+    double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+    if (dx * dx + dy * dy + dz * dz < r2) return 1;
+  }
+  return S->near[c[0] + S->cd[0] * (c[1] + S->cd[1] * c[2])] && hgrid_conflict(&S->feat, p, S->rm);
+}
+
+static int cmp_off(const void *a, const void *b) {
+  const int *x = a, *y = b;
+  int dx = x[0] * x[0] + x[1] * x[1] + x[2] * x[2], dy = y[0] * y[0] + y[1] * y[1] + y[2] * y[2];
+  return (dx > dy) - (dx < dy);
+}
+
+static karst_error_t sample_fill(sampler_t *S) {
+  cells_t cells = {0};
+  karst_error_t err = KARST_SUCCESS;
+  double limit = (double)KARST_SAMPLING_MAX_CELLS_PER_SAMPLE * (double)S->sc->sampling.max_samples;
+  for (int64_t j = 0; j < S->cd[1]; j++)
+    for (int64_t i = 0; i < S->cd[0]; i++) {
+      double x0 = S->lo[0] + i * S->cc, x1 = fmin(S->hi[0], x0 + S->cc);
+      double y0 = S->lo[1] + j * S->cc, y1 = fmin(S->hi[1], y0 + S->cc);
+      double ztop = fmin(S->hi[2], karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1));
+      for (int64_t k = 0; k < S->cd[2] && S->lo[2] + k * S->cc < ztop; k++) {
+        if ((double)cells.n >= limit) {
+          err = karst_set_error(S->ctx, KARST_ERANGE,
+                                "the fill samples need more than %.0f grid cells of %g m (%d per "
+                                "allowed sample, sampling.max_samples = %lld): they would exceed "
+                                "max_samples; increase fill_radius or max_samples",
+                                limit, S->cc, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
+                                (long long)S->sc->sampling.max_samples);
+          goto cleanup;
+        }
+        if (!cells_push(&cells, i + S->cd[0] * (j + S->cd[1] * k))) {
+          err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
+          goto cleanup;
+        }
+      }
+    }
+  shuffle(S->rng, cells.v, cells.n);
+  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES; pass++) {
+    if (karst_interrupted(S->ctx)) {
+      err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
+      goto cleanup;
+    }
+    karst_progress(S->ctx, "sampling", pass, KARST_SAMPLING_DART_PASSES);
+    for (size_t q = 0; q < cells.n; q++) {
+      int64_t id = cells.v[q];
+      if (S->fill[id] >= 0) continue;
+      int64_t c[3] = {id % S->cd[0], id / S->cd[0] % S->cd[1], id / S->cd[0] / S->cd[1]};
+      double p[3];
+      if (!dart_in_cell(S, S->lo, S->cc, c, -INFINITY, INFINITY, p)) continue;
+      if (!(p[2] < karst_terrain_height(&S->sc->terrain, p[0], p[1]))) continue;
+      if (fill_conflict(S, p, c)) continue;
+      if ((err = add_sample(S, p, KARST_SAMPLE_FILL)) != KARST_SUCCESS) goto cleanup;
+      S->fill[id] = (int32_t)(S->s->n - 1);
+    }
+  }
+cleanup:
+  free(cells.v);
+  return err;
+}
+
+static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc) {
+  const karst_sampling_t *sp = &sc->sampling;
+  for (int a = 0; a < 3; a++)
+    if (!isfinite(sc->domain_min[a]) || !isfinite(sc->domain_max[a]) ||
+        !(sc->domain_min[a] < sc->domain_max[a]))
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "domain: axis %c must have finite min < max, got [%g, %g]", "xyz"[a],
+                             sc->domain_min[a], sc->domain_max[a]);
+  if (!(isfinite(sp->fill_radius) && sp->fill_radius > 0))
+    return karst_set_error(ctx, KARST_EINVAL, "sampling.fill_radius must be > 0, got %g",
+                           sp->fill_radius);
+  if (!(isfinite(sp->feature_radius) && sp->feature_radius > 0))
+    return karst_set_error(ctx, KARST_EINVAL, "sampling.feature_radius must be > 0, got %g",
+                           sp->feature_radius);
+  if (!(isfinite(sp->feature_band) && sp->feature_band >= 0))
+    return karst_set_error(ctx, KARST_EINVAL, "sampling.feature_band must be >= 0, got %g",
+                           sp->feature_band);
+  if (!(sp->permeable_threshold >= 0 && sp->permeable_threshold <= 1))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "sampling.permeable_threshold must be within [0, 1], got %g",
+                           sp->permeable_threshold);
+  if (sp->max_samples < 1 || sp->max_samples >= INT32_MAX)
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "sampling.max_samples must be within [1, %d), got %lld", INT32_MAX,
+                           (long long)sp->max_samples);
+  for (int h = 0; h < sc->n_horizons; h++) {
+    const karst_horizon_t *H = &sc->horizons[h];
+    if (!(isfinite(H->radius) && H->radius > 0) || !isfinite(H->elevation) || !(H->dip >= 0 && H->dip < 90))
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "horizon %d: radius must be > 0 and dip within [0, 90), got radius "
+                             "%g, dip %g, elevation %g",
+                             h + 1, H->radius, H->dip, H->elevation);
+  }
+  double top = karst_i_terrain_max_rect(&sc->terrain, sc->domain_min[0], sc->domain_max[0],
+                                        sc->domain_min[1], sc->domain_max[1]);
+  if (!(top > sc->domain_min[2]))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "the domain box (z from %g to %g m) lies entirely above the terrain "
+                           "(highest terrain point over the box: %g m): there is no bedrock to "
+                           "sample",
+                           sc->domain_min[2], sc->domain_max[2], top);
+  for (int i = 0; i < sc->n_key_points; i++) {
+    const karst_keypoint_t *k = &sc->key_points[i];
+    const double *p = k->p;
+    if (karst_cost_in_bedrock(sc, p)) continue;
+    int inbox = isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
+    for (int a = 0; inbox && a < 3; a++) inbox = p[a] >= sc->domain_min[a] && p[a] <= sc->domain_max[a];
+    if (!inbox)
+      return karst_set_error(ctx, KARST_EINVAL, "key point '%s' (%g, %g, %g) is outside the domain box",
+                             k->name, p[0], p[1], p[2]);
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "key point '%s' (%g, %g, %g) is not below the terrain (terrain at %g m)",
+                           k->name, p[0], p[1], p[2], karst_terrain_height(&sc->terrain, p[0], p[1]));
+  }
+  if (sc->n_key_points > sp->max_samples)
+    return karst_set_error(ctx, KARST_ERANGE, "%d key points exceed sampling.max_samples = %lld",
+                           sc->n_key_points, (long long)sp->max_samples);
+  return KARST_SUCCESS;
+}
+
+/**
+ * Adaptive Poisson-sphere sampling of the bedrock (Paris et al. 2021, §4.1,
+ * Fig. 5), in this order, each sample tagged by its source:
+ *  1. the key points, exactly and in order (samples 0 .. n_key_points-1);
+ *  2. points along each prescribed path's straight segment, evenly spaced at
+ *     >= feature_radius, so that low-cost edges exist there (§4.2);
+ *  3. feature-radius Poisson samples within ±feature_band of each inception
+ *     horizon, then of the water table;
+ *  4. feature-radius Poisson samples where the resistance π is below
+ *     sampling.permeable_threshold;
+ *  5. fill samples at fill_radius elsewhere.
+ * Only points inside the domain box and strictly below the terrain are kept.
+ * Every random draw comes from @p rng (same stream => same samples).
+ * @param ctx context (errors, progress, interrupt).
+ * @param sc the scenario (validated here: radii, domain, key points).
+ * @param rng the random stream of this stage.
+ * @param out initialised sample set, replaced on success, unchanged on failure.
+ * @return KARST_SUCCESS; KARST_EINVAL for an invalid scenario (e.g. a domain
+ *         entirely above the terrain, a key point outside the bedrock);
+ *         KARST_ERANGE when sampling.max_samples would be exceeded;
+ *         KARST_ENOMEM; KARST_EINTERRUPTED.
+ * Time complexity: O(V / r_c^3 + feature volume / r_f^3) with
+ * KARST_SAMPLING_DART_PASSES darts per background cell, each checking O(1)
+ * neighbouring cells.
+ */
+karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_rng_t *rng,
+                                 karst_samples_t *out) {
+  karst_samples_t s;
+  karst_samples_init(&s);
+  sampler_t S;
+  memset(&S, 0, sizeof S);
+  karst_error_t err = check_scenario(ctx, sc);
+  if (err != KARST_SUCCESS) return err;
+  S.ctx = ctx, S.sc = sc, S.rng = rng, S.s = &s;
+  S.rf = sc->sampling.feature_radius;
+  S.rc = sc->sampling.fill_radius;
+  S.rm = fmin(S.rf, S.rc);
+  memcpy(S.lo, sc->domain_min, sizeof S.lo);
+  memcpy(S.hi, sc->domain_max, sizeof S.hi);
+
+  /* Grids: cells of r/√3 so that a cell's diagonal is r. */
+  int64_t fd[3];
+  double ncells_fill = 1.0, ncells_feat = 1.0;
+  S.cc = S.rc / sqrt(3.0);
+  double fcell = S.rf / sqrt(3.0);
+  for (int a = 0; a < 3; a++) {
+    double ext = S.hi[a] - S.lo[a];
+    double nc = fmax(1.0, ceil(ext / S.cc)), nf = fmax(1.0, ceil(ext / fcell));
+    ncells_fill *= nc, ncells_feat *= nf;
+    S.cd[a] = (int64_t)fmin(nc, 1e18), fd[a] = (int64_t)fmin(nf, 1e18);
+  }
+  if (ncells_fill > MAX_GRID_CELLS) {
+    err = karst_set_error(ctx, KARST_ERANGE,
+                          "the domain box needs %.3g fill grid cells of %g m, more than %.0f: "
+                          "increase sampling.fill_radius (%g m) or shrink the domain",
+                          ncells_fill, S.cc, MAX_GRID_CELLS, S.rc);
+    goto cleanup;
+  }
+  if (ncells_feat > 4e18) {
+    err = karst_set_error(ctx, KARST_ERANGE,
+                          "sampling.feature_radius = %g m is too small for the domain box",
+                          S.rf);
+    goto cleanup;
+  }
+  size_t nfill = (size_t)ncells_fill;
+  S.fill = malloc(sizeof(int32_t) * nfill);
+  S.near = calloc(nfill, 1);
+  if (!S.fill || !S.near || !hgrid_init(&S.feat, fcell, S.lo, fd)) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "no memory for a sampling grid of %.0f cells",
+                          ncells_fill);
+    goto cleanup;
+  }
+  memset(S.fill, 0xff, sizeof(int32_t) * nfill);
+  /* Offsets (di, dj, dk) in [-2, 2]^3 whose cells come closer than r_c to
+   * the centre cell: the gap along an axis is (|d| − 1)+ cells, so at most
+   * two coordinates may be ±2. Nearest first: conflicts are found sooner. */
+  for (int k = -2; k <= 2; k++)
+    for (int j = -2; j <= 2; j++)
+      for (int i = -2; i <= 2; i++) {
+        int gap = (abs(i) == 2) + (abs(j) == 2) + (abs(k) == 2);
+        if (gap == 3 || (i == 0 && j == 0 && k == 0)) continue;
+        S.off[S.n_off][0] = i, S.off[S.n_off][1] = j, S.off[S.n_off][2] = k, S.n_off++;
+      }
+  qsort(S.off, (size_t)S.n_off, sizeof S.off[0], cmp_off);
+
+  S.stage = "key point";
+  for (int i = 0; i < sc->n_key_points; i++)
+    if ((err = add_sample(&S, sc->key_points[i].p, KARST_SAMPLE_KEYPOINT)) != KARST_SUCCESS)
+      goto cleanup;
+  s.n_key_points = sc->n_key_points;
+
+  S.stage = "prescribed path";
+  for (int i = 0; i < sc->n_prescribed; i++) {
+    int ka = sc->prescribed[i].a, kb = sc->prescribed[i].b;
+    if (ka < 0 || kb < 0 || ka >= sc->n_key_points || kb >= sc->n_key_points) {
+      err = karst_set_error(ctx, KARST_EINVAL,
+                            "prescribed path %d: key point indices (%d, %d) not within [0, %d)",
+                            i + 1, ka, kb, sc->n_key_points);
+      goto cleanup;
+    }
+    const double *P = sc->key_points[ka].p, *Q = sc->key_points[kb].p;
+    double len = sqrt((Q[0] - P[0]) * (Q[0] - P[0]) + (Q[1] - P[1]) * (Q[1] - P[1]) +
+                      (Q[2] - P[2]) * (Q[2] - P[2]));
+    double m = floor(len / S.rf); /* spacing len / m >= r_f */
+    for (double j = 1; j < m; j++) {
+      double p[3];
+      for (int a = 0; a < 3; a++) p[a] = P[a] + (j / m) * (Q[a] - P[a]);
+      if (!karst_cost_in_bedrock(sc, p) || hgrid_conflict(&S.feat, p, S.rf)) continue;
+      if ((err = add_sample(&S, p, KARST_SAMPLE_PRESCRIBED)) != KARST_SUCCESS) goto cleanup;
+    }
+  }
+
+  S.stage = "horizon";
+  for (int h = 0; h < sc->n_horizons; h++) {
+    region_t R = {KARST_SAMPLE_HORIZON, &sc->horizons[h], sc->sampling.feature_band};
+    if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
+  }
+  S.stage = "water table";
+  karst_horizon_t wt;
+  memset(&wt, 0, sizeof wt);
+  wt.elevation = sc->water_table;
+  wt.radius = 1.0;
+  if (isfinite(sc->water_table)) {
+    region_t R = {KARST_SAMPLE_WATER_TABLE, &wt, sc->sampling.feature_band};
+    if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
+  }
+  S.stage = "permeability";
+  {
+    region_t R = {KARST_SAMPLE_PERMEABILITY, NULL, 0.0};
+    if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
+  }
+  S.stage = "fill";
+  if ((err = sample_fill(&S)) != KARST_SUCCESS) goto cleanup;
+  karst_progress(ctx, "sampling", 1, 1);
+  karst_log(ctx, KARST_LOG_INFO, "sampling: %lld samples (%d key points)", (long long)s.n,
+            sc->n_key_points);
+
+  karst_samples_destroy(out);
+  *out = s;
+  karst_samples_init(&s);
+cleanup:
+  karst_samples_destroy(&s);
+  hgrid_destroy(&S.feat);
+  free(S.fill);
+  free(S.near);
+  return err;
+}
