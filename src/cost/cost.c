@@ -114,6 +114,11 @@ static double quadratic_max(double q0, double qm, double q1) {
 int karst_cost_segment_in_bedrock(const karst_scenario_t *sc, const double a[3],
                                   const double b[3]) {
   if (!karst_cost_in_bedrock(sc, a) || !karst_cost_in_bedrock(sc, b)) return 0;
+  return karst_i_segment_interior_in_bedrock(sc, a, b);
+}
+
+int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double a[3],
+                                        const double b[3]) {
   const karst_terrain_t *t = &sc->terrain;
   if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) return 1;
   double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
@@ -497,8 +502,14 @@ void karst_i_cost_model_destroy(karst_i_cost_model_t *m) {
 }
 
 double karst_i_cost_edge(const karst_i_cost_model_t *m, const double a[3], const double b[3]) {
+  if (!karst_cost_in_bedrock(m->sc, a) || !karst_cost_in_bedrock(m->sc, b)) return INFINITY;
+  return karst_i_cost_edge_inside(m, a, b);
+}
+
+double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3],
+                                const double b[3]) {
   const karst_scenario_t *sc = m->sc;
-  if (!karst_cost_segment_in_bedrock(sc, a, b)) return INFINITY;
+  if (!karst_i_segment_interior_in_bedrock(sc, a, b)) return INFINITY;
   double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   double len = sqrt(dot3(d, d));
   if (len == 0.0) return 0.0;

@@ -22,6 +22,14 @@ void karst_i_cost_model_destroy(karst_i_cost_model_t *m);
 /** karst_cost_edge with a precomputed model; thread-safe (reads only). */
 double karst_i_cost_edge(const karst_i_cost_model_t *m, const double a[3], const double b[3]);
 
+/** karst_i_cost_edge for end points already known to be in the bedrock. */
+double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3],
+                                const double b[3]);
+
+/** Whether [a, b] stays in the bedrock, given that both end points are in it. */
+int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double a[3],
+                                        const double b[3]);
+
 /** Largest terrain elevation over the rectangle [x0, x1] x [y0, y1] (exact for the bilinear grid). */
 double karst_i_terrain_max_rect(const karst_terrain_t *t, double x0, double x1, double y0,
                                 double y1);

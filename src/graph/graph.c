@@ -180,7 +180,7 @@ static void sort_i32(int32_t *v, int n) {
  * `checks` says. Each query is independent of the others, so the result does
  * not depend on FLANN's thread count. */
 static karst_error_t knn_lists(karst_ctx_t *ctx, const double *xyz, karst_int_t n, int k,
-                               int nthreads, int32_t *nbr) {
+                               int nthreads, int32_t *nbr, double *kd2) {
   karst_error_t err = KARST_SUCCESS;
   int *idx = NULL;
   double *dist = NULL;
@@ -218,13 +218,13 @@ static karst_error_t knn_lists(karst_ctx_t *ctx, const double *xyz, karst_int_t 
     for (int r = 0; r < rows; r++) {
       karst_int_t v = b0 + r;
       int32_t *out = nbr + (size_t)v * (size_t)k;
+      const int *ri = idx + (size_t)r * (size_t)(k + 1);
       int c = 0;
       /* Drop the query itself (with duplicate points it may not come first). */
-      for (int j = 0; j <= k && c < k; j++) {
-        int q = idx[(size_t)r * (size_t)(k + 1) + (size_t)j];
-        if (q != v && q >= 0) out[c++] = q;
-      }
-      for (int j = 0; c < k && j <= k; j++) out[c++] = idx[(size_t)r * (size_t)(k + 1) + (size_t)j];
+      for (int j = 0; j <= k && c < k; j++)
+        if (ri[j] != v && ri[j] >= 0) out[c++] = ri[j];
+      for (int j = 0; c < k && j <= k; j++) out[c++] = ri[j];
+      kd2[v] = dist[(size_t)r * (size_t)(k + 1) + (size_t)k]; /* farthest of the k + 1 */
       sort_i32(out, k);
     }
     karst_progress(ctx, "neighbours", (double)(b0 + rows), (double)n);
@@ -260,23 +260,44 @@ typedef struct build {
   karst_int_t n;
   int k;
   const int32_t *nbr;
-  unsigned char *mutual;
+  const double *kd2;
+  unsigned char *mutual, *inside;
   karst_graph_t *g;
   const karst_i_cost_model_t *model;
   karst_int_t max_deg;
   int failed[MAX_THREADS];
 } build_t;
 
-/* mutual[u k + j] = whether u is also among the neighbours of nbr[u k + j]. */
+/* mutual[u k + j] = whether u is also among the neighbours of v = nbr[u k + j].
+ * A point strictly closer to v than v's k-th neighbour is in v's list, one
+ * strictly farther is not; only distances within MUTUAL_BAND (relative) of
+ * the k-th distance, where FLANN's rounding or a tie could decide, are
+ * looked up in the list. The band only chooses the exact path: no effect
+ * on the result. */
+#define MUTUAL_BAND 1e-9
 static void task_mutual(void *p, int tid, int nth) {
   build_t *B = p;
   int k = B->k;
+  const double *x = B->g->xyz;
   FOR_ROWS(u, B->n, tid, nth) {
     for (int j = 0; j < k; j++) {
       int32_t v = B->nbr[(size_t)u * k + j];
-      B->mutual[(size_t)u * k + j] = (unsigned char)contains_i32(B->nbr + (size_t)v * k, k, (int32_t)u);
+      const double *a = x + 3 * u, *b = x + 3 * (karst_int_t)v;
+      double d2 = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+      double kd = B->kd2[v];
+      unsigned char m;
+      if (d2 < kd * (1 - MUTUAL_BAND)) m = 1;
+      else if (d2 > kd * (1 + MUTUAL_BAND)) m = 0;
+      else m = (unsigned char)contains_i32(B->nbr + (size_t)v * k, k, (int32_t)u);
+      B->mutual[(size_t)u * k + j] = m;
     }
   }
+}
+
+/* ok[v] = whether vertex v is in the bedrock (edges at v are then excluded). */
+static void task_inside(void *p, int tid, int nth) {
+  build_t *B = p;
+  FOR_ROWS(v, B->n, tid, nth) B->inside[v] = (unsigned char)karst_cost_in_bedrock(B->model->sc, B->g->xyz + 3 * v);
 }
 
 /* Each row holds its own k neighbours then, in increasing order, the
@@ -315,7 +336,9 @@ static void task_cost(void *p, int tid, int nth) {
     for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++) {
       karst_int_t v = g->adj[a];
       if (v < u) continue;
-      double c = karst_i_cost_edge(B->model, g->xyz + 3 * u, g->xyz + 3 * v);
+      double c = B->inside[u] && B->inside[v]
+                     ? karst_i_cost_edge_inside(B->model, g->xyz + 3 * u, g->xyz + 3 * v)
+                     : INFINITY;
       g->cost[a] = c;
       g->cost[find_arc(g->adj, g->offsets[v], g->offsets[v + 1], u)] = c;
     }
@@ -347,7 +370,8 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
   karst_graph_t g;
   karst_graph_init(&g);
   int32_t *nbr = NULL;
-  unsigned char *mutual = NULL;
+  double *kd2 = NULL;
+  unsigned char *mutual = NULL, *inside = NULL;
   karst_int_t *cursor = NULL;
   karst_i_cost_model_t model;
   memset(&model, 0, sizeof model);
@@ -371,12 +395,15 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
   int k = sc->sampling.k < n - 1 ? sc->sampling.k : (int)(n > 0 ? n - 1 : 0);
   if (k > 0) {
     nbr = malloc(sizeof(int32_t) * (size_t)n * (size_t)k);
+    kd2 = malloc(sizeof(double) * (size_t)n);
     mutual = malloc((size_t)n * (size_t)k);
+    inside = malloc((size_t)n);
     cursor = malloc(sizeof(karst_int_t) * (size_t)n);
-    if (!nbr || !mutual || !cursor) goto nomem;
-    if ((err = knn_lists(ctx, samples->xyz, n, k, nth, nbr)) != KARST_SUCCESS) goto cleanup;
-    build_t B = {ctx, n, k, nbr, mutual, &g, &model, 0, {0}};
+    if (!nbr || !kd2 || !mutual || !inside || !cursor) goto nomem;
+    if ((err = knn_lists(ctx, samples->xyz, n, k, nth, nbr, kd2)) != KARST_SUCCESS) goto cleanup;
+    build_t B = {ctx, n, k, nbr, kd2, mutual, inside, &g, &model, 0, {0}};
     run_parallel(nth, task_mutual, &B);
+    run_parallel(nth, task_inside, &B);
     /* Degrees: k own neighbours plus the vertices that chose v alone. */
     for (karst_int_t v = 0; v < n; v++) g.offsets[v + 1] = k;
     for (size_t a = 0; a < (size_t)n * (size_t)k; a++)
@@ -399,8 +426,8 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
           int32_t v = nbr[(size_t)u * k + j];
           g.adj[cursor[v]++] = u;
         }
-    free(nbr), free(mutual), free(cursor);
-    nbr = NULL, mutual = NULL, cursor = NULL;
+    free(nbr), free(mutual), free(cursor), free(kd2);
+    nbr = NULL, mutual = NULL, cursor = NULL, kd2 = NULL;
     run_parallel(nth, task_merge, &B);
     for (int t = 0; t < MAX_THREADS; t++)
       if (B.failed[t]) goto nomem;
@@ -436,7 +463,9 @@ cleanup:
   karst_graph_destroy(&g);
   karst_i_cost_model_destroy(&model);
   free(nbr);
+  free(kd2);
   free(mutual);
+  free(inside);
   free(cursor);
   return err;
 }

@@ -164,15 +164,21 @@ typedef struct sampler {
   double rf, rc, rm; /* feature radius, fill radius, min of both */
   double lo[3], hi[3];
   hgrid_t feat;
-  /* dense fill grid */
+  /* dense fill grid with a border of 2 empty cells on every side, so that
+   * neighbours are found by adding a precomputed linear offset */
   double cc;
-  int64_t cd[3];
-  int32_t *fill;         /* sample index per cell, -1 = empty */
-  unsigned char *near;   /* 1 if a feature sample lies within rm of the cell */
+  int64_t cd[3], pd[3]; /* cells per axis, without and with the border */
+  int32_t *fill;        /* sample index per cell; -1 empty, -2 empty and covered */
+  unsigned char *near;  /* 1 if a feature sample lies within rm of the cell */
   int n_off;
-  int off[125][3];       /* neighbour offsets that can hold a conflicting fill sample */
+  int64_t delta[125];   /* linear offsets of the cells that can hold a conflicting fill sample */
   const char *stage;     /* for messages */
 } sampler_t;
+
+/* Linear index of fill cell (i, j, k) in the bordered grid. */
+static int64_t pidx(const sampler_t *S, int64_t i, int64_t j, int64_t k) {
+  return (i + 2) + S->pd[0] * ((j + 2) + S->pd[1] * (k + 2));
+}
 
 static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
   if (S->s->n >= S->sc->sampling.max_samples)
@@ -196,7 +202,7 @@ static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_so
   }
   for (int64_t k = lo[2]; k <= hi[2]; k++)
     for (int64_t j = lo[1]; j <= hi[1]; j++)
-      for (int64_t i = lo[0]; i <= hi[0]; i++) S->near[i + S->cd[0] * (j + S->cd[1] * k)] = 1;
+      for (int64_t i = lo[0]; i <= hi[0]; i++) S->near[pidx(S, i, j, k)] = 1;
   return KARST_SUCCESS;
 }
 
@@ -398,19 +404,34 @@ cleanup:
   return err;
 }
 
-static int fill_conflict(const sampler_t *S, const double p[3], const int64_t c[3]) {
+/* Conflict of a fill dart p in bordered cell `id`: returns -1 when p is
+ * free, else the index of the conflicting fill sample, or -2 for a feature. */
+static int64_t fill_conflict(const sampler_t *S, const double p[3], int64_t id) {
   const double *xyz = S->s->xyz;
   double r2 = S->rc * S->rc;
   for (int o = 0; o < S->n_off; o++) {
-    int64_t i = c[0] + S->off[o][0], j = c[1] + S->off[o][1], k = c[2] + S->off[o][2];
-    if (i < 0 || j < 0 || k < 0 || i >= S->cd[0] || j >= S->cd[1] || k >= S->cd[2]) continue;
-    int32_t e = S->fill[i + S->cd[0] * (j + S->cd[1] * k)];
+    int32_t e = S->fill[id + S->delta[o]];
     if (e < 0) continue;
     const double *q = xyz + 3 * (int64_t)e;
     double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
-    if (dx * dx + dy * dy + dz * dz < r2) return 1;
+    if (dx * dx + dy * dy + dz * dz < r2) return e;
   }
-  return S->near[c[0] + S->cd[0] * (c[1] + S->cd[1] * c[2])] && hgrid_conflict(&S->feat, p, S->rm);
+  return S->near[id] && hgrid_conflict(&S->feat, p, S->rm) ? -2 : -1;
+}
+
+/* Whether the ball of radius rc around q covers cell c entirely (every
+ * corner strictly inside; the ball is convex): no later dart can succeed. */
+static int cell_covered(const sampler_t *S, const int64_t c[3], const double q[3]) {
+  double r2 = S->rc * S->rc;
+  for (int m = 0; m < 8; m++) {
+    double d2 = 0;
+    for (int a = 0; a < 3; a++) {
+      double x = S->lo[a] + (double)(c[a] + ((m >> a) & 1)) * S->cc - q[a];
+      d2 += x * x;
+    }
+    if (!(d2 < r2)) return 0;
+  }
+  return 1;
 }
 
 static int cmp_off(const void *a, const void *b) {
@@ -419,53 +440,160 @@ static int cmp_off(const void *a, const void *b) {
   return (dx > dy) - (dx < dy);
 }
 
+/* Fill cells are visited tile by tile (tiles of FILL_TILE^3 cells in a random
+ * order, cells in a random order inside each tile): every dart still sees
+ * all samples placed before it, as in plain dart throwing, but consecutive
+ * darts touch the same few kilobytes of the grid instead of random memory. */
+#define FILL_TILE 8
+
 static karst_error_t sample_fill(sampler_t *S) {
   cells_t cells = {0};
+  int64_t *tiles = NULL, *ktop = NULL;
   karst_error_t err = KARST_SUCCESS;
   double limit = (double)KARST_SAMPLING_MAX_CELLS_PER_SAMPLE * (double)S->sc->sampling.max_samples;
+  /* Active cells of each column: those starting below the highest terrain point. */
+  ktop = malloc(sizeof(int64_t) * (size_t)(S->cd[0] * S->cd[1]));
+  int64_t nt[3];
+  for (int a = 0; a < 3; a++) nt[a] = (S->cd[a] + FILL_TILE - 1) / FILL_TILE;
+  tiles = malloc(sizeof(int64_t) * (size_t)(nt[0] * nt[1] * nt[2]));
+  if (!ktop || !tiles) {
+    err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
+    goto cleanup;
+  }
+  double total = 0;
   for (int64_t j = 0; j < S->cd[1]; j++)
     for (int64_t i = 0; i < S->cd[0]; i++) {
       double x0 = S->lo[0] + i * S->cc, x1 = fmin(S->hi[0], x0 + S->cc);
       double y0 = S->lo[1] + j * S->cc, y1 = fmin(S->hi[1], y0 + S->cc);
       double ztop = fmin(S->hi[2], karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1));
-      for (int64_t k = 0; k < S->cd[2] && S->lo[2] + k * S->cc < ztop; k++) {
-        if ((double)cells.n >= limit) {
-          err = karst_set_error(S->ctx, KARST_ERANGE,
-                                "the fill samples need more than %.0f grid cells of %g m (%d per "
-                                "allowed sample, sampling.max_samples = %lld): they would exceed "
-                                "max_samples; increase fill_radius or max_samples",
-                                limit, S->cc, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
-                                (long long)S->sc->sampling.max_samples);
-          goto cleanup;
-        }
-        if (!cells_push(&cells, i + S->cd[0] * (j + S->cd[1] * k))) {
-          err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
-          goto cleanup;
-        }
-      }
+      int64_t k = 0;
+      while (k < S->cd[2] && S->lo[2] + k * S->cc < ztop) k++;
+      ktop[i + S->cd[0] * j] = k;
+      total += (double)k;
     }
-  shuffle(S->rng, cells.v, cells.n);
-  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES; pass++) {
+  if (total > limit) {
+    err = karst_set_error(S->ctx, KARST_ERANGE,
+                          "the fill samples need %.0f grid cells of %g m, more than %d per "
+                          "allowed sample (sampling.max_samples = %lld): they would exceed "
+                          "max_samples; increase fill_radius or max_samples",
+                          total, S->cc, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
+                          (long long)S->sc->sampling.max_samples);
+    goto cleanup;
+  }
+  size_t ntiles = (size_t)(nt[0] * nt[1] * nt[2]);
+  for (size_t t = 0; t < ntiles; t++) tiles[t] = (int64_t)t;
+  shuffle(S->rng, tiles, ntiles);
+  for (size_t t = 0; t < ntiles; t++) {
+    int64_t ti = tiles[t] % nt[0], tj = tiles[t] / nt[0] % nt[1], tk = tiles[t] / nt[0] / nt[1];
+    size_t first = cells.n;
+    for (int64_t k = tk * FILL_TILE; k < (tk + 1) * FILL_TILE && k < S->cd[2]; k++)
+      for (int64_t j = tj * FILL_TILE; j < (tj + 1) * FILL_TILE && j < S->cd[1]; j++)
+        for (int64_t i = ti * FILL_TILE; i < (ti + 1) * FILL_TILE && i < S->cd[0]; i++)
+          if (k < ktop[i + S->cd[0] * j] && !cells_push(&cells, pidx(S, i, j, k))) {
+            err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
+            goto cleanup;
+          }
+    shuffle(S->rng, cells.v + first, cells.n - first);
+  }
+  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES && cells.n > 0; pass++) {
     if (karst_interrupted(S->ctx)) {
       err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
       goto cleanup;
     }
     karst_progress(S->ctx, "sampling", pass, KARST_SAMPLING_DART_PASSES);
+    size_t w = 0;
     for (size_t q = 0; q < cells.n; q++) {
       int64_t id = cells.v[q];
-      if (S->fill[id] >= 0) continue;
-      int64_t c[3] = {id % S->cd[0], id / S->cd[0] % S->cd[1], id / S->cd[0] / S->cd[1]};
+      int64_t c[3] = {id % S->pd[0] - 2, id / S->pd[0] % S->pd[1] - 2, id / S->pd[0] / S->pd[1] - 2};
       double p[3];
       if (!dart_in_cell(S, S->lo, S->cc, c, -INFINITY, INFINITY, p)) continue;
-      if (!(p[2] < karst_terrain_height(&S->sc->terrain, p[0], p[1]))) continue;
-      if (fill_conflict(S, p, c)) continue;
+      if (!(p[2] < karst_terrain_height(&S->sc->terrain, p[0], p[1]))) {
+        cells.v[w++] = id;
+        continue;
+      }
+      int64_t e = fill_conflict(S, p, id);
+      if (e >= 0 && cell_covered(S, c, S->s->xyz + 3 * e)) continue; /* never again */
+      if (e != -1) {
+        cells.v[w++] = id;
+        continue;
+      }
       if ((err = add_sample(S, p, KARST_SAMPLE_FILL)) != KARST_SUCCESS) goto cleanup;
       S->fill[id] = (int32_t)(S->s->n - 1);
     }
+    cells.n = w; /* keep the cells that may still take a sample, in the same order */
   }
 cleanup:
   free(cells.v);
+  free(tiles);
+  free(ktop);
   return err;
+}
+
+/* Spread the low 21 bits of x so that two zero bits separate them. */
+static uint64_t spread3(uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+/* Stable LSD radix sort of (key, idx) pairs on the low 64 bits, 8 per pass;
+ * k1, i1 are scratch of the same size. The result ends in k0, i0 (8 passes). */
+static void radix_sort(uint64_t *k0, int32_t *i0, uint64_t *k1, int32_t *i1, karst_int_t m) {
+  for (int shift = 0; shift < 64; shift += 8) {
+    size_t cnt[257] = {0};
+    for (karst_int_t i = 0; i < m; i++) cnt[((k0[i] >> shift) & 255) + 1]++;
+    for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
+    for (karst_int_t i = 0; i < m; i++) {
+      size_t d = cnt[(k0[i] >> shift) & 255]++;
+      k1[d] = k0[i], i1[d] = i0[i];
+    }
+    uint64_t *tk = k0;
+    k0 = k1, k1 = tk;
+    int32_t *ti = i0;
+    i0 = i1, i1 = ti;
+  }
+}
+
+/* Order each run of samples of one source (key points excepted: they keep
+ * the scenario's order) along a Morton (Z-order) curve of the domain box.
+ * Dart throwing visits cells in a random order; a space-filling order makes
+ * the neighbour search, the graph rows and the paths stage cache-friendly.
+ * Stable radix sort (ties keep the draw order): O(n), deterministic. */
+static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_samples_t *s) {
+  karst_int_t n = s->n;
+  uint64_t *key = malloc(sizeof(uint64_t) * 2 * (size_t)n + 1);
+  int32_t *idx = malloc(sizeof(int32_t) * 2 * (size_t)n + 1);
+  double *xyz = malloc(sizeof(double) * 3 * (size_t)n + 1);
+  if (!key || !idx || !xyz) {
+    free(key), free(idx), free(xyz);
+    return karst_set_error(ctx, KARST_ENOMEM, "no memory to order %lld samples", (long long)n);
+  }
+  const double scale = 2097151.0; /* 2^21 - 1 cells per axis */
+  for (karst_int_t b = s->n_key_points; b < n;) {
+    karst_int_t e = b;
+    while (e < n && s->source[e] == s->source[b]) e++;
+    karst_int_t m = e - b;
+    for (karst_int_t i = 0; i < m; i++) {
+      const double *p = s->xyz + 3 * (b + i);
+      uint64_t c = 0;
+      for (int a = 0; a < 3; a++) {
+        double f = (p[a] - sc->domain_min[a]) / (sc->domain_max[a] - sc->domain_min[a]);
+        c |= spread3((uint64_t)(fmin(fmax(f, 0.0), 1.0) * scale)) << a;
+      }
+      key[i] = c, idx[i] = (int32_t)(b + i);
+    }
+    radix_sort(key, idx, key + n, idx + n, m);
+    for (karst_int_t i = 0; i < m; i++)
+      memcpy(xyz + 3 * i, s->xyz + 3 * (karst_int_t)idx[i], 3 * sizeof(double));
+    memcpy(s->xyz + 3 * b, xyz, sizeof(double) * 3 * (size_t)m);
+    b = e;
+  }
+  free(key), free(idx), free(xyz);
+  return KARST_SUCCESS;
 }
 
 static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc) {
@@ -539,6 +667,8 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
  *  4. feature-radius Poisson samples where the resistance π is below
  *     sampling.permeable_threshold;
  *  5. fill samples at fill_radius elsewhere.
+ * Within each source the samples are then ordered along a Morton curve
+ * (cache locality for the graph and path stages).
  * Only points inside the domain box and strictly below the terrain are kept.
  * Every random draw comes from @p rng (same stream => same samples).
  * @param ctx context (errors, progress, interrupt).
@@ -576,8 +706,9 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
   for (int a = 0; a < 3; a++) {
     double ext = S.hi[a] - S.lo[a];
     double nc = fmax(1.0, ceil(ext / S.cc)), nf = fmax(1.0, ceil(ext / fcell));
-    ncells_fill *= nc, ncells_feat *= nf;
+    ncells_fill *= nc + 4, ncells_feat *= nf;
     S.cd[a] = (int64_t)fmin(nc, 1e18), fd[a] = (int64_t)fmin(nf, 1e18);
+    S.pd[a] = S.cd[a] + 4;
   }
   if (ncells_fill > MAX_GRID_CELLS) {
     err = karst_set_error(ctx, KARST_ERANGE,
@@ -604,14 +735,16 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
   /* Offsets (di, dj, dk) in [-2, 2]^3 whose cells come closer than r_c to
    * the centre cell: the gap along an axis is (|d| − 1)+ cells, so at most
    * two coordinates may be ±2. Nearest first: conflicts are found sooner. */
+  int off[125][3];
   for (int k = -2; k <= 2; k++)
     for (int j = -2; j <= 2; j++)
       for (int i = -2; i <= 2; i++) {
         int gap = (abs(i) == 2) + (abs(j) == 2) + (abs(k) == 2);
         if (gap == 3 || (i == 0 && j == 0 && k == 0)) continue;
-        S.off[S.n_off][0] = i, S.off[S.n_off][1] = j, S.off[S.n_off][2] = k, S.n_off++;
+        off[S.n_off][0] = i, off[S.n_off][1] = j, off[S.n_off][2] = k, S.n_off++;
       }
-  qsort(S.off, (size_t)S.n_off, sizeof S.off[0], cmp_off);
+  qsort(off, (size_t)S.n_off, sizeof off[0], cmp_off);
+  for (int o = 0; o < S.n_off; o++) S.delta[o] = off[o][0] + S.pd[0] * (off[o][1] + S.pd[1] * off[o][2]);
 
   S.stage = "key point";
   for (int i = 0; i < sc->n_key_points; i++)
@@ -661,6 +794,7 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
   }
   S.stage = "fill";
   if ((err = sample_fill(&S)) != KARST_SUCCESS) goto cleanup;
+  if ((err = morton_order(ctx, sc, &s)) != KARST_SUCCESS) goto cleanup;
   karst_progress(ctx, "sampling", 1, 1);
   karst_log(ctx, KARST_LOG_INFO, "sampling: %lld samples (%d key points)", (long long)s.n,
             sc->n_key_points);
