@@ -28,70 +28,45 @@
 #define MAX_GRID_CELLS ((double)INT32_MAX)
 
 /* ------------------------------------------------------------------------ */
-/* Sparse hash grid of feature samples (chained per cell)                    */
+/* Column grid of feature samples                                            */
 /* ------------------------------------------------------------------------ */
-typedef struct hgrid {
+/* Feature samples fill thin layers (horizons, water table) or small volumes,
+ * so they are kept per vertical column of the background grid: a dense 2-D
+ * array of chain heads (4 bytes per column) and one chain per column. A
+ * conflict query walks the 5 x 5 columns around the point, comparing z
+ * first. */
+typedef struct cgrid {
   double cell, origin[3];
   int64_t dims[3];
-  uint64_t *keys; /* open addressing; UINT64_MAX = empty slot */
-  int32_t *heads; /* first entry of the cell */
-  size_t cap, used;
-  double *xyz; /* entries */
+  int32_t *head; /* per column (i + dims[0] j), -1 = empty */
+  double *xyz;   /* entries */
   int32_t *next;
   size_t n, ncap;
-} hgrid_t;
+} cgrid_t;
 
-static uint64_t mix64(uint64_t x) {
-  x ^= x >> 30, x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27, x *= 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-static int hgrid_init(hgrid_t *g, double cell, const double origin[3], const int64_t dims[3]) {
+static int cgrid_init(cgrid_t *g, double cell, const double origin[3], const int64_t dims[3]) {
   memset(g, 0, sizeof *g);
   g->cell = cell;
   memcpy(g->origin, origin, sizeof g->origin);
   memcpy(g->dims, dims, sizeof g->dims);
-  g->cap = 1024;
-  g->keys = malloc(sizeof(uint64_t) * g->cap);
-  g->heads = malloc(sizeof(int32_t) * g->cap);
-  if (!g->keys || !g->heads) return 0;
-  memset(g->keys, 0xff, sizeof(uint64_t) * g->cap);
+  size_t cols = (size_t)(dims[0] * dims[1]);
+  g->head = malloc(sizeof(int32_t) * cols);
+  if (!g->head) return 0;
+  memset(g->head, 0xff, sizeof(int32_t) * cols);
   return 1;
 }
 
-static void hgrid_destroy(hgrid_t *g) {
-  free(g->keys), free(g->heads), free(g->xyz), free(g->next);
+static void cgrid_destroy(cgrid_t *g) {
+  free(g->head), free(g->xyz), free(g->next);
   memset(g, 0, sizeof *g);
 }
 
-static uint64_t hgrid_key(const hgrid_t *g, int64_t i, int64_t j, int64_t k) {
-  return (uint64_t)(i + g->dims[0] * (j + g->dims[1] * k));
+static int64_t cgrid_coord(const cgrid_t *g, double x, int a) {
+  double f = floor((x - g->origin[a]) / g->cell);
+  return f < 0 ? 0 : (f >= (double)g->dims[a] ? g->dims[a] - 1 : (int64_t)f);
 }
 
-static void hgrid_cell_of(const hgrid_t *g, const double p[3], int64_t c[3]) {
-  for (int a = 0; a < 3; a++) {
-    double f = floor((p[a] - g->origin[a]) / g->cell);
-    c[a] = f < 0 ? 0 : (f >= (double)g->dims[a] ? g->dims[a] - 1 : (int64_t)f);
-  }
-}
-
-static int32_t hgrid_head(const hgrid_t *g, uint64_t key) {
-  size_t mask = g->cap - 1, h = (size_t)mix64(key) & mask;
-  while (g->keys[h] != UINT64_MAX) {
-    if (g->keys[h] == key) return g->heads[h];
-    h = (h + 1) & mask;
-  }
-  return -1;
-}
-
-static size_t hgrid_slot(uint64_t *keys, size_t cap, uint64_t key) {
-  size_t mask = cap - 1, h = (size_t)mix64(key) & mask;
-  while (keys[h] != UINT64_MAX && keys[h] != key) h = (h + 1) & mask;
-  return h;
-}
-
-static int hgrid_insert(hgrid_t *g, const double p[3]) {
+static int cgrid_insert(cgrid_t *g, const double p[3]) {
   if (g->n == g->ncap) {
     size_t nc = g->ncap ? 2 * g->ncap : 1024;
     double *xyz = realloc(g->xyz, sizeof(double) * 3 * nc);
@@ -101,55 +76,36 @@ static int hgrid_insert(hgrid_t *g, const double p[3]) {
     if (!next) return 0;
     g->next = next, g->ncap = nc;
   }
-  if (2 * (g->used + 1) > g->cap) { /* keep the load below 1/2 */
-    size_t nc = 2 * g->cap;
-    uint64_t *keys = malloc(sizeof(uint64_t) * nc);
-    int32_t *heads = malloc(sizeof(int32_t) * nc);
-    if (!keys || !heads) {
-      free(keys), free(heads);
-      return 0;
-    }
-    memset(keys, 0xff, sizeof(uint64_t) * nc);
-    for (size_t i = 0; i < g->cap; i++)
-      if (g->keys[i] != UINT64_MAX) {
-        size_t s = hgrid_slot(keys, nc, g->keys[i]);
-        keys[s] = g->keys[i], heads[s] = g->heads[i];
-      }
-    free(g->keys), free(g->heads);
-    g->keys = keys, g->heads = heads, g->cap = nc;
-  }
-  int64_t c[3];
-  hgrid_cell_of(g, p, c);
-  uint64_t key = hgrid_key(g, c[0], c[1], c[2]);
-  size_t s = hgrid_slot(g->keys, g->cap, key);
+  int64_t col = cgrid_coord(g, p[0], 0) + g->dims[0] * cgrid_coord(g, p[1], 1);
   int32_t e = (int32_t)g->n++;
   memcpy(g->xyz + 3 * e, p, 3 * sizeof(double));
-  if (g->keys[s] == UINT64_MAX) {
-    g->keys[s] = key, g->used++;
-    g->next[e] = -1;
-  } else {
-    g->next[e] = g->heads[s];
-  }
-  g->heads[s] = e;
+  g->next[e] = g->head[col];
+  g->head[col] = e;
   return 1;
 }
 
+/* Whether cell (i, j, k) already holds a feature sample. */
+static int cgrid_occupied(const cgrid_t *g, int64_t i, int64_t j, int64_t k) {
+  for (int32_t e = g->head[i + g->dims[0] * j]; e >= 0; e = g->next[e])
+    if (cgrid_coord(g, g->xyz[3 * e + 2], 2) == k) return 1;
+  return 0;
+}
+
 /* Whether some entry lies closer than r to p. */
-static int hgrid_conflict(const hgrid_t *g, const double p[3], double r) {
+static int cgrid_conflict(const cgrid_t *g, const double p[3], double r) {
   if (g->n == 0) return 0;
-  int64_t lo[3], hi[3];
-  double plo[3] = {p[0] - r, p[1] - r, p[2] - r}, phi[3] = {p[0] + r, p[1] + r, p[2] + r};
-  hgrid_cell_of(g, plo, lo);
-  hgrid_cell_of(g, phi, hi);
+  int64_t i0 = cgrid_coord(g, p[0] - r, 0), i1 = cgrid_coord(g, p[0] + r, 0);
+  int64_t j0 = cgrid_coord(g, p[1] - r, 1), j1 = cgrid_coord(g, p[1] + r, 1);
   double r2 = r * r;
-  for (int64_t k = lo[2]; k <= hi[2]; k++)
-    for (int64_t j = lo[1]; j <= hi[1]; j++)
-      for (int64_t i = lo[0]; i <= hi[0]; i++)
-        for (int32_t e = hgrid_head(g, hgrid_key(g, i, j, k)); e >= 0; e = g->next[e]) {
-          const double *q = g->xyz + 3 * e;
-          double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
-          if (dx * dx + dy * dy + dz * dz < r2) return 1;
-        }
+  for (int64_t j = j0; j <= j1; j++)
+    for (int64_t i = i0; i <= i1; i++)
+      for (int32_t e = g->head[i + g->dims[0] * j]; e >= 0; e = g->next[e]) {
+        const double *q = g->xyz + 3 * e;
+        double dz = q[2] - p[2];
+        if (dz * dz >= r2) continue;
+        double dx = q[0] - p[0], dy = q[1] - p[1];
+        if (dx * dx + dy * dy + dz * dz < r2) return 1;
+      }
   return 0;
 }
 
@@ -163,7 +119,7 @@ typedef struct sampler {
   karst_samples_t *s;
   double rf, rc, rm; /* feature radius, fill radius, min of both */
   double lo[3], hi[3];
-  hgrid_t feat;
+  cgrid_t feat;
   /* dense fill grid with a border of 2 empty cells on every side, so that
    * neighbours are found by adding a precomputed linear offset */
   double cc;
@@ -191,7 +147,7 @@ static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_so
     return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for %lld samples",
                            (long long)S->s->n + 1);
   if (src == KARST_SAMPLE_FILL) return KARST_SUCCESS;
-  if (!hgrid_insert(&S->feat, p))
+  if (!cgrid_insert(&S->feat, p))
     return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the feature sample grid");
   /* Mark the fill cells a later fill dart would have to check against p. */
   int64_t lo[3], hi[3];
@@ -302,10 +258,15 @@ static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
 }
 
 /* Feature-grid cells (i, j, k) overlapping the region's bounds, in the box
- * and not entirely above the terrain. */
+ * and not entirely above the terrain, as linear keys i + nx (j + ny k).
+ * Columns are taken tile by tile (FILL_TILE^2 columns, tiles in a random
+ * order, cells shuffled inside a tile) for memory locality, as for the fill. */
+#define FILL_TILE 8
 static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out) {
-  const hgrid_t *g = &S->feat;
+  const cgrid_t *g = &S->feat;
   aabb_t box = aabb_all();
+  int64_t *tiles = NULL;
+  karst_error_t err = KARST_SUCCESS;
   if (!R->layer) {
     const karst_permeability_t *pm = &S->sc->permeability;
     box = pm->root ? perm_region(pm->root, pm->background, S->sc->sampling.permeable_threshold)
@@ -316,43 +277,56 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out)
   for (int a = 0; a < 3; a++) {
     double l = fmax(box.lo[a], S->lo[a]), h = fmin(box.hi[a], S->hi[a]);
     if (l > h) return KARST_SUCCESS;
-    double pl[3] = {0}, ph[3] = {0};
-    pl[a] = l, ph[a] = h;
-    int64_t cl[3], ch[3];
-    hgrid_cell_of(g, pl, cl);
-    hgrid_cell_of(g, ph, ch);
-    lo[a] = cl[a], hi[a] = ch[a];
+    lo[a] = cgrid_coord(g, l, a), hi[a] = cgrid_coord(g, h, a);
   }
   double limit = (double)KARST_SAMPLING_MAX_CELLS_PER_SAMPLE * (double)S->sc->sampling.max_samples;
-  for (int64_t j = lo[1]; j <= hi[1]; j++)
-    for (int64_t i = lo[0]; i <= hi[0]; i++) {
-      double x0 = fmax(S->lo[0], g->origin[0] + i * g->cell);
-      double x1 = fmin(S->hi[0], g->origin[0] + (i + 1) * g->cell);
-      double y0 = fmax(S->lo[1], g->origin[1] + j * g->cell);
-      double y1 = fmin(S->hi[1], g->origin[1] + (j + 1) * g->cell);
-      double ztop = karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1);
-      double zlo = S->lo[2], zhi = fmin(S->hi[2], ztop);
-      if (R->layer) {
-        double llo, lhi;
-        layer_range(R->layer, x0, x1, y0, y1, &llo, &lhi);
-        zlo = fmax(zlo, llo - R->band), zhi = fmin(zhi, lhi + R->band);
+  int64_t nti = (hi[0] - lo[0]) / FILL_TILE + 1, ntj = (hi[1] - lo[1]) / FILL_TILE + 1;
+  tiles = malloc(sizeof(int64_t) * (size_t)(nti * ntj));
+  if (!tiles) {
+    err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells", S->stage);
+    goto cleanup;
+  }
+  for (int64_t t = 0; t < nti * ntj; t++) tiles[t] = t;
+  shuffle(S->rng, tiles, (size_t)(nti * ntj));
+  for (int64_t t = 0; t < nti * ntj; t++) {
+    size_t first = out->n;
+    int64_t ti = lo[0] + tiles[t] % nti * FILL_TILE, tj = lo[1] + tiles[t] / nti * FILL_TILE;
+    for (int64_t j = tj; j < tj + FILL_TILE && j <= hi[1]; j++)
+      for (int64_t i = ti; i < ti + FILL_TILE && i <= hi[0]; i++) {
+        double x0 = fmax(S->lo[0], g->origin[0] + i * g->cell);
+        double x1 = fmin(S->hi[0], g->origin[0] + (i + 1) * g->cell);
+        double y0 = fmax(S->lo[1], g->origin[1] + j * g->cell);
+        double y1 = fmin(S->hi[1], g->origin[1] + (j + 1) * g->cell);
+        double ztop = karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1);
+        double zlo = fmax(S->lo[2], box.lo[2]), zhi = fmin(fmin(S->hi[2], box.hi[2]), ztop);
+        if (R->layer) {
+          double llo, lhi;
+          layer_range(R->layer, x0, x1, y0, y1, &llo, &lhi);
+          zlo = fmax(zlo, llo - R->band), zhi = fmin(zhi, lhi + R->band);
+        }
+        if (zlo > zhi) continue;
+        for (int64_t k = cgrid_coord(g, zlo, 2); k <= cgrid_coord(g, zhi, 2); k++) {
+          if ((double)out->n >= limit) {
+            err = karst_set_error(S->ctx, KARST_ERANGE,
+                                  "the %s samples need more than %.0f grid cells of %g m "
+                                  "(%d per allowed sample, sampling.max_samples = %lld): they "
+                                  "would exceed max_samples; increase feature_radius or max_samples",
+                                  S->stage, limit, g->cell, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
+                                  (long long)S->sc->sampling.max_samples);
+            goto cleanup;
+          }
+          if (!cells_push(out, i + g->dims[0] * (j + g->dims[1] * k))) {
+            err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells",
+                                  S->stage);
+            goto cleanup;
+          }
+        }
       }
-      if (zlo > zhi) continue;
-      double k0 = floor((zlo - g->origin[2]) / g->cell), k1 = floor((zhi - g->origin[2]) / g->cell);
-      for (int64_t k = (int64_t)fmax(k0, (double)lo[2]); k <= (int64_t)fmin(k1, (double)hi[2]); k++) {
-        if ((double)out->n >= limit)
-          return karst_set_error(S->ctx, KARST_ERANGE,
-                                 "the %s samples need more than %.0f grid cells of %g m "
-                                 "(%d per allowed sample, sampling.max_samples = %lld): they "
-                                 "would exceed max_samples; increase feature_radius or max_samples",
-                                 S->stage, limit, g->cell, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
-                                 (long long)S->sc->sampling.max_samples);
-        if (!cells_push(out, (int64_t)hgrid_key(g, i, j, k)))
-          return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells",
-                                 S->stage);
-      }
-    }
-  return KARST_SUCCESS;
+    shuffle(S->rng, out->v + first, out->n - first);
+  }
+cleanup:
+  free(tiles);
+  return err;
 }
 
 /* Uniform point in cell (i, j, k) of a grid, clipped to [zlo, zhi] and to the box. */
@@ -374,30 +348,30 @@ static karst_error_t sample_region(sampler_t *S, const region_t *R) {
   cells_t cells = {0};
   karst_error_t err = region_cells(S, R, &cells);
   if (err != KARST_SUCCESS) goto cleanup;
-  shuffle(S->rng, cells.v, cells.n);
-  hgrid_t *g = &S->feat;
-  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES; pass++) {
+  cgrid_t *g = &S->feat;
+  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES && cells.n > 0; pass++) {
     if (karst_interrupted(S->ctx)) {
       err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
       goto cleanup;
     }
+    size_t w = 0;
     for (size_t q = 0; q < cells.n; q++) {
-      uint64_t key = (uint64_t)cells.v[q];
-      if (hgrid_head(g, key) >= 0) continue; /* a cell holds at most one feature sample */
-      int64_t c[3] = {(int64_t)(key % (uint64_t)g->dims[0]),
-                      (int64_t)(key / (uint64_t)g->dims[0] % (uint64_t)g->dims[1]),
-                      (int64_t)(key / (uint64_t)g->dims[0] / (uint64_t)g->dims[1])};
+      int64_t key = cells.v[q];
+      int64_t c[3] = {key % g->dims[0], key / g->dims[0] % g->dims[1], key / g->dims[0] / g->dims[1]};
+      if (cgrid_occupied(g, c[0], c[1], c[2])) continue; /* at most one feature sample per cell */
       double zlo = -INFINITY, zhi = INFINITY, p[3];
       if (R->layer) {
         double x0 = g->origin[0] + c[0] * g->cell, y0 = g->origin[1] + c[1] * g->cell;
         layer_range(R->layer, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
         zlo -= R->band, zhi += R->band;
       }
+      cells.v[w++] = key;
       if (!dart_in_cell(S, g->origin, g->cell, c, zlo, zhi, p)) continue;
       if (!region_contains(S, R, p) || !karst_cost_in_bedrock(S->sc, p)) continue;
-      if (hgrid_conflict(g, p, S->rf)) continue;
+      if (cgrid_conflict(g, p, S->rf)) continue;
       if ((err = add_sample(S, p, R->src)) != KARST_SUCCESS) goto cleanup;
     }
+    cells.n = w;
   }
 cleanup:
   free(cells.v);
@@ -416,7 +390,7 @@ static int64_t fill_conflict(const sampler_t *S, const double p[3], int64_t id) 
     double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
     if (dx * dx + dy * dy + dz * dz < r2) return e;
   }
-  return S->near[id] && hgrid_conflict(&S->feat, p, S->rm) ? -2 : -1;
+  return S->near[id] && cgrid_conflict(&S->feat, p, S->rm) ? -2 : -1;
 }
 
 /* Whether the ball of radius rc around q covers cell c entirely (every
@@ -444,7 +418,6 @@ static int cmp_off(const void *a, const void *b) {
  * order, cells in a random order inside each tile): every dart still sees
  * all samples placed before it, as in plain dart throwing, but consecutive
  * darts touch the same few kilobytes of the grid instead of random memory. */
-#define FILL_TILE 8
 
 static karst_error_t sample_fill(sampler_t *S) {
   cells_t cells = {0};
@@ -717,16 +690,17 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
                           ncells_fill, S.cc, MAX_GRID_CELLS, S.rc);
     goto cleanup;
   }
-  if (ncells_feat > 4e18) {
+  if ((double)fd[0] * (double)fd[1] > MAX_GRID_CELLS || ncells_feat > 4e18) {
     err = karst_set_error(ctx, KARST_ERANGE,
-                          "sampling.feature_radius = %g m is too small for the domain box",
-                          S.rf);
+                          "sampling.feature_radius = %g m is too small for the domain box: "
+                          "%.3g grid columns of %g m, more than %.0f",
+                          S.rf, (double)fd[0] * (double)fd[1], fcell, MAX_GRID_CELLS);
     goto cleanup;
   }
   size_t nfill = (size_t)ncells_fill;
   S.fill = malloc(sizeof(int32_t) * nfill);
   S.near = calloc(nfill, 1);
-  if (!S.fill || !S.near || !hgrid_init(&S.feat, fcell, S.lo, fd)) {
+  if (!S.fill || !S.near || !cgrid_init(&S.feat, fcell, S.lo, fd)) {
     err = karst_set_error(ctx, KARST_ENOMEM, "no memory for a sampling grid of %.0f cells",
                           ncells_fill);
     goto cleanup;
@@ -768,7 +742,7 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
     for (double j = 1; j < m; j++) {
       double p[3];
       for (int a = 0; a < 3; a++) p[a] = P[a] + (j / m) * (Q[a] - P[a]);
-      if (!karst_cost_in_bedrock(sc, p) || hgrid_conflict(&S.feat, p, S.rf)) continue;
+      if (!karst_cost_in_bedrock(sc, p) || cgrid_conflict(&S.feat, p, S.rf)) continue;
       if ((err = add_sample(&S, p, KARST_SAMPLE_PRESCRIBED)) != KARST_SUCCESS) goto cleanup;
     }
   }
@@ -804,7 +778,7 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
   karst_samples_init(&s);
 cleanup:
   karst_samples_destroy(&s);
-  hgrid_destroy(&S.feat);
+  cgrid_destroy(&S.feat);
   free(S.fill);
   free(S.near);
   return err;
