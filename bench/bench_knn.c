@@ -19,7 +19,8 @@ static double now(void) {
 static double cpu_seconds(void) {
   struct rusage ru;
   getrusage(RUSAGE_SELF, &ru);
-  return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+  return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec +
+         1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
 static double peak_rss_mib(void) {
@@ -53,8 +54,8 @@ static int run_graph(karst_ctx_t *ctx, const karst_scenario_t *sc, const karst_s
   }
   printf("%-28s n = %lld, k = %d, %lld edges: kNN + undirected %.3f s, costs %.3f s, "
          "total %.3f s (CPU %.3f s)\n",
-         label, (long long)s->n, sc->sampling.k, (long long)karst_graph_edge_count(&g), m.t_costs - t0,
-         t1 - m.t_costs, t1 - t0, c1 - c0);
+         label, (long long)s->n, sc->sampling.k, (long long)karst_graph_edge_count(&g),
+         m.t_costs - t0, t1 - m.t_costs, t1 - t0, c1 - c0);
   karst_graph_destroy(&g);
   return 0;
 }
@@ -110,17 +111,19 @@ int main(int argc, char **argv) {
   sc.domain_min[2] = 0;
   sc.terrain.elevation = 200;
   sc.water_table = 60;
-  sc.sampling.fill_radius = 7.7, sc.sampling.feature_radius = 5, sc.sampling.feature_band = 1;
+  sc.sampling.fill_radius = 7.2, sc.sampling.feature_radius = 5, sc.sampling.feature_band = 1;
   sc.sampling.k = 100;
   sc.n_horizons = 1;
   sc.horizons = calloc(1, sizeof(karst_horizon_t));
   sc.horizons[0].elevation = 120, sc.horizons[0].radius = 10, sc.horizons[0].dip = 3;
-  sc.horizons[0].dip_direction = 45, sc.horizons[0].origin[0] = 1000, sc.horizons[0].origin[1] = 1000;
+  sc.horizons[0].dip_direction = 45, sc.horizons[0].origin[0] = 1000,
+  sc.horizons[0].origin[1] = 1000;
   sc.n_fractures = 3;
   sc.fractures = calloc(3, sizeof(karst_fracture_t));
   const double F[3][3] = {{0, 90, 0.5}, {90, 90, 0.5}, {30, 70, 0.3}};
   for (int i = 0; i < 3; i++)
-    sc.fractures[i].dip_direction = F[i][0], sc.fractures[i].dip = F[i][1], sc.fractures[i].weight = F[i][2];
+    sc.fractures[i].dip_direction = F[i][0], sc.fractures[i].dip = F[i][1],
+    sc.fractures[i].weight = F[i][2];
   sc.permeability.root = calloc(1, sizeof(karst_perm_node_t));
   karst_perm_node_t *sp = sc.permeability.root;
   sp->kind = KARST_PERM_SPHERE, sp->center[0] = 600, sp->center[1] = 1400, sp->center[2] = 80;
@@ -134,12 +137,13 @@ int main(int argc, char **argv) {
   }
   double t1 = now();
   int count[KARST_SAMPLE_SOURCE_COUNT] = {0};
-  for (karst_int_t i = 0; i < s.n; i++) count[s.source[i]]++;
+  for (karst_int_t i = 0; i < s.n; i++)
+    count[s.source[i]]++;
   printf("%-28s %lld samples (%d horizon, %d water table, %d permeability, %d fill) in %.3f s "
          "(CPU %.3f s)\n",
          "1.5M domain sampling", (long long)s.n, count[KARST_SAMPLE_HORIZON],
-         count[KARST_SAMPLE_WATER_TABLE], count[KARST_SAMPLE_PERMEABILITY], count[KARST_SAMPLE_FILL],
-         t1 - t0, cpu_seconds() - c0);
+         count[KARST_SAMPLE_WATER_TABLE], count[KARST_SAMPLE_PERMEABILITY],
+         count[KARST_SAMPLE_FILL], t1 - t0, cpu_seconds() - c0);
   if (run_graph(&ctx, &sc, &s, "1.5M domain, k = 100")) return 1;
   printf("1.5M domain: sampling + graph %.3f s, peak RSS %.0f MiB\n", now() - t0, peak_rss_mib());
   karst_samples_destroy(&s);

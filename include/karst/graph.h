@@ -15,13 +15,13 @@ extern "C" {
 #endif
 
 /** Which feature produced a sample (written as point data in samples.vtp). */
-#define KARST_SAMPLE_SOURCE_LIST(X)                                            \
-  X(KARST_SAMPLE_KEYPOINT, "key_point")                                        \
-  X(KARST_SAMPLE_HORIZON, "horizon")                                           \
-  X(KARST_SAMPLE_WATER_TABLE, "water_table")                                   \
-  X(KARST_SAMPLE_PERMEABILITY, "permeability")                                 \
-  X(KARST_SAMPLE_FILL, "fill")                                                 \
-  X(KARST_SAMPLE_AMPLIFICATION, "amplification")                              \
+#define KARST_SAMPLE_SOURCE_LIST(X)                                                                \
+  X(KARST_SAMPLE_KEYPOINT, "key_point")                                                            \
+  X(KARST_SAMPLE_HORIZON, "horizon")                                                               \
+  X(KARST_SAMPLE_WATER_TABLE, "water_table")                                                       \
+  X(KARST_SAMPLE_PERMEABILITY, "permeability")                                                     \
+  X(KARST_SAMPLE_FILL, "fill")                                                                     \
+  X(KARST_SAMPLE_AMPLIFICATION, "amplification")                                                   \
   X(KARST_SAMPLE_PRESCRIBED, "prescribed_path")
 
 typedef enum {
@@ -33,7 +33,8 @@ typedef enum {
 
 const char *karst_sample_source_name(karst_sample_source_t s);
 
-/** A point cloud in the bedrock. Samples 0 .. n_key_points-1 are the scenario's key points, in order. */
+/** A point cloud in the bedrock. Samples 0 .. n_key_points-1 are the scenario's key points, in
+ * order. */
 typedef struct karst_samples {
   karst_int_t n, cap;
   double *xyz;           /**< 3 * n */
@@ -54,12 +55,12 @@ karst_error_t karst_samples_add(karst_samples_t *s, const double p[3], karst_sam
  * INFINITY: leaving the bedrock) are removed, so every stored cost is finite.
  */
 typedef struct karst_graph {
-  karst_int_t n;          /**< vertices */
-  karst_int_t n_arcs;     /**< directed arcs = 2 * undirected edges */
-  const double *xyz;      /**< vertex positions (3 * n), borrowed from the samples */
-  karst_int_t *offsets;   /**< n + 1 */
-  karst_int_t *adj;       /**< n_arcs */
-  double *cost;           /**< n_arcs */
+  karst_int_t n;        /**< vertices */
+  karst_int_t n_arcs;   /**< directed arcs = 2 * undirected edges */
+  const double *xyz;    /**< vertex positions (3 * n), borrowed from the samples */
+  karst_int_t *offsets; /**< n + 1 */
+  karst_int_t *adj;     /**< n_arcs */
+  double *cost;         /**< n_arcs */
 } karst_graph_t;
 
 void karst_graph_init(karst_graph_t *g);

@@ -15,7 +15,9 @@
 #define MAX_BREAKS 64
 #define MAX_EXACT_HORIZONS 7
 
-static double clampd(double x, double a, double b) { return x < a ? a : (x > b ? b : x); }
+static double clampd(double x, double a, double b) {
+  return x < a ? a : (x > b ? b : x);
+}
 
 /* Smooth step g(x) = 3x^2 - 2x^3 on [0, 1], 1 beyond (Paris et al. 2021, §4.2). */
 static double smoothstep1(double x) {
@@ -125,12 +127,14 @@ int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double
   line_iter_t ix, iy;
   line_iter_init(&ix, a[0], d[0], t->xll, t->cellsize, t->ncols);
   line_iter_init(&iy, a[1], d[1], t->yll, t->cellsize, t->nrows);
-#define Q_AT(s) (a[2] + (s) * d[2] - karst_terrain_height(t, a[0] + (s) * d[0], a[1] + (s) * d[1]))
+#define Q_AT(s) (a[2] + (s)*d[2] - karst_terrain_height(t, a[0] + (s)*d[0], a[1] + (s)*d[1]))
   double s0 = 0.0, q0 = Q_AT(0.0);
   while (s0 < 1.0) {
     double s1 = fmin(1.0, fmin(ix.s_next, iy.s_next));
-    while (ix.s_next <= s1) line_iter_next(&ix);
-    while (iy.s_next <= s1) line_iter_next(&iy);
+    while (ix.s_next <= s1)
+      line_iter_next(&ix);
+    while (iy.s_next <= s1)
+      line_iter_next(&iy);
     if (!(s1 > s0)) continue;
     double qm = Q_AT(0.5 * (s0 + s1)), q1 = Q_AT(s1);
     if (quadratic_max(q0, qm, q1) >= 0.0) return 0;
@@ -153,8 +157,10 @@ double karst_i_terrain_max_rect(const karst_terrain_t *t, double x0, double x1, 
                   fmax(karst_terrain_height(t, x0, y1), karst_terrain_height(t, x1, y1)));
   if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) return m;
   double cs = t->cellsize;
-  double ilo = fmax(0.0, ceil((x0 - t->xll) / cs)), ihi = fmin(t->ncols - 1.0, floor((x1 - t->xll) / cs));
-  double jlo = fmax(0.0, ceil((y0 - t->yll) / cs)), jhi = fmin(t->nrows - 1.0, floor((y1 - t->yll) / cs));
+  double ilo = fmax(0.0, ceil((x0 - t->xll) / cs)),
+         ihi = fmin(t->ncols - 1.0, floor((x1 - t->xll) / cs));
+  double jlo = fmax(0.0, ceil((y0 - t->yll) / cs)),
+         jhi = fmin(t->nrows - 1.0, floor((y1 - t->yll) / cs));
   for (double i = ilo; i <= ihi; i++) {
     double x = t->xll + i * cs;
     m = fmax(m, fmax(karst_terrain_height(t, x, y0), karst_terrain_height(t, x, y1)));
@@ -247,7 +253,8 @@ static void sort_small(double *v, int n) {
   for (int i = 1; i < n; i++) {
     double x = v[i];
     int j = i - 1;
-    while (j >= 0 && v[j] > x) v[j + 1] = v[j], j--;
+    while (j >= 0 && v[j] > x)
+      v[j + 1] = v[j], j--;
     v[j + 1] = x;
   }
 }
@@ -288,11 +295,12 @@ static double horizon_integral(const karst_scenario_t *sc, const double a[3], co
     const karst_horizon_t *H = &sc->horizons[h];
     double ua = a[2] - karst_horizon_elevation(H, a[0], a[1]);
     double ub = b[2] - karst_horizon_elevation(H, b[0], b[1]);
-    int touches = (ua <= 0 && ub >= 0) || (ua >= 0 && ub <= 0) ||
-                  fmin(fabs(ua), fabs(ub)) < H->radius;
+    int touches =
+        (ua <= 0 && ub >= 0) || (ua >= 0 && ub <= 0) || fmin(fabs(ua), fabs(ub)) < H->radius;
     if (!touches) continue;
     rmin = fmin(rmin, H->radius);
-    if (n_active < MAX_EXACT_HORIZONS) al[n_active] = ua, be[n_active] = ub - ua, r[n_active] = H->radius;
+    if (n_active < MAX_EXACT_HORIZONS)
+      al[n_active] = ua, be[n_active] = ub - ua, r[n_active] = H->radius;
     n_active++;
   }
   if (n_active == 0) return 1.0;
@@ -305,7 +313,8 @@ static double horizon_integral(const karst_scenario_t *sc, const double a[3], co
     for (double i = 0; i < n; i++)
       for (int q = 0; q < 2; q++) {
         double s = (i + GL2_X[q]) * h, p[3];
-        for (int k = 0; k < 3; k++) p[k] = a[k] + s * (b[k] - a[k]);
+        for (int k = 0; k < 3; k++)
+          p[k] = a[k] + s * (b[k] - a[k]);
         sum += 0.5 * h * karst_cost_horizon_term(sc, p);
       }
     return sum;
@@ -332,10 +341,12 @@ static double horizon_integral(const karst_scenario_t *sc, const double a[3], co
   sort_small(br, nb);
   br[nb] = 1.0; /* 1 + A^2 + 2A <= 64 = MAX_BREAKS break points: none was dropped */
   double sum = 0.0, xprev = INFINITY;
-  for (int i = 0; i < n_active; i++) xprev = fmin(xprev, fabs(al[i]) / r[i]);
+  for (int i = 0; i < n_active; i++)
+    xprev = fmin(xprev, fabs(al[i]) / r[i]);
   for (int p = 0; p < nb; p++) {
     double s1 = br[p + 1], x1 = INFINITY;
-    for (int i = 0; i < n_active; i++) x1 = fmin(x1, fabs(al[i] + be[i] * s1) / r[i]);
+    for (int i = 0; i < n_active; i++)
+      x1 = fmin(x1, fabs(al[i] + be[i] * s1) / r[i]);
     sum += (s1 - br[p]) * mean_g_linear(xprev, x1);
     xprev = x1;
   }
@@ -393,7 +404,8 @@ static void perm_breaks(const karst_perm_node_t *n, const double a[3], const dou
       push_break(br, nb, (n->top - a[2]) / dz);
     }
   } else {
-    for (int i = 0; i < n->n_children; i++) perm_breaks(&n->children[i], a, b, br, nb);
+    for (int i = 0; i < n->n_children; i++)
+      perm_breaks(&n->children[i], a, b, br, nb);
   }
 }
 
@@ -426,7 +438,8 @@ static double perm_integral(const karst_i_cost_model_t *m, const double a[3], co
     for (double i = 0; i < n; i++)
       for (int q = 0; q < 3; q++) {
         double s = s0 + (i + GL3_X[q]) * h, x[3];
-        for (int k = 0; k < 3; k++) x[k] = a[k] + s * (b[k] - a[k]);
+        for (int k = 0; k < 3; k++)
+          x[k] = a[k] + s * (b[k] - a[k]);
         sum += GL3_W[q] * h * karst_permeability_eval(perm, x);
       }
   }
@@ -450,7 +463,8 @@ static int on_prescribed_path(const karst_i_cost_model_t *m, const double a[3], 
     int ka = sc->prescribed[i].a, kb = sc->prescribed[i].b;
     if (ka < 0 || kb < 0 || ka >= sc->n_key_points || kb >= sc->n_key_points) continue;
     const double *P = sc->key_points[ka].p, *Q = sc->key_points[kb].p;
-    double pq[3] = {Q[0] - P[0], Q[1] - P[1], Q[2] - P[2]}, ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double pq[3] = {Q[0] - P[0], Q[1] - P[1], Q[2] - P[2]},
+           ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     double lpq = sqrt(dot3(pq, pq));
     if (lpq == 0 || len == 0) continue;
     if (fabs(dot3(pq, ab)) < m->prescribed_cos * lpq * len) continue;
@@ -487,8 +501,11 @@ karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
       if (n->top > n->bottom) fmin_size = fmin(fmin_size, n->top - n->bottom);
     }
     for (int i = 0; i < n->n_children; i++) {
-      if (top < 64) stack[top++] = &n->children[i];
-      else fmin_size = fmin(fmin_size, sc->sampling.feature_radius); /* tree too large to walk here: be cautious */
+      if (top < 64)
+        stack[top++] = &n->children[i];
+      else
+        fmin_size = fmin(
+            fmin_size, sc->sampling.feature_radius); /* tree too large to walk here: be cautious */
     }
   }
   m->perm_step = KARST_COST_STEP_FRACTION * fmin_size;
@@ -610,7 +627,8 @@ double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
     double n[3], wk = sc->fractures[k].weight;
     karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, n);
     for (int i = 0; i < 3; i++)
-      for (int j = 0; j < 3; j++) M[i][j] += wk * n[i] * n[j];
+      for (int j = 0; j < 3; j++)
+        M[i][j] += wk * n[i] * n[j];
   }
   double cf_min = sc->n_fractures > 0 ? fmax(0.0, sym3_min_eigenvalue(M)) : 0.0;
   double pi_min = sc->permeability.background;
@@ -622,8 +640,10 @@ double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
     if (n->kind == KARST_PERM_SPHERE || n->kind == KARST_PERM_STRATUM)
       pi_min = fmin(pi_min, n->resistance);
     for (int i = 0; i < n->n_children; i++) {
-      if (top < 64) stack[top++] = &n->children[i];
-      else pi_min = 0.0; /* tree too large to walk here: 0 is always safe */
+      if (top < 64)
+        stack[top++] = &n->children[i];
+      else
+        pi_min = 0.0; /* tree too large to walk here: 0 is always safe */
     }
   }
   pi_min = clampd(pi_min, 0.0, 1.0);

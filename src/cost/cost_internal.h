@@ -9,8 +9,8 @@
 typedef struct karst_i_cost_model {
   const karst_scenario_t *sc;
   int n_fractures;
-  double *normals;      /**< 3 * n_fractures unit normals, or NULL (computed on the fly) */
-  double perm_step;     /**< max quadrature sub-interval for cπ (m), INFINITY if π is constant */
+  double *normals;       /**< 3 * n_fractures unit normals, or NULL (computed on the fly) */
+  double perm_step;      /**< max quadrature sub-interval for cπ (m), INFINITY if π is constant */
   double prescribed_cos; /**< cos(KARST_COST_PRESCRIBED_MAX_ANGLE) */
 } karst_i_cost_model_t;
 
@@ -30,7 +30,8 @@ double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3]
 int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double a[3],
                                         const double b[3]);
 
-/** Largest terrain elevation over the rectangle [x0, x1] x [y0, y1] (exact for the bilinear grid). */
+/** Largest terrain elevation over the rectangle [x0, x1] x [y0, y1] (exact for the bilinear grid).
+ */
 double karst_i_terrain_max_rect(const karst_terrain_t *t, double x0, double x1, double y0,
                                 double y1);
 

@@ -21,7 +21,9 @@
 #define MAX_THREADS 256
 
 /** Make @p g an empty graph (no allocation). O(1). */
-void karst_graph_init(karst_graph_t *g) { memset(g, 0, sizeof *g); }
+void karst_graph_init(karst_graph_t *g) {
+  memset(g, 0, sizeof *g);
+}
 
 /** Release the storage of @p g (not the borrowed positions) and leave it empty. O(1). */
 void karst_graph_destroy(karst_graph_t *g) {
@@ -32,7 +34,9 @@ void karst_graph_destroy(karst_graph_t *g) {
 }
 
 /** Number of undirected edges. O(1). */
-karst_int_t karst_graph_edge_count(const karst_graph_t *g) { return g->n_arcs / 2; }
+karst_int_t karst_graph_edge_count(const karst_graph_t *g) {
+  return g->n_arcs / 2;
+}
 
 /* ------------------------------------------------------------------------ */
 /* A minimal static-partition thread pool                                    */
@@ -58,17 +62,21 @@ static void run_parallel(int nthreads, task_fn fn, void *arg) {
   pthread_t th[MAX_THREADS];
   task_t tasks[MAX_THREADS];
   int started[MAX_THREADS] = {0};
-  for (int t = 0; t < nthreads; t++) tasks[t] = (task_t){fn, arg, t, nthreads};
-  for (int t = 1; t < nthreads; t++) started[t] = pthread_create(&th[t], NULL, task_main, &tasks[t]) == 0;
+  for (int t = 0; t < nthreads; t++)
+    tasks[t] = (task_t){fn, arg, t, nthreads};
+  for (int t = 1; t < nthreads; t++)
+    started[t] = pthread_create(&th[t], NULL, task_main, &tasks[t]) == 0;
   fn(arg, 0, nthreads);
   for (int t = 1; t < nthreads; t++) {
-    if (started[t]) pthread_join(th[t], NULL);
-    else fn(arg, t, nthreads);
+    if (started[t])
+      pthread_join(th[t], NULL);
+    else
+      fn(arg, t, nthreads);
   }
 }
 
-#define FOR_ROWS(v, n, tid, nth)                                                                  \
-  for (karst_int_t blk_ = (tid); blk_ * ROW_BLOCK < (n); blk_ += (nth))                           \
+#define FOR_ROWS(v, n, tid, nth)                                                                   \
+  for (karst_int_t blk_ = (tid); blk_ * ROW_BLOCK < (n); blk_ += (nth))                            \
     for (karst_int_t v = blk_ * ROW_BLOCK; v < (n) && v < (blk_ + 1) * ROW_BLOCK; v++)
 
 /* ------------------------------------------------------------------------ */
@@ -107,14 +115,17 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
   karst_int_t *fillp = NULL;
   karst_error_t err = KARST_SUCCESS;
   if (n < 0 || m < 0)
-    return karst_set_error(ctx, KARST_EINVAL, "graph: vertex count %lld and edge count %lld must be >= 0",
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "graph: vertex count %lld and edge count %lld must be >= 0",
                            (long long)n, (long long)m);
   for (karst_int_t i = 0; i < m; i++) {
     if (u[i] < 0 || u[i] >= n || v[i] < 0 || v[i] >= n)
-      return karst_set_error(ctx, KARST_EINVAL, "graph: edge %lld (%lld, %lld) has an end outside [0, %lld)",
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "graph: edge %lld (%lld, %lld) has an end outside [0, %lld)",
                              (long long)i, (long long)u[i], (long long)v[i], (long long)n);
     if (!(cost[i] >= 0))
-      return karst_set_error(ctx, KARST_EINVAL, "graph: edge %lld (%lld, %lld) has cost %g; costs must be >= 0",
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "graph: edge %lld (%lld, %lld) has cost %g; costs must be >= 0",
                              (long long)i, (long long)u[i], (long long)v[i], cost[i]);
   }
   r.n = n;
@@ -124,7 +135,8 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
   if (!r.offsets || !fillp) goto nomem;
   for (karst_int_t i = 0; i < m; i++)
     if (u[i] != v[i] && isfinite(cost[i])) r.offsets[u[i] + 1]++, r.offsets[v[i] + 1]++;
-  for (karst_int_t i = 0; i < n; i++) r.offsets[i + 1] += r.offsets[i];
+  for (karst_int_t i = 0; i < n; i++)
+    r.offsets[i + 1] += r.offsets[i];
   arcs = malloc(sizeof(arc_t) * ((size_t)r.offsets[n] + 1));
   if (!arcs) goto nomem;
   memcpy(fillp, r.offsets, sizeof(karst_int_t) * ((size_t)n + 1));
@@ -147,7 +159,8 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
   r.adj = malloc(sizeof(karst_int_t) * ((size_t)w + 1));
   r.cost = malloc(sizeof(double) * ((size_t)w + 1));
   if (!r.adj || !r.cost) goto nomem;
-  for (karst_int_t i = 0; i < w; i++) r.adj[i] = arcs[i].v, r.cost[i] = arcs[i].c;
+  for (karst_int_t i = 0; i < w; i++)
+    r.adj[i] = arcs[i].v, r.cost[i] = arcs[i].c;
   karst_graph_destroy(g);
   *g = r;
   karst_graph_init(&r);
@@ -169,7 +182,8 @@ static void sort_i32(int32_t *v, int n) {
   for (int i = 1; i < n; i++) {
     int32_t x = v[i];
     int j = i - 1;
-    while (j >= 0 && v[j] > x) v[j + 1] = v[j], j--;
+    while (j >= 0 && v[j] > x)
+      v[j + 1] = v[j], j--;
     v[j + 1] = x;
   }
 }
@@ -196,7 +210,9 @@ static karst_error_t knn_lists(karst_ctx_t *ctx, const double *xyz, karst_int_t 
   float speedup = 0;
   /* FLANN's C API takes a non-const pointer but only reads the data set. */
   flann_index_t index = flann_build_index_double((double *)xyz, (int)n, 3, &speedup, &fp);
-  if (!index) return karst_set_error(ctx, KARST_EEXTERNAL, "FLANN could not build a k-d tree of %lld points", (long long)n);
+  if (!index)
+    return karst_set_error(ctx, KARST_EEXTERNAL, "FLANN could not build a k-d tree of %lld points",
+                           (long long)n);
   size_t batch = (size_t)(n < KNN_BATCH ? n : KNN_BATCH);
   idx = malloc(sizeof(int) * batch * (size_t)(k + 1));
   dist = malloc(sizeof(double) * batch * (size_t)(k + 1));
@@ -223,7 +239,8 @@ static karst_error_t knn_lists(karst_ctx_t *ctx, const double *xyz, karst_int_t 
       /* Drop the query itself (with duplicate points it may not come first). */
       for (int j = 0; j <= k && c < k; j++)
         if (ri[j] != v && ri[j] >= 0) out[c++] = ri[j];
-      for (int j = 0; c < k && j <= k; j++) out[c++] = ri[j];
+      for (int j = 0; c < k && j <= k; j++)
+        out[c++] = ri[j];
       kd2[v] = dist[(size_t)r * (size_t)(k + 1) + (size_t)k]; /* farthest of the k + 1 */
       sort_i32(out, k);
     }
@@ -240,8 +257,10 @@ static int contains_i32(const int32_t *v, int n, int32_t x) {
   int lo = 0, hi = n;
   while (lo < hi) {
     int mid = (lo + hi) / 2;
-    if (v[mid] < x) lo = mid + 1;
-    else hi = mid;
+    if (v[mid] < x)
+      lo = mid + 1;
+    else
+      hi = mid;
   }
   return lo < n && v[lo] == x;
 }
@@ -249,8 +268,10 @@ static int contains_i32(const int32_t *v, int n, int32_t x) {
 static karst_int_t find_arc(const karst_int_t *adj, karst_int_t b, karst_int_t e, karst_int_t x) {
   while (b < e) {
     karst_int_t mid = b + (e - b) / 2;
-    if (adj[mid] < x) b = mid + 1;
-    else e = mid;
+    if (adj[mid] < x)
+      b = mid + 1;
+    else
+      e = mid;
   }
   return b;
 }
@@ -283,12 +304,16 @@ static void task_mutual(void *p, int tid, int nth) {
     for (int j = 0; j < k; j++) {
       int32_t v = B->nbr[(size_t)u * k + j];
       const double *a = x + 3 * u, *b = x + 3 * (karst_int_t)v;
-      double d2 = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+      double d2 = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                  (a[2] - b[2]) * (a[2] - b[2]);
       double kd = B->kd2[v];
       unsigned char m;
-      if (d2 < kd * (1 - MUTUAL_BAND)) m = 1;
-      else if (d2 > kd * (1 + MUTUAL_BAND)) m = 0;
-      else m = (unsigned char)contains_i32(B->nbr + (size_t)v * k, k, (int32_t)u);
+      if (d2 < kd * (1 - MUTUAL_BAND))
+        m = 1;
+      else if (d2 > kd * (1 + MUTUAL_BAND))
+        m = 0;
+      else
+        m = (unsigned char)contains_i32(B->nbr + (size_t)v * k, k, (int32_t)u);
       B->mutual[(size_t)u * k + j] = m;
     }
   }
@@ -297,7 +322,8 @@ static void task_mutual(void *p, int tid, int nth) {
 /* ok[v] = whether vertex v is in the bedrock (edges at v are then excluded). */
 static void task_inside(void *p, int tid, int nth) {
   build_t *B = p;
-  FOR_ROWS(v, B->n, tid, nth) B->inside[v] = (unsigned char)karst_cost_in_bedrock(B->model->sc, B->g->xyz + 3 * v);
+  FOR_ROWS(v, B->n, tid, nth)
+  B->inside[v] = (unsigned char)karst_cost_in_bedrock(B->model->sc, B->g->xyz + 3 * v);
 }
 
 /* Each row holds its own k neighbours then, in increasing order, the
@@ -314,9 +340,12 @@ static void task_merge(void *p, int tid, int nth) {
     karst_int_t b = g->offsets[v], mid = b + B->k, e = g->offsets[v + 1];
     if (mid >= e) continue;
     karst_int_t i = b, j = mid, w = 0;
-    while (i < mid && j < e) tmp[w++] = g->adj[i] < g->adj[j] ? g->adj[i++] : g->adj[j++];
-    while (i < mid) tmp[w++] = g->adj[i++];
-    while (j < e) tmp[w++] = g->adj[j++];
+    while (i < mid && j < e)
+      tmp[w++] = g->adj[i] < g->adj[j] ? g->adj[i++] : g->adj[j++];
+    while (i < mid)
+      tmp[w++] = g->adj[i++];
+    while (j < e)
+      tmp[w++] = g->adj[j++];
     memcpy(g->adj + b, tmp, sizeof(karst_int_t) * (size_t)w);
   }
   free(tmp);
@@ -405,7 +434,8 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
     run_parallel(nth, task_mutual, &B);
     run_parallel(nth, task_inside, &B);
     /* Degrees: k own neighbours plus the vertices that chose v alone. */
-    for (karst_int_t v = 0; v < n; v++) g.offsets[v + 1] = k;
+    for (karst_int_t v = 0; v < n; v++)
+      g.offsets[v + 1] = k;
     for (size_t a = 0; a < (size_t)n * (size_t)k; a++)
       if (!mutual[a]) g.offsets[nbr[a] + 1]++;
     for (karst_int_t v = 0; v < n; v++) {
@@ -417,7 +447,8 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
     g.cost = malloc(sizeof(double) * (size_t)g.n_arcs);
     if (!g.adj || !g.cost) goto nomem;
     for (karst_int_t v = 0; v < n; v++) {
-      for (int j = 0; j < k; j++) g.adj[g.offsets[v] + j] = nbr[(size_t)v * k + j];
+      for (int j = 0; j < k; j++)
+        g.adj[g.offsets[v] + j] = nbr[(size_t)v * k + j];
       cursor[v] = g.offsets[v] + k;
     }
     for (karst_int_t u = 0; u < n; u++)

@@ -10,14 +10,17 @@ static const char *const source_names[] = {
 #undef KARST_X_NAME
 };
 
-/** Name of a sample source as written in samples.vtp ("horizon", ...); "unknown" if invalid. O(1). */
+/** Name of a sample source as written in samples.vtp ("horizon", ...); "unknown" if invalid. O(1).
+ */
 const char *karst_sample_source_name(karst_sample_source_t s) {
   if ((int)s < 0 || s >= KARST_SAMPLE_SOURCE_COUNT) return "unknown";
   return source_names[s];
 }
 
 /** Make @p s an empty sample set (no allocation). O(1). */
-void karst_samples_init(karst_samples_t *s) { memset(s, 0, sizeof *s); }
+void karst_samples_init(karst_samples_t *s) {
+  memset(s, 0, sizeof *s);
+}
 
 /** Release the storage of @p s and leave it empty. O(1). */
 void karst_samples_destroy(karst_samples_t *s) {

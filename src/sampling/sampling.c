@@ -127,8 +127,8 @@ typedef struct sampler {
   int32_t *fill;        /* sample index per cell; -1 empty, -2 empty and covered */
   unsigned char *near;  /* 1 if a feature sample lies within rm of the cell */
   int n_off;
-  int64_t delta[125];   /* linear offsets of the cells that can hold a conflicting fill sample */
-  const char *stage;     /* for messages */
+  int64_t delta[125]; /* linear offsets of the cells that can hold a conflicting fill sample */
+  const char *stage;  /* for messages */
 } sampler_t;
 
 /* Linear index of fill cell (i, j, k) in the bordered grid. */
@@ -152,13 +152,15 @@ static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_so
   /* Mark the fill cells a later fill dart would have to check against p. */
   int64_t lo[3], hi[3];
   for (int a = 0; a < 3; a++) {
-    double l = floor((p[a] - S->rm - S->lo[a]) / S->cc), h = floor((p[a] + S->rm - S->lo[a]) / S->cc);
+    double l = floor((p[a] - S->rm - S->lo[a]) / S->cc),
+           h = floor((p[a] + S->rm - S->lo[a]) / S->cc);
     lo[a] = l < 0 ? 0 : (int64_t)l;
     hi[a] = h >= (double)S->cd[a] ? S->cd[a] - 1 : (int64_t)h;
   }
   for (int64_t k = lo[2]; k <= hi[2]; k++)
     for (int64_t j = lo[1]; j <= hi[1]; j++)
-      for (int64_t i = lo[0]; i <= hi[0]; i++) S->near[pidx(S, i, j, k)] = 1;
+      for (int64_t i = lo[0]; i <= hi[0]; i++)
+        S->near[pidx(S, i, j, k)] = 1;
   return KARST_SUCCESS;
 }
 
@@ -230,7 +232,8 @@ static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
     aabb_t b = aabb_all();
     if (n->kind == KARST_PERM_SPHERE) {
       double r = n->radius + (n->falloff > 0 ? n->falloff : 0.0);
-      for (int a = 0; a < 3; a++) b.lo[a] = n->center[a] - r, b.hi[a] = n->center[a] + r;
+      for (int a = 0; a < 3; a++)
+        b.lo[a] = n->center[a] - r, b.hi[a] = n->center[a] + r;
     } else {
       b.lo[2] = n->bottom, b.hi[2] = n->top;
     }
@@ -242,7 +245,8 @@ static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
     aabb_t c = perm_region(&n->children[i], bg, t);
     if (n->kind == KARST_PERM_INTERSECTION) { /* max < t iff all children < t */
       if (acc.empty || c.empty) return aabb_none();
-      for (int a = 0; a < 3; a++) acc.lo[a] = fmax(acc.lo[a], c.lo[a]), acc.hi[a] = fmin(acc.hi[a], c.hi[a]);
+      for (int a = 0; a < 3; a++)
+        acc.lo[a] = fmax(acc.lo[a], c.lo[a]), acc.hi[a] = fmin(acc.hi[a], c.hi[a]);
       for (int a = 0; a < 3; a++)
         if (acc.lo[a] > acc.hi[a]) return aabb_none();
     } else { /* min (union) or weighted mean (blend) < t needs some child < t */
@@ -251,7 +255,8 @@ static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
         acc = c;
         continue;
       }
-      for (int a = 0; a < 3; a++) acc.lo[a] = fmin(acc.lo[a], c.lo[a]), acc.hi[a] = fmax(acc.hi[a], c.hi[a]);
+      for (int a = 0; a < 3; a++)
+        acc.lo[a] = fmin(acc.lo[a], c.lo[a]), acc.hi[a] = fmax(acc.hi[a], c.hi[a]);
     }
   }
   return acc;
@@ -269,8 +274,9 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out)
   karst_error_t err = KARST_SUCCESS;
   if (!R->layer) {
     const karst_permeability_t *pm = &S->sc->permeability;
-    box = pm->root ? perm_region(pm->root, pm->background, S->sc->sampling.permeable_threshold)
-                   : (pm->background < S->sc->sampling.permeable_threshold ? aabb_all() : aabb_none());
+    box = pm->root
+              ? perm_region(pm->root, pm->background, S->sc->sampling.permeable_threshold)
+              : (pm->background < S->sc->sampling.permeable_threshold ? aabb_all() : aabb_none());
     if (box.empty) return KARST_SUCCESS;
   }
   int64_t lo[3], hi[3];
@@ -286,7 +292,8 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out)
     err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells", S->stage);
     goto cleanup;
   }
-  for (int64_t t = 0; t < nti * ntj; t++) tiles[t] = t;
+  for (int64_t t = 0; t < nti * ntj; t++)
+    tiles[t] = t;
   shuffle(S->rng, tiles, (size_t)(nti * ntj));
   for (int64_t t = 0; t < nti * ntj; t++) {
     size_t first = out->n;
@@ -307,12 +314,13 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out)
         if (zlo > zhi) continue;
         for (int64_t k = cgrid_coord(g, zlo, 2); k <= cgrid_coord(g, zhi, 2); k++) {
           if ((double)out->n >= limit) {
-            err = karst_set_error(S->ctx, KARST_ERANGE,
-                                  "the %s samples need more than %.0f grid cells of %g m "
-                                  "(%d per allowed sample, sampling.max_samples = %lld): they "
-                                  "would exceed max_samples; increase feature_radius or max_samples",
-                                  S->stage, limit, g->cell, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
-                                  (long long)S->sc->sampling.max_samples);
+            err =
+                karst_set_error(S->ctx, KARST_ERANGE,
+                                "the %s samples need more than %.0f grid cells of %g m "
+                                "(%d per allowed sample, sampling.max_samples = %lld): they "
+                                "would exceed max_samples; increase feature_radius or max_samples",
+                                S->stage, limit, g->cell, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
+                                (long long)S->sc->sampling.max_samples);
             goto cleanup;
           }
           if (!cells_push(out, i + g->dims[0] * (j + g->dims[1] * k))) {
@@ -340,7 +348,8 @@ static int dart_in_cell(sampler_t *S, const double origin[3], double cell, const
   lo[2] = fmax(lo[2], zlo), hi[2] = fmin(hi[2], zhi);
   for (int a = 0; a < 3; a++)
     if (lo[a] > hi[a]) return 0;
-  for (int a = 0; a < 3; a++) p[a] = karst_rng_uniform_range(S->rng, lo[a], hi[a]);
+  for (int a = 0; a < 3; a++)
+    p[a] = karst_rng_uniform_range(S->rng, lo[a], hi[a]);
   return 1;
 }
 
@@ -357,7 +366,8 @@ static karst_error_t sample_region(sampler_t *S, const region_t *R) {
     size_t w = 0;
     for (size_t q = 0; q < cells.n; q++) {
       int64_t key = cells.v[q];
-      int64_t c[3] = {key % g->dims[0], key / g->dims[0] % g->dims[1], key / g->dims[0] / g->dims[1]};
+      int64_t c[3] = {key % g->dims[0], key / g->dims[0] % g->dims[1],
+                      key / g->dims[0] / g->dims[1]};
       if (cgrid_occupied(g, c[0], c[1], c[2])) continue; /* at most one feature sample per cell */
       double zlo = -INFINITY, zhi = INFINITY, p[3];
       if (R->layer) {
@@ -427,7 +437,8 @@ static karst_error_t sample_fill(sampler_t *S) {
   /* Active cells of each column: those starting below the highest terrain point. */
   ktop = malloc(sizeof(int64_t) * (size_t)(S->cd[0] * S->cd[1]));
   int64_t nt[3];
-  for (int a = 0; a < 3; a++) nt[a] = (S->cd[a] + FILL_TILE - 1) / FILL_TILE;
+  for (int a = 0; a < 3; a++)
+    nt[a] = (S->cd[a] + FILL_TILE - 1) / FILL_TILE;
   tiles = malloc(sizeof(int64_t) * (size_t)(nt[0] * nt[1] * nt[2]));
   if (!ktop || !tiles) {
     err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
@@ -440,7 +451,8 @@ static karst_error_t sample_fill(sampler_t *S) {
       double y0 = S->lo[1] + j * S->cc, y1 = fmin(S->hi[1], y0 + S->cc);
       double ztop = fmin(S->hi[2], karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1));
       int64_t k = 0;
-      while (k < S->cd[2] && S->lo[2] + k * S->cc < ztop) k++;
+      while (k < S->cd[2] && S->lo[2] + k * S->cc < ztop)
+        k++;
       ktop[i + S->cd[0] * j] = k;
       total += (double)k;
     }
@@ -454,7 +466,8 @@ static karst_error_t sample_fill(sampler_t *S) {
     goto cleanup;
   }
   size_t ntiles = (size_t)(nt[0] * nt[1] * nt[2]);
-  for (size_t t = 0; t < ntiles; t++) tiles[t] = (int64_t)t;
+  for (size_t t = 0; t < ntiles; t++)
+    tiles[t] = (int64_t)t;
   shuffle(S->rng, tiles, ntiles);
   for (size_t t = 0; t < ntiles; t++) {
     int64_t ti = tiles[t] % nt[0], tj = tiles[t] / nt[0] % nt[1], tk = tiles[t] / nt[0] / nt[1];
@@ -477,7 +490,8 @@ static karst_error_t sample_fill(sampler_t *S) {
     size_t w = 0;
     for (size_t q = 0; q < cells.n; q++) {
       int64_t id = cells.v[q];
-      int64_t c[3] = {id % S->pd[0] - 2, id / S->pd[0] % S->pd[1] - 2, id / S->pd[0] / S->pd[1] - 2};
+      int64_t c[3] = {id % S->pd[0] - 2, id / S->pd[0] % S->pd[1] - 2,
+                      id / S->pd[0] / S->pd[1] - 2};
       double p[3];
       if (!dart_in_cell(S, S->lo, S->cc, c, -INFINITY, INFINITY, p)) continue;
       if (!(p[2] < karst_terrain_height(&S->sc->terrain, p[0], p[1]))) {
@@ -518,8 +532,10 @@ static uint64_t spread3(uint64_t x) {
 static void radix_sort(uint64_t *k0, int32_t *i0, uint64_t *k1, int32_t *i1, karst_int_t m) {
   for (int shift = 0; shift < 64; shift += 8) {
     size_t cnt[257] = {0};
-    for (karst_int_t i = 0; i < m; i++) cnt[((k0[i] >> shift) & 255) + 1]++;
-    for (int b = 0; b < 256; b++) cnt[b + 1] += cnt[b];
+    for (karst_int_t i = 0; i < m; i++)
+      cnt[((k0[i] >> shift) & 255) + 1]++;
+    for (int b = 0; b < 256; b++)
+      cnt[b + 1] += cnt[b];
     for (karst_int_t i = 0; i < m; i++) {
       size_t d = cnt[(k0[i] >> shift) & 255]++;
       k1[d] = k0[i], i1[d] = i0[i];
@@ -536,7 +552,8 @@ static void radix_sort(uint64_t *k0, int32_t *i0, uint64_t *k1, int32_t *i1, kar
  * Dart throwing visits cells in a random order; a space-filling order makes
  * the neighbour search, the graph rows and the paths stage cache-friendly.
  * Stable radix sort (ties keep the draw order): O(n), deterministic. */
-static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_samples_t *s) {
+static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                  karst_samples_t *s) {
   karst_int_t n = s->n;
   uint64_t *key = malloc(sizeof(uint64_t) * 2 * (size_t)n + 1);
   int32_t *idx = malloc(sizeof(int32_t) * 2 * (size_t)n + 1);
@@ -548,7 +565,8 @@ static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc, 
   const double scale = 2097151.0; /* 2^21 - 1 cells per axis */
   for (karst_int_t b = s->n_key_points; b < n;) {
     karst_int_t e = b;
-    while (e < n && s->source[e] == s->source[b]) e++;
+    while (e < n && s->source[e] == s->source[b])
+      e++;
     karst_int_t m = e - b;
     for (karst_int_t i = 0; i < m; i++) {
       const double *p = s->xyz + 3 * (b + i);
@@ -576,7 +594,7 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
         !(sc->domain_min[a] < sc->domain_max[a]))
       return karst_set_error(ctx, KARST_EINVAL,
                              "domain: axis %c must have finite min < max, got [%g, %g]", "xyz"[a],
-                             sc->domain_min[a], sc->domain_max[a]);
+                             sc -> domain_min[a], sc -> domain_max[a]);
   if (!(isfinite(sp->fill_radius) && sp->fill_radius > 0))
     return karst_set_error(ctx, KARST_EINVAL, "sampling.fill_radius must be > 0, got %g",
                            sp->fill_radius);
@@ -596,7 +614,8 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
                            (long long)sp->max_samples);
   for (int h = 0; h < sc->n_horizons; h++) {
     const karst_horizon_t *H = &sc->horizons[h];
-    if (!(isfinite(H->radius) && H->radius > 0) || !isfinite(H->elevation) || !(H->dip >= 0 && H->dip < 90))
+    if (!(isfinite(H->radius) && H->radius > 0) || !isfinite(H->elevation) ||
+        !(H->dip >= 0 && H->dip < 90))
       return karst_set_error(ctx, KARST_EINVAL,
                              "horizon %d: radius must be > 0 and dip within [0, 90), got radius "
                              "%g, dip %g, elevation %g",
@@ -615,13 +634,15 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
     const double *p = k->p;
     if (karst_cost_in_bedrock(sc, p)) continue;
     int inbox = isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
-    for (int a = 0; inbox && a < 3; a++) inbox = p[a] >= sc->domain_min[a] && p[a] <= sc->domain_max[a];
+    for (int a = 0; inbox && a < 3; a++)
+      inbox = p[a] >= sc->domain_min[a] && p[a] <= sc->domain_max[a];
     if (!inbox)
-      return karst_set_error(ctx, KARST_EINVAL, "key point '%s' (%g, %g, %g) is outside the domain box",
-                             k->name, p[0], p[1], p[2]);
-    return karst_set_error(ctx, KARST_EINVAL,
-                           "key point '%s' (%g, %g, %g) is not below the terrain (terrain at %g m)",
-                           k->name, p[0], p[1], p[2], karst_terrain_height(&sc->terrain, p[0], p[1]));
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "key point '%s' (%g, %g, %g) is outside the domain box", k->name, p[0],
+                             p[1], p[2]);
+    return karst_set_error(
+        ctx, KARST_EINVAL, "key point '%s' (%g, %g, %g) is not below the terrain (terrain at %g m)",
+        k->name, p[0], p[1], p[2], karst_terrain_height(&sc->terrain, p[0], p[1]));
   }
   if (sc->n_key_points > sp->max_samples)
     return karst_set_error(ctx, KARST_ERANGE, "%d key points exceed sampling.max_samples = %lld",
@@ -718,7 +739,8 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
         off[S.n_off][0] = i, off[S.n_off][1] = j, off[S.n_off][2] = k, S.n_off++;
       }
   qsort(off, (size_t)S.n_off, sizeof off[0], cmp_off);
-  for (int o = 0; o < S.n_off; o++) S.delta[o] = off[o][0] + S.pd[0] * (off[o][1] + S.pd[1] * off[o][2]);
+  for (int o = 0; o < S.n_off; o++)
+    S.delta[o] = off[o][0] + S.pd[0] * (off[o][1] + S.pd[1] * off[o][2]);
 
   S.stage = "key point";
   for (int i = 0; i < sc->n_key_points; i++)
@@ -741,7 +763,8 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
     double m = floor(len / S.rf); /* spacing len / m >= r_f */
     for (double j = 1; j < m; j++) {
       double p[3];
-      for (int a = 0; a < 3; a++) p[a] = P[a] + (j / m) * (Q[a] - P[a]);
+      for (int a = 0; a < 3; a++)
+        p[a] = P[a] + (j / m) * (Q[a] - P[a]);
       if (!karst_cost_in_bedrock(sc, p) || cgrid_conflict(&S.feat, p, S.rf)) continue;
       if ((err = add_sample(&S, p, KARST_SAMPLE_PRESCRIBED)) != KARST_SUCCESS) goto cleanup;
     }

@@ -17,12 +17,14 @@
 /* A 100 m box under a flat terrain at 200 m with every weight zero but w0 = 1. */
 static void base_scenario(karst_scenario_t *sc) {
   karst_scenario_init(sc);
-  for (int a = 0; a < 3; a++) sc->domain_min[a] = 0, sc->domain_max[a] = 100;
+  for (int a = 0; a < 3; a++)
+    sc->domain_min[a] = 0, sc->domain_max[a] = 100;
   sc->terrain.elevation = 200;
   sc->cost.w0 = 1, sc->cost.horizon = 0, sc->cost.fracture = 0, sc->cost.permeability = 0;
 }
 
-static void add_horizon(karst_scenario_t *sc, double elev, double radius, double dip, double dipdir) {
+static void add_horizon(karst_scenario_t *sc, double elev, double radius, double dip,
+                        double dipdir) {
   sc->horizons = realloc(sc->horizons, sizeof(karst_horizon_t) * (size_t)(sc->n_horizons + 1));
   karst_horizon_t *h = &sc->horizons[sc->n_horizons++];
   memset(h, 0, sizeof *h);
@@ -111,7 +113,9 @@ static void test_horizon_dipping_reference(void **state) {
   add_horizon(&sc, 50, 6, 20, 45);
   add_horizon(&sc, 55, 3, 5, 200);
   add_horizon(&sc, 30, 10, 0, 0);
-  const double E[][6] = {{10, 20, 35, 90, 70, 65}, {50, 50, 40, 52, 48, 62}, {5, 95, 20, 95, 5, 80},
+  const double E[][6] = {{10, 20, 35, 90, 70, 65},
+                         {50, 50, 40, 52, 48, 62},
+                         {5, 95, 20, 95, 5, 80},
                          {40, 40, 52, 60, 40, 52}};
   for (int e = 0; e < 4; e++) {
     double got = karst_cost_edge(&sc, E[e], E[e] + 3);
@@ -177,7 +181,9 @@ static void test_perm_sphere_reference(void **state) {
   sp->radius = 8, sp->falloff = 6, sp->resistance = 0.05;
   st->kind = KARST_PERM_STRATUM, st->bottom = 70, st->top = 75, st->resistance = 0.4;
   sc.permeability.root = root;
-  const double E[][6] = {{30, 50, 50, 70, 50, 50}, {40, 45, 60, 62, 55, 80}, {50, 50, 50, 51, 50, 50},
+  const double E[][6] = {{30, 50, 50, 70, 50, 50},
+                         {40, 45, 60, 62, 55, 80},
+                         {50, 50, 50, 51, 50, 50},
                          {35, 35, 35, 65, 60, 62}};
   for (int e = 0; e < 4; e++) {
     double got = karst_cost_edge(&sc, E[e], E[e] + 3);
@@ -280,13 +286,15 @@ static void test_lower_bound(void **state) {
     sc.permeability.background = karst_rng_uniform(&r);
     sc.permeability.root = calloc(1, sizeof(karst_perm_node_t));
     sc.permeability.root->kind = KARST_PERM_SPHERE;
-    for (int a = 0; a < 3; a++) sc.permeability.root->center[a] = 50;
+    for (int a = 0; a < 3; a++)
+      sc.permeability.root->center[a] = 50;
     sc.permeability.root->radius = 20, sc.permeability.root->falloff = 10;
     sc.permeability.root->resistance = karst_rng_uniform(&r);
     double lb = karst_cost_lower_bound_per_metre(&sc), cmin = INFINITY, fmin_seen = INFINITY;
     for (int i = 0; i < 10000; i++) {
       double p[3], d[3];
-      for (int a = 0; a < 3; a++) p[a] = karst_rng_uniform_range(&r, 0, 100);
+      for (int a = 0; a < 3; a++)
+        p[a] = karst_rng_uniform_range(&r, 0, 100);
       karst_rng_unit_vector(&r, d);
       double c = karst_cost_point(&sc, p, d);
       assert_true(lb <= c);
@@ -295,21 +303,25 @@ static void test_lower_bound(void **state) {
     }
     for (int i = 0; i < 300; i++) {
       double a[3], b[3], d[3];
-      for (int k = 0; k < 3; k++) a[k] = karst_rng_uniform_range(&r, 10, 90);
+      for (int k = 0; k < 3; k++)
+        a[k] = karst_rng_uniform_range(&r, 10, 90);
       karst_rng_unit_vector(&r, d);
       double len = karst_rng_uniform_range(&r, 0.1, 10);
-      for (int k = 0; k < 3; k++) b[k] = a[k] + len * d[k];
+      for (int k = 0; k < 3; k++)
+        b[k] = a[k] + len * d[k];
       assert_true(lb * len <= karst_cost_edge(&sc, a, b));
     }
     (void)cmin;
     /* The fracture part of the bound is tight: some random direction comes
      * within 2 % of Σ w_k of the minimum λmin (1e4 directions). */
-    double lbF = (lb / (1 - KARST_COST_LB_MARGIN) - sc.cost.w0 -
-                  sc.cost.horizon * (sc.n_horizons == 0) -
-                  sc.cost.permeability * fmin(sc.permeability.background, sc.permeability.root->resistance)) /
-                 (sc.cost.fracture > 0 ? sc.cost.fracture : 1);
+    double lbF =
+        (lb / (1 - KARST_COST_LB_MARGIN) - sc.cost.w0 - sc.cost.horizon * (sc.n_horizons == 0) -
+         sc.cost.permeability *
+             fmin(sc.permeability.background, sc.permeability.root->resistance)) /
+        (sc.cost.fracture > 0 ? sc.cost.fracture : 1);
     double sw = 0;
-    for (int k = 0; k < nf; k++) sw += sc.fractures[k].weight;
+    for (int k = 0; k < nf; k++)
+      sw += sc.fractures[k].weight;
     if (nf > 0 && sc.cost.fracture > 0) assert_true(fmin_seen <= lbF + 0.02 * sw + 1e-12);
     karst_scenario_destroy(&sc);
   }
@@ -317,11 +329,16 @@ static void test_lower_bound(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_constant_cost),         cmocka_unit_test(test_horizon_vertical_edge),
-      cmocka_unit_test(test_horizon_oblique_edge),  cmocka_unit_test(test_horizon_dipping_reference),
-      cmocka_unit_test(test_fracture_strike),       cmocka_unit_test(test_perm_stratum),
-      cmocka_unit_test(test_perm_sphere_reference), cmocka_unit_test(test_bedrock_segments),
-      cmocka_unit_test(test_prescribed),            cmocka_unit_test(test_lower_bound),
+      cmocka_unit_test(test_constant_cost),
+      cmocka_unit_test(test_horizon_vertical_edge),
+      cmocka_unit_test(test_horizon_oblique_edge),
+      cmocka_unit_test(test_horizon_dipping_reference),
+      cmocka_unit_test(test_fracture_strike),
+      cmocka_unit_test(test_perm_stratum),
+      cmocka_unit_test(test_perm_sphere_reference),
+      cmocka_unit_test(test_bedrock_segments),
+      cmocka_unit_test(test_prescribed),
+      cmocka_unit_test(test_lower_bound),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -28,14 +28,16 @@ static void random_samples(karst_samples_t *s, int n, uint64_t seed, int line) {
   karst_samples_init(s);
   for (int i = 0; i < n; i++) {
     double p[3];
-    for (int a = 0; a < 3; a++) p[a] = karst_rng_uniform_range(&r, 0, 100);
+    for (int a = 0; a < 3; a++)
+      p[a] = karst_rng_uniform_range(&r, 0, 100);
     if (line) p[1] = p[2] = p[0]; /* collinear: the diagonal of the box */
     assert_int_equal(karst_samples_add(s, p, KARST_SAMPLE_FILL), KARST_SUCCESS);
   }
 }
 
 static double d2(const double *a, const double *b) {
-  return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+  return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+         (a[2] - b[2]) * (a[2] - b[2]);
 }
 
 typedef struct {
@@ -58,7 +60,8 @@ static unsigned char *brute_knn_union(const karst_samples_t *s, int k) {
     for (int u = 0; u < n; u++)
       if (u != v) buf[m++] = (di_t){d2(s->xyz + 3 * v, s->xyz + 3 * u), u};
     qsort(buf, (size_t)m, sizeof(di_t), cmp_di);
-    for (int j = 0; j < k && j < m; j++) A[(size_t)v * n + buf[j].i] = A[(size_t)buf[j].i * n + v] = 1;
+    for (int j = 0; j < k && j < m; j++)
+      A[(size_t)v * n + buf[j].i] = A[(size_t)buf[j].i * n + v] = 1;
   }
   free(buf);
   return A;
@@ -88,7 +91,8 @@ static void check_against_brute(const karst_samples_t *s, const karst_graph_t *g
   for (int v = 0; v < n; v++) {
     for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++)
       assert_int_equal(A[(size_t)v * n + g->adj[a]], 1);
-    for (int u = 0; u < n; u++) arcs += A[(size_t)v * n + u];
+    for (int u = 0; u < n; u++)
+      arcs += A[(size_t)v * n + u];
   }
   assert_int_equal(arcs, g->n_arcs); /* same size and included: equal sets */
   free(A);
@@ -113,7 +117,8 @@ static void test_knn_exact(void **state) {
   check_symmetric(&g1);
   check_against_brute(&s, &g1, 12);
   /* The union of the 12-NN relations gives every vertex at least 12 neighbours. */
-  for (karst_int_t v = 0; v < g1.n; v++) assert_true(g1.offsets[v + 1] - g1.offsets[v] >= 12);
+  for (karst_int_t v = 0; v < g1.n; v++)
+    assert_true(g1.offsets[v + 1] - g1.offsets[v] >= 12);
   assert_int_equal(g1.n_arcs, g2.n_arcs);
   assert_memory_equal(g1.offsets, g2.offsets, sizeof(karst_int_t) * (size_t)(g1.n + 1));
   assert_memory_equal(g1.adj, g2.adj, sizeof(karst_int_t) * (size_t)g1.n_arcs);
@@ -188,7 +193,8 @@ static void test_graph_small_cases(void **state) {
   assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
   check_symmetric(&g);
   for (karst_int_t v = 0; v < 40; v++)
-    for (karst_int_t a = g.offsets[v]; a < g.offsets[v + 1]; a++) assert_true((v < 20) == (g.adj[a] < 20));
+    for (karst_int_t a = g.offsets[v]; a < g.offsets[v + 1]; a++)
+      assert_true((v < 20) == (g.adj[a] < 20));
   /* Invalid k and non-finite samples are refused. */
   sc.sampling.k = 0;
   assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_EINVAL);
@@ -216,7 +222,8 @@ static void test_graph_excludes_air(void **state) {
   karst_samples_t s;
   karst_samples_init(&s);
   const double P[4][3] = {{0, 20, 50}, {5, 20, 50}, {95, 20, 50}, {100, 20, 50}};
-  for (int i = 0; i < 4; i++) karst_samples_add(&s, P[i], KARST_SAMPLE_FILL);
+  for (int i = 0; i < 4; i++)
+    karst_samples_add(&s, P[i], KARST_SAMPLE_FILL);
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
   karst_graph_t g;
@@ -309,9 +316,9 @@ static void test_pipeline(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_knn_exact),          cmocka_unit_test(test_knn_collinear),
-      cmocka_unit_test(test_graph_small_cases),  cmocka_unit_test(test_graph_excludes_air),
-      cmocka_unit_test(test_from_edges),         cmocka_unit_test(test_pipeline),
+      cmocka_unit_test(test_knn_exact),         cmocka_unit_test(test_knn_collinear),
+      cmocka_unit_test(test_graph_small_cases), cmocka_unit_test(test_graph_excludes_air),
+      cmocka_unit_test(test_from_edges),        cmocka_unit_test(test_pipeline),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -14,7 +14,8 @@
 #include "test_util.h"
 
 static void add_key(karst_scenario_t *sc, const char *name, double x, double y, double z) {
-  sc->key_points = realloc(sc->key_points, sizeof(karst_keypoint_t) * (size_t)(sc->n_key_points + 1));
+  sc->key_points =
+      realloc(sc->key_points, sizeof(karst_keypoint_t) * (size_t)(sc->n_key_points + 1));
   karst_keypoint_t *k = &sc->key_points[sc->n_key_points++];
   memset(k, 0, sizeof *k);
   snprintf(k->name, sizeof k->name, "%s", name);
@@ -52,9 +53,9 @@ static void scenario(karst_scenario_t *sc) {
   s->radius = 6, s->falloff = 2, s->resistance = 0.0;
 }
 
-
 static double dist(const double *a, const double *b) {
-  return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+  return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+              (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 /* Checks every pair (O(n²), independent of the grids): feature samples
@@ -67,12 +68,16 @@ static void check_poisson(const karst_scenario_t *sc, const karst_samples_t *s) 
       int a = s->source[i], b = s->source[j];
       if (a == KARST_SAMPLE_KEYPOINT && b == KARST_SAMPLE_KEYPOINT) continue;
       double d = dist(s->xyz + 3 * i, s->xyz + 3 * j), need;
-      if (a == KARST_SAMPLE_FILL && b == KARST_SAMPLE_FILL) need = rc;
-      else if (a == KARST_SAMPLE_FILL || b == KARST_SAMPLE_FILL) need = rm;
-      else need = rf;
+      if (a == KARST_SAMPLE_FILL && b == KARST_SAMPLE_FILL)
+        need = rc;
+      else if (a == KARST_SAMPLE_FILL || b == KARST_SAMPLE_FILL)
+        need = rm;
+      else
+        need = rf;
       if (!(d >= need)) {
         print_error("samples %lld (%s) and %lld (%s) are %g m apart, need %g\n", (long long)i,
-                    karst_sample_source_name(a), (long long)j, karst_sample_source_name(b), d, need);
+                    karst_sample_source_name(a), (long long)j, karst_sample_source_name(b), d,
+                    need);
         fail();
       }
     }
@@ -100,7 +105,8 @@ static void test_sampling_rules(void **state) {
     const double *p = s.xyz + 3 * i;
     count[s.source[i]]++;
     if (i >= 3) assert_int_not_equal(s.source[i], KARST_SAMPLE_KEYPOINT);
-    for (int a = 0; a < 3; a++) assert_true(p[a] >= sc.domain_min[a] && p[a] <= sc.domain_max[a]);
+    for (int a = 0; a < 3; a++)
+      assert_true(p[a] >= sc.domain_min[a] && p[a] <= sc.domain_max[a]);
     assert_true(p[2] < 50.0);
     if (s.source[i] == KARST_SAMPLE_HORIZON) assert_true(fabs(p[2] - 20) <= 1.0);
     if (s.source[i] == KARST_SAMPLE_WATER_TABLE) assert_true(fabs(p[2] - 32) <= 1.0);
@@ -159,7 +165,8 @@ static void test_sampling_determinism(void **state) {
               memcmp(s[0].xyz + 9, s[2].xyz + 9, sizeof(double) * 3 * (size_t)(m - 3)) != 0);
   /* Key points are the same whatever the stream. */
   assert_memory_equal(s[0].xyz, s[2].xyz, sizeof(double) * 9);
-  for (int r = 0; r < 3; r++) karst_samples_destroy(&s[r]);
+  for (int r = 0; r < 3; r++)
+    karst_samples_destroy(&s[r]);
   karst_scenario_destroy(&sc);
 }
 
@@ -177,7 +184,8 @@ static void test_sampling_dip_grid_prescribed(void **state) {
   sc.terrain.is_grid = 1, sc.terrain.ncols = 5, sc.terrain.nrows = 5, sc.terrain.cellsize = 25;
   sc.terrain.z = malloc(25 * sizeof(double));
   for (int j = 0; j < 5; j++)
-    for (int i = 0; i < 5; i++) sc.terrain.z[j * 5 + i] = 30 + 0.2 * 25 * i;
+    for (int i = 0; i < 5; i++)
+      sc.terrain.z[j * 5 + i] = 30 + 0.2 * 25 * i;
   add_key(&sc, "a", 10, 40, 20);
   add_key(&sc, "b", 90, 40, 20);
   sc.n_prescribed = 1;
@@ -229,7 +237,8 @@ static void test_sampling_degenerate(void **state) {
   sc.domain_max[2] = 99;
   assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
   assert_int_equal(s.n_key_points, 0);
-  for (karst_int_t i = 0; i < s.n; i++) assert_int_not_equal(s.source[i], KARST_SAMPLE_HORIZON);
+  for (karst_int_t i = 0; i < s.n; i++)
+    assert_int_not_equal(s.source[i], KARST_SAMPLE_HORIZON);
   assert_true(s.n > 100);
   karst_scenario_destroy(&sc);
 
