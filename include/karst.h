@@ -10,6 +10,7 @@
 #define KARST_H
 
 #include "karst/common.h"
+#include "karst/cost.h"
 #include "karst/crs.h"
 #include "karst/generate.h"
 #include "karst/graph.h"
@@ -17,6 +18,7 @@
 #include "karst/metrics.h"
 #include "karst/network.h"
 #include "karst/readers.h"
+#include "karst/sampling.h"
 #include "karst/scenario.h"
 #include "karst/vtk.h"
 
