@@ -363,7 +363,7 @@ static void plot_degrees(karst_i_buf_t *b, const double *ens, const double *surv
     ymax = fmax(ymax, ens[d] / se);
     if (survey && ss > 0) ymax = fmax(ymax, survey[d] / ss);
   }
-  p.ymax = ymax;
+  p.ymax = ymax * 1.08; /* headroom so the tallest bar does not touch the frame */
   karst_i_svg_axes(b, &p, 0, 8, 5, "node degree (last bar: 8 or more)", "fraction of nodes");
   for (int d = 1; d <= DEGREE_PLOT_MAX; d++) {
     double x0 = karst_i_plot_px(&p, d - 0.35), x1 = karst_i_plot_px(&p, d + 0.35);
