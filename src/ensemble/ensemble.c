@@ -316,7 +316,7 @@ static void *worker(void *arg) {
       if (better) {
         rs->err = err;
         rs->err_index = index;
-        snprintf(rs->errmsg, sizeof rs->errmsg, "realisation %" PRId64 ": %s", index,
+        snprintf(rs->errmsg, sizeof rs->errmsg, "realisation %" PRId64 ": %.1990s", index,
                  ctx.errmsg[0] ? ctx.errmsg : karst_strerror(err));
       }
     } else {
