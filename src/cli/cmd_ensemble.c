@@ -107,10 +107,6 @@ static int run(int argc, char **argv) {
   }
   ctx.progress = (!quiet && rank == 0) ? show_progress : NULL;
   ctx.progress_user = &ps;
-  if (quiet)
-    ctx.verbosity = KARST_LOG_WARNING;
-  else
-    ctx.verbosity = KARST_LOG_INFO;
 
   err = karst_scenario_load(&ctx, scenario, &sc);
   if (!err) err = karst_file_hash(&ctx, scenario, hash);

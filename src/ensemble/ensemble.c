@@ -337,6 +337,8 @@ static karst_error_t run_queue(karst_ctx_t *ctx, run_state_t *rs, int nthreads) 
   if (nthreads > rs->n_pending) nthreads = (int)rs->n_pending;
   th = calloc((size_t)nthreads, sizeof *th);
   if (!th) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  /* A first report before any work, so a display can start its clock and rate. */
+  karst_progress(ctx, "ensemble", 0.0, (double)rs->n_pending);
   pthread_mutex_init(&rs->lock, NULL);
   pthread_cond_init(&rs->changed, NULL);
   rs->active = nthreads;
@@ -350,7 +352,7 @@ static karst_error_t run_queue(karst_ctx_t *ctx, run_state_t *rs, int nthreads) 
     err = karst_set_error(ctx, KARST_EINVAL, "cannot start a worker thread");
     goto cleanup;
   }
-  karst_int_t reported = -1;
+  karst_int_t reported = 0;
   for (;;) {
     karst_int_t done = rs->done;
     int active = rs->active;

@@ -429,9 +429,9 @@ static void test_interrupt_and_resume(void **state) {
   char *ref = make_tmpdir(), *d = make_tmpdir();
   fake_t f = fake_default();
   karst_ensemble_summary_t s;
-  assert_int_equal(run_fake(ref, 30, 9, 2, &f, &s, NULL), KARST_SUCCESS);
+  assert_int_equal(run_fake(ref, 60, 9, 2, &f, &s, NULL), KARST_SUCCESS);
 
-  int status = interrupted_child(d, SIGTERM, 30);
+  int status = interrupted_child(d, SIGTERM, 60);
   assert_true(WIFEXITED(status));
   assert_int_equal(WEXITSTATUS(status), KARST_EINTERRUPTED);
   char real[1200], p[1300];
@@ -441,9 +441,9 @@ static void test_interrupt_and_resume(void **state) {
   snprintf(p, sizeof p, "%s/metrics.csv", d);
   assert_int_not_equal(access(p, F_OK), 0);    /* collection files only when complete */
   int members = count_entries(real, NULL) - 1; /* minus ensemble.key */
-  assert_true(members >= 3 && members < 30);
+  assert_true(members >= 3 && members < 60);
   /* Every member directory present is complete. */
-  for (int i = 0; i < 30; i++) {
+  for (int i = 0; i < 60; i++) {
     snprintf(p, sizeof p, "%s/%04d", real, i);
     if (access(p, F_OK) != 0) continue;
     snprintf(p, sizeof p, "%s/%04d/metrics.csv", real, i);
@@ -455,17 +455,17 @@ static void test_interrupt_and_resume(void **state) {
     assert_int_equal(lines, 2);
     free(m);
   }
-  assert_int_equal(run_fake(d, 30, 9, 2, &f, &s, NULL), KARST_SUCCESS);
+  assert_int_equal(run_fake(d, 60, 9, 2, &f, &s, NULL), KARST_SUCCESS);
   assert_int_equal(s.reused, members);
-  assert_int_equal(s.computed, 30 - members);
+  assert_int_equal(s.computed, 60 - members);
   assert_same_tree(ref, d);
   rm_rf(d);
 
   /* SIGKILL: no clean-up at all; the re-run removes the leftovers and completes. */
   char *k = make_tmpdir();
-  status = interrupted_child(k, SIGKILL, 30);
+  status = interrupted_child(k, SIGKILL, 60);
   assert_true(WIFSIGNALED(status));
-  assert_int_equal(run_fake(k, 30, 9, 1, &f, &s, NULL), KARST_SUCCESS);
+  assert_int_equal(run_fake(k, 60, 9, 1, &f, &s, NULL), KARST_SUCCESS);
   snprintf(real, sizeof real, "%s/realisations", k);
   assert_int_equal(count_entries(real, ".tmp."), 0);
   assert_same_tree(ref, k);
@@ -581,6 +581,7 @@ static void test_progress(void **state) {
   karst_ensemble_hooks_t h;
   fake_hooks(&h, &f);
   assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_SUCCESS);
+  /* At least the start (0 of 6) and the end (6 of 6); intermediate reports may coalesce. */
   assert_true(progress_calls >= 2);
   assert_close(progress_last_done, 6, 0);
   assert_close(progress_last_total, 6, 0);
