@@ -665,6 +665,77 @@ static void test_parameters_json(void **state) {
   free(d);
 }
 
+/* The real writers and metrics (VTK .vtp, Karstnet pair, karst_metrics_compute, .pvd) behind
+ * a fake realisation: same bytes for 1 and 2 threads, and the files read back. */
+static karst_error_t seed_only_realise(karst_ctx_t *ctx, void *user, uint64_t seed,
+                                       karst_int_t index, karst_network_t *net) {
+  (void)user;
+  fake_t f = fake_default();
+  return fake_realise(ctx, &f, seed, index, net);
+}
+
+static void test_pipeline_writers(void **state) {
+  (void)state;
+  char *a = make_tmpdir(), *b = make_tmpdir();
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_ensemble_hooks_t h;
+  karst_ensemble_pipeline_t pipe;
+  assert_int_equal(karst_ensemble_hooks_pipeline(&ctx, &h, &pipe, &sc), KARST_SUCCESS);
+  int nf = 0;
+  karst_metric_fields(&nf);
+  assert_int_equal(h.n_metrics, nf);
+  h.realise = seed_only_realise;
+  karst_ensemble_options_t opt;
+  karst_ensemble_options_init(&opt);
+  opt.n = 5;
+  opt.seed = 3;
+  opt.nthreads = 1;
+  karst_ensemble_summary_t s;
+  assert_int_equal(karst_ensemble_run(&ctx, a, &opt, &h, &s), KARST_SUCCESS);
+  opt.nthreads = 2;
+  assert_int_equal(karst_ensemble_run(&ctx, b, &opt, &h, &s), KARST_SUCCESS);
+  assert_same_tree(a, b);
+  char p[1200];
+  const char *files[] = {"ensemble.pvd", "realisations/0004/network.vtp",
+                         "realisations/0004/network_nodes.dat",
+                         "realisations/0004/network_links.dat"};
+  for (int i = 0; i < 4; i++) {
+    snprintf(p, sizeof p, "%s/%s", a, files[i]);
+    assert_int_equal(access(p, F_OK), 0);
+  }
+  /* The member reads back (VTK reader) with the node count its metrics row records. */
+  snprintf(p, sizeof p, "%s/realisations/0004/network.vtp", a);
+  karst_network_t net;
+  karst_network_init(&net);
+  assert_int_equal(karst_read_network(&ctx, p, KARST_FORMAT_AUTO, &net), KARST_SUCCESS);
+  snprintf(p, sizeof p, "%s/metrics.csv", a);
+  karst_ensemble_table_t t;
+  karst_ensemble_table_init(&t);
+  assert_int_equal(karst_ensemble_table_read(&ctx, p, &t), KARST_SUCCESS);
+  int cn = karst_ensemble_table_column(&t, "nodes"), ce = karst_ensemble_table_column(&t, "edges");
+  assert_true(cn >= 0 && ce >= 0);
+  assert_close(t.values[4 * t.n_cols + cn], (double)net.n_nodes, 0);
+  assert_close(t.values[4 * t.n_cols + ce], (double)net.n_edges, 0);
+  karst_ensemble_table_destroy(&t);
+  karst_network_destroy(&net);
+  /* The collection lists the members in order (Python's XML parser). */
+  char cmd[1600];
+  snprintf(cmd, sizeof cmd,
+           "/usr/bin/python3 -c \"import xml.etree.ElementTree as E; "
+           "d=[x.get('file') for x in E.parse('%s/ensemble.pvd').getroot().iter('DataSet')]; "
+           "assert d==['realisations/%%04d/network.vtp'%%i for i in range(5)], d\"",
+           a);
+  assert_int_equal(system(cmd), 0);
+  karst_scenario_destroy(&sc);
+  rm_rf(a);
+  rm_rf(b);
+  free(a);
+  free(b);
+}
+
 /* MPI: the test program re-runs itself under mpirun as 3 ranks (--mpi-child DIR). */
 static int mpi_child(const char *dir) {
   karst_ctx_t ctx;
@@ -746,6 +817,7 @@ int main(int argc, char **argv) {
       cmocka_unit_test(test_progress),
       cmocka_unit_test(test_table_errors),
       cmocka_unit_test(test_parameters_json),
+      cmocka_unit_test(test_pipeline_writers),
       cmocka_unit_test(test_mpi_three_ranks),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

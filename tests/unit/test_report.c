@@ -255,6 +255,59 @@ static void test_report_degraded(void **state) {
   assert_int_not_equal(access(out, F_OK), 0);
 }
 
+static karst_error_t seed_only_realise(karst_ctx_t *ctx, void *user, uint64_t seed,
+                                       karst_int_t index, karst_network_t *net) {
+  (void)user;
+  return fake_realise(ctx, NULL, seed, index, net);
+}
+
+/* The real files: members written by the VTK writer and read back by karst_read_network,
+ * every metric of karst_metric_fields, and Monachou (GOCAD PLine) loaded as the survey. */
+static void test_report_real_files(void **state) {
+  (void)state;
+  char tmpl[] = "/tmp/karst_test_report_real_XXXXXX";
+  char *dir = mkdtemp(tmpl);
+  assert_non_null(dir);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  karst_ensemble_hooks_t h;
+  karst_ensemble_pipeline_t pipe;
+  assert_int_equal(karst_ensemble_hooks_pipeline(&ctx, &h, &pipe, &sc), KARST_SUCCESS);
+  h.realise = seed_only_realise;
+  karst_ensemble_options_t eo;
+  karst_ensemble_options_init(&eo);
+  eo.n = 8;
+  eo.nthreads = 2;
+  assert_int_equal(karst_ensemble_run(&ctx, dir, &eo, &h, NULL), KARST_SUCCESS);
+  karst_report_survey_t sv;
+  assert_int_equal(karst_report_survey_load(
+                       &ctx, KARST_SOURCE_DIR "/datasets/surveys/karstnet/Monachou.pl", &sv),
+                   KARST_SUCCESS);
+  karst_report_options_t opt;
+  karst_report_options_init(&opt);
+  opt.surveys = &sv;
+  opt.n_surveys = 1;
+  opt.published_path = KARST_SOURCE_DIR "/datasets/published_metrics.csv";
+  char out[1200];
+  snprintf(out, sizeof out, "%s/report.html", dir);
+  assert_int_equal(karst_report_write(&ctx, dir, out, &opt), KARST_SUCCESS);
+  char *html = read_all(out);
+  assert_non_null(html);
+  assert_null(strstr(html, "could not be read"));
+  /* histograms of every metric + rose + degrees + 4 members x 2 views */
+  assert_int_equal(count(html, "<svg "), h.n_metrics + 2 + 8);
+  /* Monachou's aspl (docs: 7.5810126582278485) appears as the survey value, 4 digits. */
+  assert_non_null(strstr(html, "<td>7.581</td>"));
+  free(html);
+  karst_report_survey_destroy(&sv);
+  karst_scenario_destroy(&sc);
+  char cmd[1200];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  assert_int_equal(system(cmd), 0);
+}
+
 /* Headless Chromium renders the page: no console error, every plot in the DOM. */
 static void test_report_chromium(void **state) {
   (void)state;
@@ -286,6 +339,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_report_content),
       cmocka_unit_test(test_report_degraded),
+      cmocka_unit_test(test_report_real_files),
       cmocka_unit_test(test_report_chromium),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
