@@ -10,14 +10,17 @@
 #define KARST_H
 
 #include "karst/common.h"
+#include "karst/compare.h"
 #include "karst/cost.h"
 #include "karst/crs.h"
+#include "karst/ensemble.h"
 #include "karst/generate.h"
 #include "karst/graph.h"
 #include "karst/io.h"
 #include "karst/metrics.h"
 #include "karst/network.h"
 #include "karst/readers.h"
+#include "karst/report.h"
 #include "karst/sampling.h"
 #include "karst/scenario.h"
 #include "karst/vtk.h"
