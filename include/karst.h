@@ -9,6 +9,8 @@
 #ifndef KARST_H
 #define KARST_H
 
+#include "karst/amplification.h"
+#include "karst/classification.h"
 #include "karst/common.h"
 #include "karst/crs.h"
 #include "karst/generate.h"
@@ -16,8 +18,10 @@
 #include "karst/io.h"
 #include "karst/metrics.h"
 #include "karst/network.h"
+#include "karst/paths.h"
 #include "karst/readers.h"
 #include "karst/scenario.h"
+#include "karst/skeleton.h"
 #include "karst/vtk.h"
 
 #endif
