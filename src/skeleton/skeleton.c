@@ -150,10 +150,12 @@ static karst_error_t node_for(karst_ctx_t *ctx, karst_skeleton_t *sk, const kars
   return KARST_SUCCESS;
 }
 
+/* Cost of arc u -> w (the cheapest, should the graph hold parallel arcs). */
 static double arc_cost(const karst_graph_t *g, karst_int_t u, karst_int_t w) {
+  double best = INFINITY;
   for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++)
-    if (g->adj[a] == w) return g->cost[a];
-  return INFINITY;
+    if (g->adj[a] == w && g->cost[a] < best) best = g->cost[a];
+  return best;
 }
 
 /**
