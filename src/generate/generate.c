@@ -2,6 +2,7 @@
  * sampling -> graph (+ costs) -> key-point paths -> γ-skeleton ->
  * amplification -> classification. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
@@ -68,13 +69,14 @@ static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *s
       reach_i += dist[i * n + j] < INFINITY;
     }
     if (reach_ref < reach_i) k = r, r = &sc->key_points[i];
+    char where[64] = "";
+    if (k->line > 0) snprintf(where, sizeof where, " (%s:%d)", sc->path ? sc->path : "scenario", k->line);
     return karst_set_error(
         ctx, KARST_EUNREACHABLE,
-        "key point '%s' at (%.2f, %.2f, %.2f)%s%d cannot be connected to '%s': no path "
+        "key point '%s'%s at (%.2f, %.2f, %.2f) cannot be connected to '%s': no path "
         "through the bedrock joins them (is it enclosed by space above the terrain or outside "
         "the domain?)",
-        k->name, k->p[0], k->p[1], k->p[2], k->line ? ", scenario line " : "",
-        k->line ? k->line : 0, r->name);
+        k->name, where, k->p[0], k->p[1], k->p[2], r->name);
   }
   return KARST_SUCCESS;
 }
