@@ -8,6 +8,8 @@
 #ifndef KARST_PATHS_H
 #define KARST_PATHS_H
 
+#include <stdint.h>
+
 #include "karst/common.h"
 #include "karst/graph.h"
 
@@ -62,6 +64,14 @@ karst_error_t karst_paths_keypoint_distances(karst_ctx_t *ctx, const karst_graph
                                              karst_int_t n_keys, const karst_int_t *keys,
                                              double lb_per_metre, karst_paths_method_t method,
                                              double *dist);
+
+karst_error_t karst_paths_keypoint_trees(karst_ctx_t *ctx, const karst_graph_t *g,
+                                         karst_int_t n_keys, const karst_int_t *keys, double *dist,
+                                         int32_t *pred);
+
+karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
+                                    const int32_t *pred_row, karst_int_t source,
+                                    karst_int_t target, karst_path_t *path);
 
 #ifdef __cplusplus
 }

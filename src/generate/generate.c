@@ -100,6 +100,7 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
   const karst_int_t n = sc->n_key_points;
   karst_int_t *keys = NULL;
   double *dist = NULL;
+  int32_t *pred = NULL;
   karst_skeleton_t sk;
   int sk_ready = 0;
   karst_network_t out;
@@ -125,9 +126,19 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
 
   karst_progress(ctx, "paths", 0, 1);
   t = karst_i_now();
-  if ((err = karst_paths_keypoint_distances(ctx, g, n, keys, lb_per_metre, KARST_I_KEYPOINT_METHOD,
-                                            dist)))
-    goto cleanup;
+  /* One Dijkstra per key point gives the distances and the trees the skeleton reads its
+   * paths from (see karst_paths_keypoint_distances for why rows beat A* pairs). */
+  if (n > 1 && (size_t)(n - 1) * (size_t)g->n <= KARST_I_TREE_BUDGET / sizeof(int32_t)) {
+    pred = malloc((size_t)(n - 1) * (size_t)g->n * sizeof *pred);
+    if (!pred) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory for the key-point trees");
+      goto cleanup;
+    }
+  }
+  err = pred ? karst_paths_keypoint_trees(ctx, g, n, keys, dist, pred)
+             : karst_paths_keypoint_distances(ctx, g, n, keys, lb_per_metre,
+                                              KARST_I_KEYPOINT_METHOD, dist);
+  if (err) goto cleanup;
   if ((err = check_connected(ctx, sc, n, dist))) goto cleanup;
   if (stats) stats->stage_seconds[KARST_STAGE_PATHS] = karst_i_now() - t;
 
@@ -136,7 +147,8 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
   if ((err = karst_skeleton_init(ctx, &sk, g))) goto cleanup;
   sk_ready = 1;
   karst_int_t kept = 0;
-  if ((err = karst_skeleton_build(ctx, g, n, keys, dist, sc->gamma, lb_per_metre, &sk, &kept)))
+  if ((err = karst_skeleton_build(ctx, g, n, keys, dist, pred, sc->gamma, lb_per_metre, &sk,
+                                  &kept)))
     goto cleanup;
   for (karst_int_t i = 0; i < n; i++) {
     if ((err = karst_skeleton_mark_node(ctx, &sk, g, keys[i], key_kind(sc->key_points[i].type))))
@@ -187,6 +199,7 @@ cleanup:
   karst_network_destroy(&out);
   free(keys);
   free(dist);
+  free(pred);
   return err;
 }
 

@@ -9,6 +9,10 @@
 
 /* Key-point distance matrix method used by the pipeline (see paths.c for the measurement). */
 #define KARST_I_KEYPOINT_METHOD KARST_PATHS_DIJKSTRA_MULTI
+/* Memory (bytes) the pipeline may spend on the key points' shortest-path trees (4 bytes per
+ * vertex per key point); above it, distances are computed without trees and each kept pair's
+ * path is found again with A*. 1 GiB. */
+#define KARST_I_TREE_BUDGET ((size_t)1 << 30)
 
 karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario_t *sc,
                                           uint64_t seed, uint64_t realisation,

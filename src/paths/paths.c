@@ -312,6 +312,7 @@ typedef struct {
   double lb;
   karst_paths_method_t method;
   double *dist;
+  int32_t *pred; /* (n_keys − 1) × n trees, or NULL */
   int thread, nthreads;
   volatile int *interrupt;
   karst_error_t err;
@@ -348,6 +349,11 @@ static void *rows_worker(void *arg) {
       if (t->err) goto cleanup;
       for (karst_int_t j = i + 1; j < t->n_keys; j++)
         t->dist[i * t->n_keys + j] = karst_search_dist(s, t->keys[j]);
+      if (t->pred) {
+        int32_t *row = t->pred + (size_t)i * (size_t)t->g->n;
+        for (karst_int_t v = 0; v < t->g->n; v++)
+          row[v] = s->settled[v] == s->cur ? (int32_t)s->pred[v] : -2;
+      }
     } else {
       for (karst_int_t j = i + 1; j < t->n_keys; j++) {
         karst_error_t e = karst_paths_astar(&t->ctx, s, ki, t->keys[j], t->lb, &path);
@@ -370,14 +376,18 @@ cleanup:
   return NULL;
 }
 
+static karst_error_t keypoint_rows(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
+                                   const karst_int_t *keys, double lb_per_metre,
+                                   karst_paths_method_t method, double *dist, int32_t *pred);
+
 /**
  * Least-cost distances between all pairs of key points (the complete graph
  * of Paris et al. 2021, §5.1, before γ pruning).
  *
  * Which method is faster: one multi-target Dijkstra per key point. Measured by
- * bench/bench_generate on the looping-cave preset (47 key points) and a
- * 1.5 M-vertex graph (100 key points): the Dijkstra rows take a fraction of
- * the time of the A* pairs (see the figures printed by the benchmark). Why:
+ * bench/bench_generate (47 key points on a 72 000-vertex, 1.77 M-arc graph,
+ * costs 1–2 × length, 1 thread, shared 2-core machine): Dijkstra rows 2.7 s,
+ * A* pairs 7.8 s (2.8 × slower); on 300 000 vertices 9.6 s against 52 s. Why:
  * with k key points, A* runs k(k−1)/2 searches, and each one to a distant key
  * point still settles an ellipsoid-shaped region that the cost heuristic
  * (which only knows the minimum cost per metre, often far below the typical
@@ -399,6 +409,80 @@ karst_error_t karst_paths_keypoint_distances(karst_ctx_t *ctx, const karst_graph
                                              karst_int_t n_keys, const karst_int_t *keys,
                                              double lb_per_metre, karst_paths_method_t method,
                                              double *dist) {
+  return keypoint_rows(ctx, g, n_keys, keys, lb_per_metre, method, dist, NULL);
+}
+
+/**
+ * The key-point distance matrix (as karst_paths_keypoint_distances with
+ * Dijkstra rows) together with the shortest-path tree of each row, so the
+ * skeleton can read the path of every kept pair without searching again
+ * (one search per key point in all, instead of one more A* per kept pair —
+ * with γ ≤ 1 every pair is kept: 1081 searches for 47 key points).
+ *
+ * @param dist  n_keys × n_keys output as in karst_paths_keypoint_distances.
+ * @param pred  (n_keys − 1) × n output: row i holds, for each vertex settled by
+ *              the search from key i, its predecessor (−1 at key i), and −2 for
+ *              vertices that search did not settle. Read paths with
+ *              karst_paths_tree_path. The graph must have fewer than 2^31 vertices.
+ * @return as karst_paths_keypoint_distances; KARST_ERANGE for too large a graph.
+ * Time complexity: O(k (m + n) log n); memory 4 (k − 1) n bytes.
+ */
+karst_error_t karst_paths_keypoint_trees(karst_ctx_t *ctx, const karst_graph_t *g,
+                                         karst_int_t n_keys, const karst_int_t *keys, double *dist,
+                                         int32_t *pred) {
+  if (g->n >= INT32_MAX)
+    return karst_set_error(ctx, KARST_ERANGE, "key-point trees: %lld vertices exceed 2^31 - 1",
+                           (long long)g->n);
+  return keypoint_rows(ctx, g, n_keys, keys, 0.0, KARST_PATHS_DIJKSTRA_MULTI, dist, pred);
+}
+
+/**
+ * The path from @p source to @p target in a shortest-path tree written by
+ * karst_paths_keypoint_trees (the row of @p source).
+ * @return KARST_EUNREACHABLE when @p target was not settled in that tree.
+ * Time complexity: O(path length).
+ */
+karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
+                                    const int32_t *pred_row, karst_int_t source,
+                                    karst_int_t target, karst_path_t *path) {
+  if (target < 0 || target >= g->n || pred_row[target] == -2)
+    return karst_set_error(ctx, KARST_EUNREACHABLE, "no finite-cost path from vertex %lld to vertex %lld",
+                           (long long)source, (long long)target);
+  karst_int_t len = 0;
+  for (karst_int_t u = target; u >= 0; u = pred_row[u]) {
+    if (++len > g->n)
+      return karst_set_error(ctx, KARST_EINVAL, "key-point tree of vertex %lld has a cycle",
+                             (long long)source);
+  }
+  if (len > path->cap) {
+    karst_int_t *nv = realloc(path->v, (size_t)len * sizeof *nv);
+    if (!nv) return karst_set_error(ctx, KARST_ENOMEM, "path: out of memory");
+    path->v = nv;
+    path->cap = len;
+  }
+  path->n = len;
+  karst_int_t i = len;
+  double cost = 0;
+  for (karst_int_t u = target; u >= 0; u = pred_row[u]) {
+    path->v[--i] = u;
+    karst_int_t p = pred_row[u];
+    if (p >= 0) {
+      double best = INFINITY;
+      for (karst_int_t a = g->offsets[p]; a < g->offsets[p + 1]; a++)
+        if (g->adj[a] == u && g->cost[a] < best) best = g->cost[a];
+      cost += best;
+    }
+  }
+  if (path->v[0] != source)
+    return karst_set_error(ctx, KARST_EINVAL, "tree row does not start at vertex %lld",
+                           (long long)source);
+  path->cost = cost;
+  return KARST_SUCCESS;
+}
+
+static karst_error_t keypoint_rows(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
+                                   const karst_int_t *keys, double lb_per_metre,
+                                   karst_paths_method_t method, double *dist, int32_t *pred) {
   karst_error_t err = KARST_SUCCESS;
   rows_task_t *tasks = NULL;
   pthread_t *threads = NULL;
@@ -430,6 +514,7 @@ karst_error_t karst_paths_keypoint_distances(karst_ctx_t *ctx, const karst_graph
     tasks[t].lb = lb_per_metre;
     tasks[t].method = method;
     tasks[t].dist = dist;
+    tasks[t].pred = pred;
     tasks[t].thread = t;
     tasks[t].nthreads = T;
     tasks[t].interrupt = ctx ? ctx->interrupt : NULL;

@@ -246,17 +246,20 @@ void karst_skeleton_mark_junctions(karst_skeleton_t *sk) {
  * @param g             the sample graph.
  * @param n_keys, keys  key points as vertices.
  * @param dist          their distance matrix (karst_paths_keypoint_distances).
+ * @param pred          the shortest-path trees of karst_paths_keypoint_trees, read
+ *                      for the path of pair (a < b) from row a; NULL: one A* per pair.
  * @param gamma         γ > 0 or INFINITY.
  * @param lb_per_metre  cost lower bound for the A* heuristic.
  * @param sk            initialised on @p g; receives the paths.
  * @param n_kept        receives the number of kept pairs (may be NULL).
  * @return KARST_SUCCESS, KARST_EINVAL, KARST_ENOMEM.
- * Time complexity: O(k³) for the rule plus one A* per kept pair.
+ * Time complexity: O(k³) for the rule plus, per kept pair, the path length
+ * (trees) or one A* search (no trees).
  */
 karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
-                                   const karst_int_t *keys, const double *dist, double gamma,
-                                   double lb_per_metre, karst_skeleton_t *sk,
-                                   karst_int_t *n_kept) {
+                                   const karst_int_t *keys, const double *dist,
+                                   const int32_t *pred, double gamma, double lb_per_metre,
+                                   karst_skeleton_t *sk, karst_int_t *n_kept) {
   karst_error_t err = KARST_SUCCESS;
   unsigned char *keep = malloc((size_t)(n_keys * n_keys > 0 ? n_keys * n_keys : 1));
   karst_search_t *s = NULL;
@@ -278,7 +281,11 @@ karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, kar
         err = karst_set_error(ctx, KARST_EINTERRUPTED, "skeleton interrupted");
         goto cleanup;
       }
-      if ((err = karst_paths_astar(ctx, s, keys[a], keys[b], lb_per_metre, &path))) goto cleanup;
+      if (pred)
+        err = karst_paths_tree_path(ctx, g, pred + (size_t)a * (size_t)g->n, keys[a], keys[b], &path);
+      else
+        err = karst_paths_astar(ctx, s, keys[a], keys[b], lb_per_metre, &path);
+      if (err) goto cleanup;
       if ((err = karst_skeleton_add_path(ctx, sk, g, &path, 0))) goto cleanup;
       kept++;
     }

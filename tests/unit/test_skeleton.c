@@ -147,7 +147,7 @@ static void test_union_and_junctions(void **state) {
   karst_skeleton_t sk;
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
   karst_int_t kept;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 3, keys, dist, 2.0, 1.0, &sk, &kept), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, 2.0, 1.0, &sk, &kept), KARST_SUCCESS);
   assert_int_equal(kept, 3);
   karst_skeleton_mark_junctions(&sk);
   assert_int_equal(sk.net.n_nodes, 6);
@@ -171,7 +171,7 @@ static void test_union_and_junctions(void **state) {
   assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, 2, keys2, 1.0, 0, dist), KARST_SUCCESS);
   assert_true(isinf(dist[1]));
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 2, keys2, dist, 2.0, 1.0, &sk, &kept), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 2, keys2, dist, NULL, 2.0, 1.0, &sk, &kept), KARST_SUCCESS);
   assert_int_equal(kept, 0);
   assert_int_equal(sk.net.n_nodes, 2); /* the two key points alone */
   assert_int_equal(sk.net.n_edges, 0);
@@ -201,7 +201,7 @@ static void test_skeleton_on_dense_graph(void **state) {
   karst_skeleton_t sk;
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
   karst_int_t kept;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist, 2.0, 1.0, &sk, &kept), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist, NULL, 2.0, 1.0, &sk, &kept), KARST_SUCCESS);
   assert_true(kept >= 7); /* a connected proximity graph on 8 points has at least 7 edges */
   /* connectivity by union-find over the network edges */
   karst_int_t *parent = malloc((size_t)sk.net.n_nodes * sizeof *parent);
@@ -216,6 +216,28 @@ static void test_skeleton_on_dense_graph(void **state) {
   for (karst_int_t i = 0; i < sk.net.n_nodes; i++) roots += parent[i] == i;
   assert_int_equal(roots, 1);
   free(parent);
+  /* The same skeleton from the key points' shortest-path trees (one Dijkstra per key point
+   * instead of one A* per kept pair): same distances, same paths (no ties on a jittered
+   * lattice), so the same network. */
+  double dist2[64];
+  int32_t *pred = malloc((size_t)7 * (size_t)n * sizeof *pred);
+  assert_int_equal(karst_paths_keypoint_trees(&ctx, &g, 8, keys, dist2, pred), KARST_SUCCESS);
+  assert_memory_equal(dist, dist2, sizeof dist);
+  karst_path_t p;
+  karst_path_init(&p);
+  assert_int_equal(karst_paths_tree_path(&ctx, &g, pred + 2 * n, keys[2], keys[5], &p), KARST_SUCCESS);
+  assert_rel(p.cost, dist[2 * 8 + 5], 1e-12);
+  karst_path_destroy(&p);
+  karst_skeleton_t sk2;
+  assert_int_equal(karst_skeleton_init(&ctx, &sk2, &g), KARST_SUCCESS);
+  karst_int_t kept2;
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist2, pred, 2.0, 1.0, &sk2, &kept2), KARST_SUCCESS);
+  assert_int_equal(kept2, kept);
+  assert_int_equal(sk2.net.n_nodes, sk.net.n_nodes);
+  assert_int_equal(sk2.net.n_edges, sk.net.n_edges);
+  assert_memory_equal(sk2.net.xyz, sk.net.xyz, (size_t)sk.net.n_nodes * 3 * sizeof(double));
+  karst_skeleton_destroy(&sk2);
+  free(pred);
   karst_skeleton_destroy(&sk);
   fx_graph_free(&g);
   free(xyz);
