@@ -16,11 +16,13 @@ static void print_stats(const char *what, const karst_generate_stats_t *st, doub
          what, (long long)st->n_samples, (long long)st->n_graph_edges, (long long)st->n_key_points,
          (long long)st->n_skeleton_paths, (long long)st->n_nodes, st->total_length);
   printf("%-22s", "");
-  for (int s = 0; s < KARST_STAGE_COUNT; s++) printf(" %s %.3f s", karst_stage_name(s), st->stage_seconds[s]);
+  for (int s = 0; s < KARST_STAGE_COUNT; s++)
+    printf(" %s %.3f s", karst_stage_name(s), st->stage_seconds[s]);
   double to_skel = 0;
-  for (int s = KARST_STAGE_SAMPLING; s <= KARST_STAGE_SKELETON; s++) to_skel += st->stage_seconds[s];
-  printf("\n%-22s sampling-to-skeleton %.3f s, total %.3f s, peak RSS so far %.0f MiB\n", "", to_skel,
-         wall, st->peak_bytes / 1048576.0);
+  for (int s = KARST_STAGE_SAMPLING; s <= KARST_STAGE_SKELETON; s++)
+    to_skel += st->stage_seconds[s];
+  printf("\n%-22s sampling-to-skeleton %.3f s, total %.3f s, peak RSS so far %.0f MiB\n", "",
+         to_skel, wall, st->peak_bytes / 1048576.0);
 }
 
 /* Key-point distance matrix on a jittered 3-D lattice with 26-neighbour edges and costs
@@ -54,9 +56,12 @@ static void bench_keypoint_methods(int nx, int ny, int nz, int K) {
       for (int dy = -1; dy <= 1; dy++)
         for (int dx = -1; dx <= 1; dx++) {
           if (!dx && !dy && !dz) continue;
-          if (x + dx < 0 || x + dx >= nx || y + dy < 0 || y + dy >= ny || z + dz < 0 || z + dz >= nz) continue;
+          if (x + dx < 0 || x + dx >= nx || y + dy < 0 || y + dy >= ny || z + dz < 0 ||
+              z + dz >= nz)
+            continue;
           karst_int_t j = i + dx + (karst_int_t)dy * nx + (karst_int_t)dz * nx * ny;
-          double ex = xyz[3 * j] - xyz[3 * i], ey = xyz[3 * j + 1] - xyz[3 * i + 1], ez = xyz[3 * j + 2] - xyz[3 * i + 2];
+          double ex = xyz[3 * j] - xyz[3 * i], ey = xyz[3 * j + 1] - xyz[3 * i + 1],
+                 ez = xyz[3 * j + 2] - xyz[3 * i + 2];
           /* symmetric perturbation: hash of the unordered pair */
           uint64_t lo = i < j ? (uint64_t)i : (uint64_t)j, hi = i < j ? (uint64_t)j : (uint64_t)i;
           karst_rng_t h;
@@ -69,7 +74,8 @@ static void bench_keypoint_methods(int nx, int ny, int nz, int K) {
   g.offsets[n] = a;
   g.n_arcs = a;
   karst_int_t *keys = malloc((size_t)K * sizeof *keys);
-  for (int k = 0; k < K; k++) keys[k] = (karst_int_t)karst_rng_below(&r, (uint64_t)n);
+  for (int k = 0; k < K; k++)
+    keys[k] = (karst_int_t)karst_rng_below(&r, (uint64_t)n);
   double *d1 = malloc((size_t)K * K * sizeof *d1), *d2 = malloc((size_t)K * K * sizeof *d2);
   ctx.nthreads = 1;
   double t0 = karst_i_now();
@@ -133,7 +139,8 @@ static void large_scenario(karst_scenario_t *sc) {
   karst_rng_init(&r, 1500000, 0);
   for (int i = 0; i < 20; i++) {
     karst_keypoint_t *k = &sc->key_points[i];
-    k->type = i == 0 ? KARST_KEYPOINT_SPRING : (i < 12 ? KARST_KEYPOINT_SINK : KARST_KEYPOINT_WAYPOINT);
+    k->type =
+        i == 0 ? KARST_KEYPOINT_SPRING : (i < 12 ? KARST_KEYPOINT_SINK : KARST_KEYPOINT_WAYPOINT);
     snprintf(k->name, sizeof k->name, "k%d", i);
     k->p[0] = 50 + 900 * karst_rng_uniform(&r);
     k->p[1] = 50 + 900 * karst_rng_uniform(&r);

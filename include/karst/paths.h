@@ -70,8 +70,8 @@ karst_error_t karst_paths_keypoint_trees(karst_ctx_t *ctx, const karst_graph_t *
                                          int32_t *pred);
 
 karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
-                                    const int32_t *pred_row, karst_int_t source,
-                                    karst_int_t target, karst_path_t *path);
+                                    const int32_t *pred_row, karst_int_t source, karst_int_t target,
+                                    karst_path_t *path);
 
 #ifdef __cplusplus
 }

@@ -27,12 +27,12 @@ extern "C" {
  */
 typedef struct karst_skeleton {
   karst_network_t net;
-  karst_int_t n_graph;          /**< vertices of the graph the network lives on */
-  karst_int_t *node_of_vertex;  /**< n_graph entries, -1 when the vertex is not a node */
-  karst_int_t *vertex_of_node;  /**< graph vertex of each node */
-  karst_int_t vertex_cap;       /**< allocated entries of vertex_of_node */
-  karst_int_t n_paths;          /**< paths added so far (the next branch id) */
-  uint64_t *edge_keys;          /**< open-addressing set of node pairs (min << 32 | max) + 1 */
+  karst_int_t n_graph;         /**< vertices of the graph the network lives on */
+  karst_int_t *node_of_vertex; /**< n_graph entries, -1 when the vertex is not a node */
+  karst_int_t *vertex_of_node; /**< graph vertex of each node */
+  karst_int_t vertex_cap;      /**< allocated entries of vertex_of_node */
+  karst_int_t n_paths;         /**< paths added so far (the next branch id) */
+  uint64_t *edge_keys;         /**< open-addressing set of node pairs (min << 32 | max) + 1 */
   size_t edge_set_cap;
 } karst_skeleton_t;
 
@@ -53,9 +53,9 @@ karst_error_t karst_skeleton_mark_node(karst_ctx_t *ctx, karst_skeleton_t *sk,
 void karst_skeleton_mark_junctions(karst_skeleton_t *sk);
 
 karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
-                                   const karst_int_t *keys, const double *dist,
-                                   const int32_t *pred, double gamma, double lb_per_metre,
-                                   karst_skeleton_t *sk, karst_int_t *n_kept);
+                                   const karst_int_t *keys, const double *dist, const int32_t *pred,
+                                   double gamma, double lb_per_metre, karst_skeleton_t *sk,
+                                   karst_int_t *n_kept);
 
 #ifdef __cplusplus
 }

@@ -28,7 +28,8 @@ void karst_amplification_options_init(karst_amplification_options_t *opt) {
 double karst_amplification_max_displacement(const karst_amplification_options_t *opt,
                                             double theta) {
   double t = theta < 0 ? 0 : (theta > 1 ? 1 : theta);
-  return opt->displacement_at_theta0 + t * (opt->displacement_at_theta1 - opt->displacement_at_theta0);
+  return opt->displacement_at_theta0 +
+         t * (opt->displacement_at_theta1 - opt->displacement_at_theta0);
 }
 
 /**
@@ -94,7 +95,8 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
   karst_path_init(&p1);
   karst_path_init(&p2);
   karst_int_t added_points = 0, added_paths = 0;
-  if (am->steps < 0 || am->points < 0 || !(am->dead_end_fraction >= 0 && am->dead_end_fraction <= 1))
+  if (am->steps < 0 || am->points < 0 ||
+      !(am->dead_end_fraction >= 0 && am->dead_end_fraction <= 1))
     return karst_set_error(ctx, KARST_EINVAL,
                            "amplification: steps (%d) and points (%d) must be >= 0 and "
                            "dead_end_fraction (%g) within [0, 1]",
@@ -111,14 +113,16 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
     err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
     goto cleanup;
   }
-  for (karst_int_t v = 0; v < g->n; v++) in_net[v] = sk->node_of_vertex[v] >= 0;
+  for (karst_int_t v = 0; v < g->n; v++)
+    in_net[v] = sk->node_of_vertex[v] >= 0;
   const karst_int_t n_dead = (karst_int_t)llround(am->dead_end_fraction * am->points);
 
   for (int step = 1; step <= am->steps; step++) {
     /* Bounding box of the current network, clipped to the domain. */
     double lo[3], hi[3];
     const karst_network_t *net = &sk->net;
-    for (int k = 0; k < 3; k++) lo[k] = hi[k] = net->xyz[k];
+    for (int k = 0; k < 3; k++)
+      lo[k] = hi[k] = net->xyz[k];
     for (karst_int_t v = 1; v < net->n_nodes; v++)
       for (int k = 0; k < 3; k++) {
         lo[k] = fmin(lo[k], net->xyz[3 * v + k]);
@@ -133,7 +137,8 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
     for (int i = 0; i < am->points; i++) {
       for (int t = 0; t < opt->max_tries; t++) {
         double p[3];
-        for (int k = 0; k < 3; k++) p[k] = karst_rng_uniform_range(rng, lo[k], hi[k] > lo[k] ? hi[k] : lo[k]);
+        for (int k = 0; k < 3; k++)
+          p[k] = karst_rng_uniform_range(rng, lo[k], hi[k] > lo[k] ? hi[k] : lo[k]);
         if (hi[2] <= lo[2]) p[2] = lo[2];
         if (karst_amplification_in_bedrock(sc, p)) {
           memcpy(&pts[3 * n_pts], p, sizeof p);
@@ -143,7 +148,8 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
       }
     }
     /* Snap every point to its nearest vertex off the network: one pass over the graph. */
-    for (int i = 0; i < n_pts; i++) snap[i] = -1, snap_d[i] = INFINITY;
+    for (int i = 0; i < n_pts; i++)
+      snap[i] = -1, snap_d[i] = INFINITY;
     for (karst_int_t v = 0; v < g->n; v++) {
       if (in_net[v]) continue;
       for (int i = 0; i < n_pts; i++) {
@@ -161,8 +167,8 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
       karst_int_t v1 = -1, v2 = -1;
       if ((err = karst_paths_dijkstra(ctx, s, 1, &pv, NULL, in_net, 1, &v1))) goto cleanup;
       if (v1 < 0) {
-        karst_log(ctx, KARST_LOG_DEBUG, "amplification: point at vertex %lld cannot reach the network",
-                  (long long)pv);
+        karst_log(ctx, KARST_LOG_DEBUG,
+                  "amplification: point at vertex %lld cannot reach the network", (long long)pv);
         continue;
       }
       if ((err = karst_search_path_to(ctx, s, v1, &p1))) goto cleanup;
@@ -183,10 +189,13 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
             in_net[w] = 0;
             cleared[n_cleared++] = w;
           }
-        for (karst_int_t k = 1; k < p1.n; k++) blocked[p1.v[k]] = 1;
+        for (karst_int_t k = 1; k < p1.n; k++)
+          blocked[p1.v[k]] = 1;
         err = karst_paths_dijkstra(ctx, s, 1, &pv, blocked, in_net, 1, &v2);
-        for (karst_int_t k = 1; k < p1.n; k++) blocked[p1.v[k]] = 0;
-        for (karst_int_t k = 0; k < n_cleared; k++) in_net[cleared[k]] = 1;
+        for (karst_int_t k = 1; k < p1.n; k++)
+          blocked[p1.v[k]] = 0;
+        for (karst_int_t k = 0; k < n_cleared; k++)
+          in_net[cleared[k]] = 1;
         if (err) goto cleanup;
         if (v2 >= 0 && (err = karst_search_path_to(ctx, s, v2, &p2))) goto cleanup;
       }
@@ -197,8 +206,10 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
         added_paths++;
       }
       if ((err = karst_skeleton_mark_node(ctx, sk, g, pv, KARST_NODE_AMPLIFICATION))) goto cleanup;
-      for (karst_int_t k = 0; k < p1.n; k++) in_net[p1.v[k]] = 1;
-      for (karst_int_t k = 0; k < p2.n; k++) in_net[p2.v[k]] = 1;
+      for (karst_int_t k = 0; k < p1.n; k++)
+        in_net[p1.v[k]] = 1;
+      for (karst_int_t k = 0; k < p2.n; k++)
+        in_net[p2.v[k]] = 1;
       added_points++;
     }
   }
@@ -222,10 +233,12 @@ static void random_orthogonal(karst_rng_t *rng, const double t[3], double u[3]) 
   for (;;) {
     karst_rng_unit_vector(rng, u);
     double d = u[0] * t[0] + u[1] * t[1] + u[2] * t[2];
-    for (int k = 0; k < 3; k++) u[k] -= d * t[k];
+    for (int k = 0; k < 3; k++)
+      u[k] -= d * t[k];
     double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
     if (l > 1e-3) { /* the unit draw was not (nearly) parallel to t */
-      for (int k = 0; k < 3; k++) u[k] /= l;
+      for (int k = 0; k < 3; k++)
+        u[k] /= l;
       return;
     }
   }
@@ -315,7 +328,8 @@ karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_scenari
   for (int i = 0; i < in->n_node_attrs; i++) {
     const karst_attr_t *a = &in->node_attrs[i];
     double *d;
-    if (karst_network_attr_add(&tmp, KARST_ATTR_NODE, a->name, a->ncomp, a->integer, &d)) goto nomem;
+    if (karst_network_attr_add(&tmp, KARST_ATTR_NODE, a->name, a->ncomp, a->integer, &d))
+      goto nomem;
     memcpy(d, a->data, (size_t)in->n_nodes * a->ncomp * sizeof *d);
   }
   if (in->node_labels)
@@ -324,7 +338,8 @@ karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_scenari
   for (int i = 0; i < in->n_edge_attrs; i++) {
     const karst_attr_t *a = &in->edge_attrs[i];
     double *d;
-    if (karst_network_attr_add(&tmp, KARST_ATTR_EDGE, a->name, a->ncomp, a->integer, &d)) goto nomem;
+    if (karst_network_attr_add(&tmp, KARST_ATTR_EDGE, a->name, a->ncomp, a->integer, &d))
+      goto nomem;
   }
   for (karst_int_t e = 0; e < in->n_edges; e++) {
     karst_int_t u = in->edges[2 * e], w = in->edges[2 * e + 1];

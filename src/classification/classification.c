@@ -81,17 +81,17 @@ karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_scenario_t 
   for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++)
     if (!(cl->radius[t].min >= 0 && cl->radius[t].min <= cl->radius[t].max) ||
         isinf(cl->radius[t].max))
-      return karst_set_error(ctx, KARST_EINVAL,
-                             "classification radius of %s: need 0 <= min <= max, got [%g, %g]",
-                             karst_tunnel_type_name((karst_tunnel_type_t)t), cl->radius[t].min,
-                             cl->radius[t].max);
+      return karst_set_error(
+          ctx, KARST_EINVAL, "classification radius of %s: need 0 <= min <= max, got [%g, %g]",
+          karst_tunnel_type_name((karst_tunnel_type_t)t), cl->radius[t].min, cl->radius[t].max);
   double *type, *radius, *vadose, *wtd;
   if (karst_network_attr_add(net, KARST_ATTR_EDGE, "tunnel_type", 1, 1, &type) ||
       karst_network_attr_add(net, KARST_ATTR_EDGE, "radius", 1, 0, &radius) ||
       karst_network_attr_add(net, KARST_ATTR_EDGE, "vadose", 1, 1, &vadose) ||
       karst_network_attr_add(net, KARST_ATTR_NODE, "water_table_distance", 1, 0, &wtd))
     return karst_set_error(ctx, KARST_ENOMEM, "classification: out of memory");
-  for (karst_int_t v = 0; v < net->n_nodes; v++) wtd[v] = net->xyz[3 * v + 2] - sc->water_table;
+  for (karst_int_t v = 0; v < net->n_nodes; v++)
+    wtd[v] = net->xyz[3 * v + 2] - sc->water_table;
   for (karst_int_t e = 0; e < net->n_edges; e++) {
     const double *a = &net->xyz[3 * net->edges[2 * e]], *b = &net->xyz[3 * net->edges[2 * e + 1]];
     karst_tunnel_type_t t = karst_classification_type(sc, a, b);

@@ -45,7 +45,8 @@ static int run(int argc, char **argv) {
     } else if (!scenario) {
       scenario = a;
     } else {
-      return cli_usage_error("generate", "more than one scenario given ('%s' and '%s')", scenario, a);
+      return cli_usage_error("generate", "more than one scenario given ('%s' and '%s')", scenario,
+                             a);
     }
   }
   if (!scenario) return cli_usage_error("generate", "no scenario file given");

@@ -51,8 +51,8 @@ static karst_node_kind_t key_kind(karst_keypoint_type_t t) {
  * group is the one holding the first spring (or key point 0 without a
  * spring). The first key point outside it is named in the error.
  */
-static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *sc,
-                                     karst_int_t n, const double *dist) {
+static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_int_t n,
+                                     const double *dist) {
   karst_int_t ref = 0;
   for (karst_int_t i = 0; i < n; i++)
     if (sc->key_points[i].type == KARST_KEYPOINT_SPRING) {
@@ -70,7 +70,8 @@ static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *s
     }
     if (reach_ref < reach_i) k = r, r = &sc->key_points[i];
     char where[64] = "";
-    if (k->line > 0) snprintf(where, sizeof where, " (%s:%d)", sc->path ? sc->path : "scenario", k->line);
+    if (k->line > 0)
+      snprintf(where, sizeof where, " (%s:%d)", sc->path ? sc->path : "scenario", k->line);
     return karst_set_error(
         ctx, KARST_EUNREACHABLE,
         "key point '%s'%s at (%.2f, %.2f, %.2f) cannot be connected to '%s': no path "
@@ -83,7 +84,8 @@ static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *s
 
 static double total_length(const karst_network_t *net) {
   double s = 0;
-  for (karst_int_t e = 0; e < net->n_edges; e++) s += karst_network_edge_length(net, e);
+  for (karst_int_t e = 0; e < net->n_edges; e++)
+    s += karst_network_edge_length(net, e);
   return s;
 }
 
@@ -122,7 +124,8 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
     err = karst_set_error(ctx, KARST_ENOMEM, "out of memory for %lld key points", (long long)n);
     goto cleanup;
   }
-  for (karst_int_t i = 0; i < n; i++) keys[i] = i;
+  for (karst_int_t i = 0; i < n; i++)
+    keys[i] = i;
 
   karst_progress(ctx, "paths", 0, 1);
   t = karst_i_now();
@@ -147,8 +150,8 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
   if ((err = karst_skeleton_init(ctx, &sk, g))) goto cleanup;
   sk_ready = 1;
   karst_int_t kept = 0;
-  if ((err = karst_skeleton_build(ctx, g, n, keys, dist, pred, sc->gamma, lb_per_metre, &sk,
-                                  &kept)))
+  if ((err =
+           karst_skeleton_build(ctx, g, n, keys, dist, pred, sc->gamma, lb_per_metre, &sk, &kept)))
     goto cleanup;
   for (karst_int_t i = 0; i < n; i++) {
     if ((err = karst_skeleton_mark_node(ctx, &sk, g, keys[i], key_kind(sc->key_points[i].type))))

@@ -107,9 +107,15 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   fputs("{\n  \"karst_version\": ", fp);
   json_string(fp, karst_version());
   fputs(",\n  \"scenario\": ", fp);
-  if (sc->path) json_string(fp, sc->path); else fputs("null", fp);
+  if (sc->path)
+    json_string(fp, sc->path);
+  else
+    fputs("null", fp);
   fputs(",\n  \"scenario_hash\": ", fp);
-  if (sc->path) json_string(fp, hash); else fputs("null", fp);
+  if (sc->path)
+    json_string(fp, hash);
+  else
+    fputs("null", fp);
   fprintf(fp, ",\n  \"seed\": %llu,\n  \"realisation\": %llu,\n", (unsigned long long)seed,
           (unsigned long long)realisation);
   fputs("  \"parameters\": {\n    \"name\": ", fp);
@@ -134,7 +140,8 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
     fputs("\"elevation\": ", fp), json_num(fp, h->elevation);
     fputs(", \"dip\": ", fp), json_num(fp, h->dip);
     fputs(", \"dip_direction\": ", fp), json_num(fp, h->dip_direction);
-    fputs(", \"origin\": [", fp), json_num(fp, h->origin[0]), fputs(", ", fp), json_num(fp, h->origin[1]);
+    fputs(", \"origin\": [", fp), json_num(fp, h->origin[0]), fputs(", ", fp),
+        json_num(fp, h->origin[1]);
     fputs("], \"radius\": ", fp), json_num(fp, h->radius);
     fputc('}', fp);
   }
@@ -150,7 +157,10 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   fputs("],\n    \"permeability\": {\"background\": ", fp);
   json_num(fp, sc->permeability.background);
   fputs(", \"tree\": ", fp);
-  if (sc->permeability.root) perm_json(fp, sc->permeability.root); else fputs("null", fp);
+  if (sc->permeability.root)
+    perm_json(fp, sc->permeability.root);
+  else
+    fputs("null", fp);
   fputs("},\n    \"key_points\": [", fp);
   for (int i = 0; i < sc->n_key_points; i++) {
     const karst_keypoint_t *k = &sc->key_points[i];
@@ -188,7 +198,8 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   fprintf(fp, "    \"amplification\": {\"steps\": %d, \"points\": %d, \"dead_end_fraction\": ",
           sc->amplification.steps, sc->amplification.points);
   json_num(fp, sc->amplification.dead_end_fraction);
-  fputs(", \"max_displacement\": ", fp), json_num(fp, karst_amplification_max_displacement(&ao, sc->tortuosity));
+  fputs(", \"max_displacement\": ", fp),
+      json_num(fp, karst_amplification_max_displacement(&ao, sc->tortuosity));
   fputs(", \"displacement_at_theta0\": ", fp), json_num(fp, ao.displacement_at_theta0);
   fputs(", \"displacement_at_theta1\": ", fp), json_num(fp, ao.displacement_at_theta1);
   fputs(", \"max_displacement_ratio\": ", fp), json_num(fp, ao.max_displacement_ratio);
@@ -212,8 +223,10 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   fputs("}}\n  },\n  \"counts\": {\n", fp);
   fprintf(fp, "    \"samples\": %lld,\n    \"graph_edges\": %lld,\n    \"key_points\": %lld,\n",
           (long long)st->n_samples, (long long)st->n_graph_edges, (long long)st->n_key_points);
-  fprintf(fp, "    \"skeleton_paths\": %lld,\n    \"network_nodes\": %lld,\n    \"network_edges\": %lld,\n",
-          (long long)st->n_skeleton_paths, (long long)st->n_nodes, (long long)st->n_edges);
+  fprintf(
+      fp,
+      "    \"skeleton_paths\": %lld,\n    \"network_nodes\": %lld,\n    \"network_edges\": %lld,\n",
+      (long long)st->n_skeleton_paths, (long long)st->n_nodes, (long long)st->n_edges);
   kv_num(fp, I, "total_length", st->total_length, 1);
   fputs("  },\n  \"stage_seconds\": {\n", fp);
   for (int s = 0; s < KARST_STAGE_COUNT; s++)

@@ -16,10 +16,10 @@ typedef struct {
 
 struct karst_search {
   const karst_graph_t *g;
-  double *dist;         /* tentative or final distance, valid when stamp[v] == cur */
-  karst_int_t *pred;    /* predecessor on the search tree, -1 at a source */
-  uint32_t *stamp;      /* generation in which dist/pred were written */
-  uint32_t *settled;    /* generation in which v was settled (popped with its final key) */
+  double *dist;      /* tentative or final distance, valid when stamp[v] == cur */
+  karst_int_t *pred; /* predecessor on the search tree, -1 at a source */
+  uint32_t *stamp;   /* generation in which dist/pred were written */
+  uint32_t *settled; /* generation in which v was settled (popped with its final key) */
   uint32_t cur;
   heap_entry_t *heap;
   karst_int_t hn, hcap;
@@ -128,9 +128,13 @@ double karst_search_dist(const karst_search_t *s, karst_int_t v) {
   return s->dist[v];
 }
 
-karst_int_t karst_search_settled(const karst_search_t *s) { return s ? s->n_settled : 0; }
+karst_int_t karst_search_settled(const karst_search_t *s) {
+  return s ? s->n_settled : 0;
+}
 
-void karst_path_init(karst_path_t *p) { memset(p, 0, sizeof *p); }
+void karst_path_init(karst_path_t *p) {
+  memset(p, 0, sizeof *p);
+}
 void karst_path_destroy(karst_path_t *p) {
   free(p->v);
   memset(p, 0, sizeof *p);
@@ -148,7 +152,8 @@ karst_error_t karst_search_path_to(karst_ctx_t *ctx, const karst_search_t *s, ka
     return karst_set_error(ctx, KARST_EUNREACHABLE, "vertex %lld was not reached by the search",
                            (long long)v);
   karst_int_t len = 0;
-  for (karst_int_t u = v; u >= 0; u = s->pred[u]) len++;
+  for (karst_int_t u = v; u >= 0; u = s->pred[u])
+    len++;
   if (len > path->cap) {
     karst_int_t *nv = realloc(path->v, (size_t)len * sizeof *nv);
     if (!nv) return karst_set_error(ctx, KARST_ENOMEM, "path: out of memory");
@@ -157,7 +162,8 @@ karst_error_t karst_search_path_to(karst_ctx_t *ctx, const karst_search_t *s, ka
   }
   path->n = len;
   karst_int_t i = len;
-  for (karst_int_t u = v; u >= 0; u = s->pred[u]) path->v[--i] = u;
+  for (karst_int_t u = v; u >= 0; u = s->pred[u])
+    path->v[--i] = u;
   path->cost = s->dist[v];
   return KARST_SUCCESS;
 }
@@ -267,13 +273,12 @@ karst_error_t karst_paths_astar(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
     return karst_set_error(ctx, KARST_EINVAL,
                            "A*: the cost lower bound per metre must be finite and >= 0, got %g",
                            lb_per_metre);
-  karst_error_t err =
-      run_search(ctx, s, 1, &source, target, lb_per_metre, NULL, NULL, 0, NULL);
+  karst_error_t err = run_search(ctx, s, 1, &source, target, lb_per_metre, NULL, NULL, 0, NULL);
   if (err) return err;
   if (s->settled[target] != s->cur)
     return karst_set_error(ctx, KARST_EUNREACHABLE,
-                           "no finite-cost path from vertex %lld to vertex %lld",
-                           (long long)source, (long long)target);
+                           "no finite-cost path from vertex %lld to vertex %lld", (long long)source,
+                           (long long)target);
   return karst_search_path_to(ctx, s, target, path);
 }
 
@@ -345,7 +350,8 @@ static void *rows_worker(void *arg) {
       for (karst_int_t j = i + 1; j < t->n_keys; j++)
         if (!mask[t->keys[j]]) mask[t->keys[j]] = 1, want++;
       t->err = karst_paths_dijkstra(&t->ctx, s, 1, &ki, NULL, mask, want, NULL);
-      for (karst_int_t j = i + 1; j < t->n_keys; j++) mask[t->keys[j]] = 0;
+      for (karst_int_t j = i + 1; j < t->n_keys; j++)
+        mask[t->keys[j]] = 0;
       if (t->err) goto cleanup;
       for (karst_int_t j = i + 1; j < t->n_keys; j++)
         t->dist[i * t->n_keys + j] = karst_search_dist(s, t->keys[j]);
@@ -443,11 +449,12 @@ karst_error_t karst_paths_keypoint_trees(karst_ctx_t *ctx, const karst_graph_t *
  * Time complexity: O(path length).
  */
 karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
-                                    const int32_t *pred_row, karst_int_t source,
-                                    karst_int_t target, karst_path_t *path) {
+                                    const int32_t *pred_row, karst_int_t source, karst_int_t target,
+                                    karst_path_t *path) {
   if (target < 0 || target >= g->n || pred_row[target] == -2)
-    return karst_set_error(ctx, KARST_EUNREACHABLE, "no finite-cost path from vertex %lld to vertex %lld",
-                           (long long)source, (long long)target);
+    return karst_set_error(ctx, KARST_EUNREACHABLE,
+                           "no finite-cost path from vertex %lld to vertex %lld", (long long)source,
+                           (long long)target);
   karst_int_t len = 0;
   for (karst_int_t u = target; u >= 0; u = pred_row[u]) {
     if (++len > g->n)
@@ -492,11 +499,14 @@ static karst_error_t keypoint_rows(karst_ctx_t *ctx, const karst_graph_t *g, kar
                            (long long)n_keys);
   for (karst_int_t i = 0; i < n_keys; i++)
     if (keys[i] < 0 || keys[i] >= g->n)
-      return karst_set_error(ctx, KARST_EINVAL,
-                             "key-point distances: key point %lld is vertex %lld, outside [0, %lld)",
-                             (long long)i, (long long)keys[i], (long long)g->n);
-  for (karst_int_t i = 0; i < n_keys * n_keys; i++) dist[i] = INFINITY;
-  for (karst_int_t i = 0; i < n_keys; i++) dist[i * n_keys + i] = 0.0;
+      return karst_set_error(
+          ctx, KARST_EINVAL,
+          "key-point distances: key point %lld is vertex %lld, outside [0, %lld)", (long long)i,
+          (long long)keys[i], (long long)g->n);
+  for (karst_int_t i = 0; i < n_keys * n_keys; i++)
+    dist[i] = INFINITY;
+  for (karst_int_t i = 0; i < n_keys; i++)
+    dist[i * n_keys + i] = 0.0;
   if (n_keys < 2) return KARST_SUCCESS;
   int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
   if (T > n_keys - 1) T = (int)(n_keys - 1);
@@ -527,8 +537,10 @@ static karst_error_t keypoint_rows(karst_ctx_t *ctx, const karst_graph_t *g, kar
       if (pthread_create(&threads[started], NULL, rows_worker, &tasks[started])) break;
     if (started == 0) rows_worker(&tasks[0]), started = -1;
     /* Threads that could not start: their rows are done here, in order. */
-    for (int t = started < 0 ? 1 : started; t < T; t++) rows_worker(&tasks[t]);
-    for (int t = 0; t < (started < 0 ? 0 : started); t++) pthread_join(threads[t], NULL);
+    for (int t = started < 0 ? 1 : started; t < T; t++)
+      rows_worker(&tasks[t]);
+    for (int t = 0; t < (started < 0 ? 0 : started); t++)
+      pthread_join(threads[t], NULL);
   }
   for (int t = 0; t < T; t++)
     if (tasks[t].err) {

@@ -27,7 +27,8 @@ karst_error_t karst_skeleton_init(karst_ctx_t *ctx, karst_skeleton_t *sk, const 
     return karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory for %lld vertices",
                            (long long)g->n);
   }
-  for (karst_int_t v = 0; v < g->n; v++) sk->node_of_vertex[v] = -1;
+  for (karst_int_t v = 0; v < g->n; v++)
+    sk->node_of_vertex[v] = -1;
   return KARST_SUCCESS;
 }
 
@@ -59,8 +60,7 @@ void karst_skeleton_destroy(karst_skeleton_t *sk) {
  */
 karst_error_t karst_skeleton_gamma_keep(karst_ctx_t *ctx, karst_int_t n, const double *dist,
                                         double gamma, unsigned char *keep) {
-  if (!(gamma > 0))
-    return karst_set_error(ctx, KARST_EINVAL, "gamma must be > 0, got %g", gamma);
+  if (!(gamma > 0)) return karst_set_error(ctx, KARST_EINVAL, "gamma must be > 0, got %g", gamma);
   for (karst_int_t i = 0; i < n * n; i++)
     if (!(dist[i] >= 0))
       return karst_set_error(ctx, KARST_EINVAL,
@@ -104,7 +104,8 @@ static karst_error_t edge_set_insert(karst_skeleton_t *sk, uint64_t key, int *ad
     for (size_t i = 0; i < sk->edge_set_cap; i++) {
       if (!sk->edge_keys[i]) continue;
       size_t h = hash_key(sk->edge_keys[i], cap);
-      while (keys[h]) h = (h + 1) & (cap - 1);
+      while (keys[h])
+        h = (h + 1) & (cap - 1);
       keys[h] = sk->edge_keys[i];
     }
     free(sk->edge_keys);
@@ -228,7 +229,8 @@ void karst_skeleton_mark_junctions(karst_skeleton_t *sk) {
   karst_network_t *net = &sk->net;
   karst_int_t *deg = calloc((size_t)(net->n_nodes > 0 ? net->n_nodes : 1), sizeof *deg);
   if (!deg) return;
-  for (karst_int_t e = 0; e < net->n_edges; e++) deg[net->edges[2 * e]]++, deg[net->edges[2 * e + 1]]++;
+  for (karst_int_t e = 0; e < net->n_edges; e++)
+    deg[net->edges[2 * e]]++, deg[net->edges[2 * e + 1]]++;
   double *kind = karst_network_attr_find(net, KARST_ATTR_NODE, "kind")->data;
   for (karst_int_t v = 0; v < net->n_nodes; v++)
     if (kind[v] == KARST_NODE_INTERIOR && deg[v] >= 3) kind[v] = KARST_NODE_JUNCTION;
@@ -257,9 +259,9 @@ void karst_skeleton_mark_junctions(karst_skeleton_t *sk) {
  * (trees) or one A* search (no trees).
  */
 karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
-                                   const karst_int_t *keys, const double *dist,
-                                   const int32_t *pred, double gamma, double lb_per_metre,
-                                   karst_skeleton_t *sk, karst_int_t *n_kept) {
+                                   const karst_int_t *keys, const double *dist, const int32_t *pred,
+                                   double gamma, double lb_per_metre, karst_skeleton_t *sk,
+                                   karst_int_t *n_kept) {
   karst_error_t err = KARST_SUCCESS;
   unsigned char *keep = malloc((size_t)(n_keys * n_keys > 0 ? n_keys * n_keys : 1));
   karst_search_t *s = NULL;
@@ -282,7 +284,8 @@ karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, kar
         goto cleanup;
       }
       if (pred)
-        err = karst_paths_tree_path(ctx, g, pred + (size_t)a * (size_t)g->n, keys[a], keys[b], &path);
+        err =
+            karst_paths_tree_path(ctx, g, pred + (size_t)a * (size_t)g->n, keys[a], keys[b], &path);
       else
         err = karst_paths_astar(ctx, s, keys[a], keys[b], lb_per_metre, &path);
       if (err) goto cleanup;

@@ -35,8 +35,10 @@ static inline void fx_graph_from_edges(karst_graph_t *g, karst_int_t n, const do
   g->offsets = calloc((size_t)n + 1, sizeof *g->offsets);
   g->adj = malloc((size_t)(2 * m + 1) * sizeof *g->adj);
   g->cost = malloc((size_t)(2 * m + 1) * sizeof *g->cost);
-  for (karst_int_t e = 0; e < m; e++) g->offsets[u[e] + 1]++, g->offsets[v[e] + 1]++;
-  for (karst_int_t i = 0; i < n; i++) g->offsets[i + 1] += g->offsets[i];
+  for (karst_int_t e = 0; e < m; e++)
+    g->offsets[u[e] + 1]++, g->offsets[v[e] + 1]++;
+  for (karst_int_t i = 0; i < n; i++)
+    g->offsets[i + 1] += g->offsets[i];
   karst_int_t *fill = calloc((size_t)n + 1, sizeof *fill);
   for (karst_int_t e = 0; e < m; e++) {
     karst_int_t a = g->offsets[u[e]] + fill[u[e]]++;
@@ -53,7 +55,8 @@ static inline void fx_graph_from_edges(karst_graph_t *g, karst_int_t n, const do
 static inline void fx_knn_graph(karst_graph_t *g, karst_int_t n, const double *xyz, int k,
                                 fx_cost_fn cost, void *user) {
   karst_int_t cap = n * k, m = 0;
-  karst_int_t *u = malloc((size_t)(cap + 1) * sizeof *u), *v = malloc((size_t)(cap + 1) * sizeof *v);
+  karst_int_t *u = malloc((size_t)(cap + 1) * sizeof *u),
+              *v = malloc((size_t)(cap + 1) * sizeof *v);
   double *c = malloc((size_t)(cap + 1) * sizeof *c);
   karst_int_t *best = malloc((size_t)(k + 1) * sizeof *best);
   double *bd = malloc((size_t)(k + 1) * sizeof *bd);
@@ -65,10 +68,12 @@ static inline void fx_knn_graph(karst_graph_t *g, karst_int_t n, const double *x
              dz = xyz[3 * i + 2] - xyz[3 * j + 2];
       double d = dx * dx + dy * dy + dz * dz;
       int pos = nb;
-      while (pos > 0 && bd[pos - 1] > d) pos--;
+      while (pos > 0 && bd[pos - 1] > d)
+        pos--;
       if (pos >= k) continue;
       int last = nb < k ? nb : k - 1;
-      for (int q = last; q > pos; q--) bd[q] = bd[q - 1], best[q] = best[q - 1];
+      for (int q = last; q > pos; q--)
+        bd[q] = bd[q - 1], best[q] = best[q - 1];
       bd[pos] = d;
       best[pos] = j;
       if (nb < k) nb++;
@@ -127,7 +132,8 @@ static inline double fx_scenario_cost(const double *a, const double *b, void *us
   double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   if (len == 0) return 0;
-  for (int k = 0; k < 3; k++) d[k] /= len;
+  for (int k = 0; k < 3; k++)
+    d[k] /= len;
   double cf = 0;
   for (int f = 0; f < sc->n_fractures; f++) {
     double nrm[3];

@@ -25,9 +25,12 @@ static void test_theta_mapping(void **state) {
 
 /* Distance from p to the line through a and b. */
 static double line_dist(const double *p, const double *a, const double *b) {
-  double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
-  double cr[3] = {ab[1] * ap[2] - ab[2] * ap[1], ab[2] * ap[0] - ab[0] * ap[2], ab[0] * ap[1] - ab[1] * ap[0]};
-  return sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]) / sqrt(ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]);
+  double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]},
+         ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+  double cr[3] = {ab[1] * ap[2] - ab[2] * ap[1], ab[2] * ap[0] - ab[0] * ap[2],
+                  ab[0] * ap[1] - ab[1] * ap[0]};
+  return sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]) /
+         sqrt(ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]);
 }
 
 /* One 16 m edge just below a flat terrain (z = 10, edge at z = 9.9), min segment 1 m, 3 levels:
@@ -65,8 +68,10 @@ static void test_displacement(void **state) {
       karst_rng_t r1, r2;
       karst_rng_init(&r1, seed, 0);
       karst_rng_init(&r2, seed, 0);
-      assert_int_equal(karst_amplification_displace(&ctx, &sc, th, &r1, &opt, &in, &out), KARST_SUCCESS);
-      assert_int_equal(karst_amplification_displace(&ctx, &sc, th, &r2, &opt, &in, &out2), KARST_SUCCESS);
+      assert_int_equal(karst_amplification_displace(&ctx, &sc, th, &r1, &opt, &in, &out),
+                       KARST_SUCCESS);
+      assert_int_equal(karst_amplification_displace(&ctx, &sc, th, &r2, &opt, &in, &out2),
+                       KARST_SUCCESS);
       assert_int_equal(out.n_nodes, 9);
       assert_int_equal(out.n_edges, 8);
       assert_memory_equal(out.xyz, out2.xyz, 9 * 3 * sizeof(double)); /* same stream, same result */
@@ -82,10 +87,12 @@ static void test_displacement(void **state) {
       }
       assert_close(csum, 32.0, 1e-12);
       karst_int_t deg[9] = {0};
-      for (karst_int_t e = 0; e < 8; e++) deg[out.edges[2 * e]]++, deg[out.edges[2 * e + 1]]++;
+      for (karst_int_t e = 0; e < 8; e++)
+        deg[out.edges[2 * e]]++, deg[out.edges[2 * e + 1]]++;
       assert_int_equal(deg[0], 1);
       assert_int_equal(deg[1], 1);
-      for (int v = 2; v < 9; v++) assert_int_equal(deg[v], 2);
+      for (int v = 2; v < 9; v++)
+        assert_int_equal(deg[v], 2);
       for (karst_int_t v = 0; v < 9; v++) {
         assert_true(out.xyz[3 * v + 2] < 10.0); /* never above the terrain */
         double dev = line_dist(&out.xyz[3 * v], &in.xyz[0], &in.xyz[3]);
@@ -116,15 +123,19 @@ static void test_displacement(void **state) {
 /* Cyclomatic number E − N + C of a network. */
 static karst_int_t cyclomatic(const karst_network_t *net, karst_int_t *components) {
   karst_int_t *parent = malloc((size_t)(net->n_nodes + 1) * sizeof *parent);
-  for (karst_int_t i = 0; i < net->n_nodes; i++) parent[i] = i;
+  for (karst_int_t i = 0; i < net->n_nodes; i++)
+    parent[i] = i;
   for (karst_int_t e = 0; e < net->n_edges; e++) {
     karst_int_t a = net->edges[2 * e], b = net->edges[2 * e + 1];
-    while (parent[a] != a) a = parent[a];
-    while (parent[b] != b) b = parent[b];
+    while (parent[a] != a)
+      a = parent[a];
+    while (parent[b] != b)
+      b = parent[b];
     if (a != b) parent[a] = b;
   }
   karst_int_t c = 0;
-  for (karst_int_t i = 0; i < net->n_nodes; i++) c += parent[i] == i;
+  for (karst_int_t i = 0; i < net->n_nodes; i++)
+    c += parent[i] == i;
   free(parent);
   *components = c;
   return net->n_edges - net->n_nodes + c;
@@ -163,13 +174,16 @@ static void run_ramify(double dead_fraction, karst_int_t *cyc, karst_int_t *comp
   karst_rng_t ra;
   karst_rng_init(&ra, 77, 0);
   karst_int_t paths;
-  assert_int_equal(karst_amplification_ramify(&ctx, &sc, &g, &ra, NULL, &sk, npts, &paths), KARST_SUCCESS);
+  assert_int_equal(karst_amplification_ramify(&ctx, &sc, &g, &ra, NULL, &sk, npts, &paths),
+                   KARST_SUCCESS);
   assert_true(sk.net.n_edges > before);
   *cyc = cyclomatic(&sk.net, comp);
   const double *kind = karst_network_attr_find(&sk.net, KARST_ATTR_NODE, "kind")->data;
   *namp = 0;
-  for (karst_int_t v = 0; v < sk.net.n_nodes; v++) *namp += kind[v] == KARST_NODE_AMPLIFICATION;
-  const double *step = karst_network_attr_find(&sk.net, KARST_ATTR_EDGE, "amplification_step")->data;
+  for (karst_int_t v = 0; v < sk.net.n_nodes; v++)
+    *namp += kind[v] == KARST_NODE_AMPLIFICATION;
+  const double *step =
+      karst_network_attr_find(&sk.net, KARST_ATTR_EDGE, "amplification_step")->data;
   *max_amp_step = 0;
   for (karst_int_t e = 0; e < sk.net.n_edges; e++)
     if ((int)step[e] > *max_amp_step) *max_amp_step = (int)step[e];
@@ -198,7 +212,8 @@ static void test_ramify(void **state) {
   assert_int_equal(comp, 1);
   assert_true(cyc >= npts / 2); /* most interior points close a loop */
   assert_true(npts >= 10);
-  print_message("interior points: %lld points, cyclomatic number %lld\n", (long long)npts, (long long)cyc);
+  print_message("interior points: %lld points, cyclomatic number %lld\n", (long long)npts,
+                (long long)cyc);
 }
 
 int main(void) {

@@ -28,7 +28,8 @@ static void make_scenario(karst_scenario_t *sc, karst_perm_node_t *sphere) {
   sc->permeability.root = sphere;
 }
 
-static karst_tunnel_type_t seg(const karst_scenario_t *sc, double x, double z, double dx, double dz) {
+static karst_tunnel_type_t seg(const karst_scenario_t *sc, double x, double z, double dx,
+                               double dz) {
   double a[3] = {x, 0, z}, b[3] = {x + dx, 0, z + dz};
   return karst_classification_type(sc, a, b);
 }
@@ -39,15 +40,15 @@ static void test_decision_table(void **state) {
   karst_perm_node_t sphere;
   make_scenario(&sc, &sphere);
   /* Each segment is 10 m long, centred at the stated elevation; tan 60° = 1.732. */
-  assert_int_equal(seg(&sc, 0, 75, 10, 0), KARST_TUNNEL_CANYON);   /* vadose, horizontal */
-  assert_int_equal(seg(&sc, 0, 70, 0, 10), KARST_TUNNEL_TUBE);     /* vadose, vertical (centre 75) */
-  assert_int_equal(seg(&sc, 0, 50, 10, 0), KARST_TUNNEL_KEYHOLE);  /* at the table, horizontal */
-  assert_int_equal(seg(&sc, 0, 46, 0, 8), KARST_TUNNEL_TUBE);      /* at the table, vertical */
-  assert_int_equal(seg(&sc, 0, 20, 10, 0), KARST_TUNNEL_BED);      /* phreatic, horizontal */
-  assert_int_equal(seg(&sc, 0, 15, 0, 10), KARST_TUNNEL_PASSAGE);  /* phreatic, vertical */
+  assert_int_equal(seg(&sc, 0, 75, 10, 0), KARST_TUNNEL_CANYON);  /* vadose, horizontal */
+  assert_int_equal(seg(&sc, 0, 70, 0, 10), KARST_TUNNEL_TUBE);    /* vadose, vertical (centre 75) */
+  assert_int_equal(seg(&sc, 0, 50, 10, 0), KARST_TUNNEL_KEYHOLE); /* at the table, horizontal */
+  assert_int_equal(seg(&sc, 0, 46, 0, 8), KARST_TUNNEL_TUBE);     /* at the table, vertical */
+  assert_int_equal(seg(&sc, 0, 20, 10, 0), KARST_TUNNEL_BED);     /* phreatic, horizontal */
+  assert_int_equal(seg(&sc, 0, 15, 0, 10), KARST_TUNNEL_PASSAGE); /* phreatic, vertical */
   assert_int_equal(seg(&sc, 0, 95, 10, 0), KARST_TUNNEL_EPIKARST); /* 5 m below the terrain */
   assert_int_equal(seg(&sc, 0, 91, 0, 6), KARST_TUNNEL_EPIKARST);  /* centre 94: vertical too */
-  assert_int_equal(seg(&sc, 0, 88, 10, 0), KARST_TUNNEL_CANYON);   /* 12 m deep: below the epikarst */
+  assert_int_equal(seg(&sc, 0, 88, 10, 0), KARST_TUNNEL_CANYON); /* 12 m deep: below the epikarst */
   double a[3] = {495, 500, 30}, b[3] = {505, 500, 30};
   assert_int_equal(karst_classification_type(&sc, a, b), KARST_TUNNEL_CHAMBER); /* ghost rock */
   /* Band edges: |z − W| ≤ 5 counts as the table; 5.5 m above is vadose. */
@@ -74,8 +75,10 @@ static void test_run_radii(void **state) {
   karst_network_init(&net);
   /* 2000 horizontal phreatic segments (bed) and one epikarst segment at the end. */
   const int n = 2000;
-  for (int i = 0; i <= n; i++) karst_network_add_node(&net, i, 0, 20, NULL);
-  for (int i = 0; i < n; i++) karst_network_add_edge(&net, i, i + 1, NULL);
+  for (int i = 0; i <= n; i++)
+    karst_network_add_node(&net, i, 0, 20, NULL);
+  for (int i = 0; i < n; i++)
+    karst_network_add_edge(&net, i, i + 1, NULL);
   karst_int_t u, v;
   karst_network_add_node(&net, 0, 0, 92, &u);
   karst_network_add_node(&net, 0, 0, 98, &v);
@@ -95,7 +98,8 @@ static void test_run_radii(void **state) {
     lo = fmin(lo, rad[e]);
     hi = fmax(hi, rad[e]);
   }
-  /* Uniform on [0.5, 4] (§5.3): mean 2.25, standard error 3.5/sqrt(12·2000) = 0.023; 0.1 is > 4 SE. */
+  /* Uniform on [0.5, 4] (§5.3): mean 2.25, standard error 3.5/sqrt(12·2000) = 0.023; 0.1 is > 4 SE.
+   */
   assert_close(mean, 2.25, 0.1);
   assert_true(lo >= 0.5 && hi <= 4.0);
   assert_true(lo < 0.6 && hi > 3.9);

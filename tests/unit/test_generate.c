@@ -36,9 +36,11 @@ static void make_fixture(fixture_t *f, int isolate_key) {
   sc->amplification.points = 4;
   sc->amplification.dead_end_fraction = 0.5;
   sc->name = strdup("fixture");
-  const double kp[5][3] = {{20, 20, 55}, {180, 40, 55}, {100, 180, 30}, {60, 120, 40}, {150, 150, 20}};
-  const karst_keypoint_type_t kt[5] = {KARST_KEYPOINT_SINK, KARST_KEYPOINT_SINK, KARST_KEYPOINT_SPRING,
-                                       KARST_KEYPOINT_WAYPOINT, KARST_KEYPOINT_WAYPOINT};
+  const double kp[5][3] = {
+      {20, 20, 55}, {180, 40, 55}, {100, 180, 30}, {60, 120, 40}, {150, 150, 20}};
+  const karst_keypoint_type_t kt[5] = {KARST_KEYPOINT_SINK, KARST_KEYPOINT_SINK,
+                                       KARST_KEYPOINT_SPRING, KARST_KEYPOINT_WAYPOINT,
+                                       KARST_KEYPOINT_WAYPOINT};
   const char *names[5] = {"sink_a", "sink_b", "spring", "way_1", "way_2"};
   sc->n_key_points = 5;
   sc->key_points = calloc(5, sizeof *sc->key_points);
@@ -53,10 +55,11 @@ static void make_fixture(fixture_t *f, int isolate_key) {
   double *lat = fx_jittered_grid(40, 40, 11, 5.0, o, 0.3, &r);
   f->n = 5 + 40 * 40 * 11;
   f->xyz = malloc((size_t)f->n * 3 * sizeof *f->xyz);
-  for (int i = 0; i < 5; i++) memcpy(&f->xyz[3 * i], kp[i], sizeof kp[i]);
+  for (int i = 0; i < 5; i++)
+    memcpy(&f->xyz[3 * i], kp[i], sizeof kp[i]);
   memcpy(&f->xyz[15], lat, 40 * 40 * 11 * 3 * sizeof *lat);
   free(lat);
-  if (isolate_key) /* move key point 4 far away: its k nearest neighbours are still found, */
+  if (isolate_key)       /* move key point 4 far away: its k nearest neighbours are still found, */
     f->xyz[3 * 4] = 1e6; /* so make every edge touching it infinite below instead */
   fx_cost_ctx_t cc = {sc, 4};
   fx_knn_graph(&f->g, f->n, f->xyz, 20, fx_scenario_cost, &cc);
@@ -79,9 +82,11 @@ static void assert_same_network(const karst_network_t *a, const karst_network_t 
   assert_memory_equal(a->edges, b->edges, (size_t)a->n_edges * 2 * sizeof(karst_int_t));
   assert_int_equal(a->n_edge_attrs, b->n_edge_attrs);
   for (int i = 0; i < a->n_edge_attrs; i++)
-    assert_memory_equal(a->edge_attrs[i].data, b->edge_attrs[i].data, (size_t)a->n_edges * sizeof(double));
+    assert_memory_equal(a->edge_attrs[i].data, b->edge_attrs[i].data,
+                        (size_t)a->n_edges * sizeof(double));
   for (int i = 0; i < a->n_node_attrs; i++)
-    assert_memory_equal(a->node_attrs[i].data, b->node_attrs[i].data, (size_t)a->n_nodes * sizeof(double));
+    assert_memory_equal(a->node_attrs[i].data, b->node_attrs[i].data,
+                        (size_t)a->n_nodes * sizeof(double));
 }
 
 static void test_pipeline_after_graph(void **state) {
@@ -97,18 +102,25 @@ static void test_pipeline_after_graph(void **state) {
   karst_generate_stats_t st;
   memset(&st, 0, sizeof st);
   ctx.nthreads = 1;
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 42, 0, &f.g, 1.0, &n1, &st), KARST_SUCCESS);
+  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 42, 0, &f.g, 1.0, &n1, &st),
+                   KARST_SUCCESS);
   ctx.nthreads = 2;
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 42, 0, &f.g, 1.0, &n2, NULL), KARST_SUCCESS);
+  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 42, 0, &f.g, 1.0, &n2, NULL),
+                   KARST_SUCCESS);
   assert_same_network(&n1, &n2); /* same seed: identical, whatever the thread count */
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 43, 0, &f.g, 1.0, &n3, NULL), KARST_SUCCESS);
+  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 43, 0, &f.g, 1.0, &n3, NULL),
+                   KARST_SUCCESS);
   assert_true(n3.n_nodes != n1.n_nodes ||
-              memcmp(n3.xyz, n1.xyz, (size_t)n1.n_nodes * 3 * sizeof(double)) != 0); /* another seed differs */
+              memcmp(n3.xyz, n1.xyz, (size_t)n1.n_nodes * 3 * sizeof(double)) !=
+                  0); /* another seed differs */
   /* Attributes promised by generate.h. */
   const char *node_attrs[] = {"kind", "water_table_distance"};
-  const char *edge_attrs[] = {"tunnel_type", "radius", "cost", "vadose", "branch_id", "amplification_step"};
-  for (int i = 0; i < 2; i++) assert_non_null(karst_network_attr_find(&n1, KARST_ATTR_NODE, node_attrs[i]));
-  for (int i = 0; i < 6; i++) assert_non_null(karst_network_attr_find(&n1, KARST_ATTR_EDGE, edge_attrs[i]));
+  const char *edge_attrs[] = {"tunnel_type", "radius",    "cost",
+                              "vadose",      "branch_id", "amplification_step"};
+  for (int i = 0; i < 2; i++)
+    assert_non_null(karst_network_attr_find(&n1, KARST_ATTR_NODE, node_attrs[i]));
+  for (int i = 0; i < 6; i++)
+    assert_non_null(karst_network_attr_find(&n1, KARST_ATTR_EDGE, edge_attrs[i]));
   /* Key points are nodes 0..4 with their kinds and names (the skeleton adds them first). */
   const double *kind = karst_network_attr_find(&n1, KARST_ATTR_NODE, "kind")->data;
   assert_int_equal((int)kind[0], KARST_NODE_SINK);
@@ -127,7 +139,8 @@ static void test_pipeline_after_graph(void **state) {
   assert_true(amp >= 1 && amp <= 8);
   const double *step = karst_network_attr_find(&n1, KARST_ATTR_EDGE, "amplification_step")->data;
   int has_step2 = 0;
-  for (karst_int_t e = 0; e < n1.n_edges; e++) has_step2 |= step[e] == 2;
+  for (karst_int_t e = 0; e < n1.n_edges; e++)
+    has_step2 |= step[e] == 2;
   assert_true(has_step2);
   /* Stats. */
   assert_int_equal(st.n_key_points, 5);
@@ -135,7 +148,8 @@ static void test_pipeline_after_graph(void **state) {
   assert_int_equal(st.n_nodes, n1.n_nodes);
   assert_int_equal(st.n_edges, n1.n_edges);
   double len = 0;
-  for (karst_int_t e = 0; e < n1.n_edges; e++) len += karst_network_edge_length(&n1, e);
+  for (karst_int_t e = 0; e < n1.n_edges; e++)
+    len += karst_network_edge_length(&n1, e);
   assert_rel(st.total_length, len, 1e-12);
   assert_true(st.total_length > 200); /* the key points span more than 200 m */
   karst_network_destroy(&n1);
@@ -152,7 +166,8 @@ static void test_unreachable_key_point(void **state) {
   karst_ctx_init(&ctx);
   karst_network_t net;
   karst_network_init(&net);
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 1, 0, &f.g, 1.0, &net, NULL), KARST_EUNREACHABLE);
+  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 1, 0, &f.g, 1.0, &net, NULL),
+                   KARST_EUNREACHABLE);
   print_message("%s\n", ctx.errmsg);
   assert_non_null(strstr(ctx.errmsg, "'way_2'"));
   assert_int_equal(net.n_nodes, 0); /* nothing half-built survives */
@@ -170,11 +185,13 @@ static void test_single_key_point(void **state) {
   karst_ctx_init(&ctx);
   karst_network_t net;
   karst_network_init(&net);
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 1, 0, &f.g, 1.0, &net, NULL), KARST_SUCCESS);
+  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 1, 0, &f.g, 1.0, &net, NULL),
+                   KARST_SUCCESS);
   assert_int_equal(net.n_nodes, 1);
   assert_int_equal(net.n_edges, 0);
   f.sc.n_key_points = 0;
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 1, 0, &f.g, 1.0, &net, NULL), KARST_EINVAL);
+  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 1, 0, &f.g, 1.0, &net, NULL),
+                   KARST_EINVAL);
   f.sc.n_key_points = 5;
   karst_network_destroy(&net);
   free_fixture(&f);

@@ -47,7 +47,8 @@ static void test_astar_equals_dijkstra(void **state) {
     karst_rng_init(&rng, seed, 7);
     const karst_int_t n = 150;
     double *xyz = malloc(3 * n * sizeof *xyz);
-    for (karst_int_t i = 0; i < 3 * n; i++) xyz[i] = 100 * karst_rng_uniform(&rng);
+    for (karst_int_t i = 0; i < 3 * n; i++)
+      xyz[i] = 100 * karst_rng_uniform(&rng);
     karst_graph_t g;
     fx_knn_graph(&g, n, xyz, 5, random_cost, &rng);
     karst_search_t *s1, *s2;
@@ -56,7 +57,8 @@ static void test_astar_equals_dijkstra(void **state) {
     karst_path_t p;
     karst_path_init(&p);
     for (int q = 0; q < 20; q++) {
-      karst_int_t a = (karst_int_t)karst_rng_below(&rng, n), b = (karst_int_t)karst_rng_below(&rng, n);
+      karst_int_t a = (karst_int_t)karst_rng_below(&rng, n),
+                  b = (karst_int_t)karst_rng_below(&rng, n);
       assert_int_equal(karst_paths_dijkstra(&ctx, s2, 1, &a, NULL, NULL, 0, NULL), KARST_SUCCESS);
       double dref = karst_search_dist(s2, b);
       karst_error_t e = karst_paths_astar(&ctx, s1, a, b, 1.0, &p);
@@ -100,7 +102,8 @@ static void test_hand_graph(void **state) {
   assert_int_equal(karst_paths_astar(&ctx, s, 0, 2, 1.0, &p), KARST_SUCCESS);
   assert_int_equal(p.n, 2);
   assert_close(p.cost, 1.5, 0);
-  /* 1 -> 3: two sides either way (2); ties are broken by vertex index, so the same path every time. */
+  /* 1 -> 3: two sides either way (2); ties are broken by vertex index, so the same path every time.
+   */
   assert_int_equal(karst_paths_astar(&ctx, s, 1, 3, 1.0, &p), KARST_SUCCESS);
   assert_close(p.cost, 2.0, 0);
   karst_int_t mid = p.v[1];
@@ -119,7 +122,8 @@ static void test_hand_graph(void **state) {
   assert_int_equal(karst_paths_astar(&ctx, s, 0, 9, 1.0, &p), KARST_EINVAL);
   assert_int_equal(karst_paths_astar(&ctx, s, 0, 2, NAN, &p), KARST_EINVAL);
   assert_int_equal(karst_paths_dijkstra(&ctx, s, 0, NULL, NULL, NULL, 0, NULL), KARST_EINVAL);
-  /* Multi-source Dijkstra: from {0, 2}, vertex 1 and 3 are at 1, and stop after the first target. */
+  /* Multi-source Dijkstra: from {0, 2}, vertex 1 and 3 are at 1, and stop after the first target.
+   */
   karst_int_t src[] = {0, 2};
   unsigned char target[5] = {0, 1, 0, 1, 0};
   karst_int_t last;
@@ -162,19 +166,27 @@ static void test_keypoint_distances(void **state) {
   karst_rng_init(&rng, 11, 0);
   const karst_int_t n = 600, K = 12;
   double *xyz = malloc(3 * n * sizeof *xyz);
-  for (karst_int_t i = 0; i < 3 * n; i++) xyz[i] = 100 * karst_rng_uniform(&rng);
+  for (karst_int_t i = 0; i < 3 * n; i++)
+    xyz[i] = 100 * karst_rng_uniform(&rng);
   karst_graph_t g;
   fx_knn_graph(&g, n, xyz, 6, random_cost, &rng);
   karst_int_t keys[12];
-  for (int i = 0; i < K; i++) keys[i] = 50 * i;
+  for (int i = 0; i < K; i++)
+    keys[i] = 50 * i;
   keys[5] = keys[4]; /* a duplicated key point is at distance 0 from its twin */
   double d1[144], d2[144], d3[144];
   ctx.nthreads = 1;
-  assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, K, keys, 1.0, KARST_PATHS_DIJKSTRA_MULTI, d1), KARST_SUCCESS);
+  assert_int_equal(
+      karst_paths_keypoint_distances(&ctx, &g, K, keys, 1.0, KARST_PATHS_DIJKSTRA_MULTI, d1),
+      KARST_SUCCESS);
   ctx.nthreads = 2;
-  assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, K, keys, 1.0, KARST_PATHS_DIJKSTRA_MULTI, d2), KARST_SUCCESS);
+  assert_int_equal(
+      karst_paths_keypoint_distances(&ctx, &g, K, keys, 1.0, KARST_PATHS_DIJKSTRA_MULTI, d2),
+      KARST_SUCCESS);
   assert_memory_equal(d1, d2, sizeof d1);
-  assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, K, keys, 1.0, KARST_PATHS_ASTAR_PAIRS, d3), KARST_SUCCESS);
+  assert_int_equal(
+      karst_paths_keypoint_distances(&ctx, &g, K, keys, 1.0, KARST_PATHS_ASTAR_PAIRS, d3),
+      KARST_SUCCESS);
   int finite = 0;
   for (int i = 0; i < K; i++)
     for (int j = 0; j < K; j++) {
@@ -253,8 +265,10 @@ static void test_fracture_strike(void **state) {
   assert_int_equal(karst_paths_astar(&ctx, s, a, b, sc.cost.w0, &p), KARST_SUCCESS);
   const double north[3] = {0, 1, 0}, east[3] = {1, 0, 0};
   double al = alignment(&g, &p, north);
-  print_message("fracture: alignment with strike %.3f, with normal %.3f\n", al, alignment(&g, &p, east));
-  assert_true(al > 0.8); /* the 8° zig-zag gives cos 8° ≈ 0.99; the graph's directions are coarser */
+  print_message("fracture: alignment with strike %.3f, with normal %.3f\n", al,
+                alignment(&g, &p, east));
+  assert_true(al >
+              0.8); /* the 8° zig-zag gives cos 8° ≈ 0.99; the graph's directions are coarser */
   fx_graph_free(&g);
   sc.n_fractures = 0;
   fx_knn_graph(&g, n, xyz, 24, fx_scenario_cost, &cc);
@@ -378,9 +392,12 @@ static void test_horizon_corridor(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_astar_equals_dijkstra), cmocka_unit_test(test_hand_graph),
-      cmocka_unit_test(test_empty),                 cmocka_unit_test(test_keypoint_distances),
-      cmocka_unit_test(test_fracture_strike),       cmocka_unit_test(test_sphere_attracts),
+      cmocka_unit_test(test_astar_equals_dijkstra),
+      cmocka_unit_test(test_hand_graph),
+      cmocka_unit_test(test_empty),
+      cmocka_unit_test(test_keypoint_distances),
+      cmocka_unit_test(test_fracture_strike),
+      cmocka_unit_test(test_sphere_attracts),
       cmocka_unit_test(test_horizon_corridor),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -13,7 +13,9 @@
 #include "graph_fixture.h"
 #include "test_util.h"
 
-static double d3(const double *a, const double *b) { return fx_euclid_cost(a, b, NULL); }
+static double d3(const double *a, const double *b) {
+  return fx_euclid_cost(a, b, NULL);
+}
 
 /* Key-point distances on the complete graph with cost = Euclidean length (the path metric is then
  * the Euclidean distance: no detour is shorter than the straight edge). */
@@ -24,13 +26,16 @@ static void euclid_matrix(karst_int_t n, const double *xyz, double *dist) {
   karst_int_t *u = malloc((size_t)(m + 1) * sizeof *u), *v = malloc((size_t)(m + 1) * sizeof *v);
   double *c = malloc((size_t)(m + 1) * sizeof *c);
   for (karst_int_t i = 0; i < n; i++)
-    for (karst_int_t j = i + 1; j < n; j++, e++) u[e] = i, v[e] = j, c[e] = d3(&xyz[3 * i], &xyz[3 * j]);
+    for (karst_int_t j = i + 1; j < n; j++, e++)
+      u[e] = i, v[e] = j, c[e] = d3(&xyz[3 * i], &xyz[3 * j]);
   karst_graph_t g;
   fx_graph_from_edges(&g, n, xyz, m, u, v, c);
   karst_int_t *keys = malloc((size_t)n * sizeof *keys);
-  for (karst_int_t i = 0; i < n; i++) keys[i] = i;
-  assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, n, keys, 1.0, KARST_PATHS_DIJKSTRA_MULTI, dist),
-                   KARST_SUCCESS);
+  for (karst_int_t i = 0; i < n; i++)
+    keys[i] = i;
+  assert_int_equal(
+      karst_paths_keypoint_distances(&ctx, &g, n, keys, 1.0, KARST_PATHS_DIJKSTRA_MULTI, dist),
+      KARST_SUCCESS);
   free(keys), free(u), free(v), free(c);
   fx_graph_free(&g);
 }
@@ -51,7 +56,8 @@ static int gabriel_edge(karst_int_t n, const double *xyz, karst_int_t a, karst_i
 static int rng_edge(karst_int_t n, const double *xyz, karst_int_t a, karst_int_t b) {
   double dab = d3(&xyz[3 * a], &xyz[3 * b]);
   for (karst_int_t k = 0; k < n; k++)
-    if (k != a && k != b && d3(&xyz[3 * k], &xyz[3 * a]) < dab && d3(&xyz[3 * k], &xyz[3 * b]) < dab)
+    if (k != a && k != b && d3(&xyz[3 * k], &xyz[3 * a]) < dab &&
+        d3(&xyz[3 * k], &xyz[3 * b]) < dab)
       return 0;
   return 1;
 }
@@ -66,7 +72,8 @@ static void test_gabriel_and_rng(void **state) {
     const karst_int_t n = 40;
     double xyz[3 * 40], dist[40 * 40];
     unsigned char keep2[40 * 40], keepinf[40 * 40], keep08[40 * 40];
-    for (int i = 0; i < 3 * n; i++) xyz[i] = 1000 * karst_rng_uniform(&r);
+    for (int i = 0; i < 3 * n; i++)
+      xyz[i] = 1000 * karst_rng_uniform(&r);
     euclid_matrix(n, xyz, dist);
     assert_int_equal(karst_skeleton_gamma_keep(&ctx, n, dist, 2.0, keep2), KARST_SUCCESS);
     assert_int_equal(karst_skeleton_gamma_keep(&ctx, n, dist, INFINITY, keepinf), KARST_SUCCESS);
@@ -82,8 +89,8 @@ static void test_gabriel_and_rng(void **state) {
         n_gabriel += keep2[a * n + b];
         n_rng += keepinf[a * n + b];
       }
-    assert_true(n_rng < n_gabriel);         /* the two rules differ on these point sets */
-    assert_true(n_gabriel < n * (n - 1));   /* and both prune */
+    assert_true(n_rng < n_gabriel);       /* the two rules differ on these point sets */
+    assert_true(n_gabriel < n * (n - 1)); /* and both prune */
   }
 }
 
@@ -147,7 +154,8 @@ static void test_union_and_junctions(void **state) {
   karst_skeleton_t sk;
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
   karst_int_t kept;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, 2.0, 1.0, &sk, &kept), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, 2.0, 1.0, &sk, &kept),
+                   KARST_SUCCESS);
   assert_int_equal(kept, 3);
   karst_skeleton_mark_junctions(&sk);
   assert_int_equal(sk.net.n_nodes, 6);
@@ -163,7 +171,8 @@ static void test_union_and_junctions(void **state) {
   assert_close(branch[0], 0, 0);
   assert_close(branch[4], 1, 0); /* 3-4 or 4-5 came with path (1, 5) */
   double sum = 0;
-  for (karst_int_t e = 0; e < sk.net.n_edges; e++) sum += cost[e];
+  for (karst_int_t e = 0; e < sk.net.n_edges; e++)
+    sum += cost[e];
   assert_close(sum, 5.0, 0);
   karst_skeleton_destroy(&sk);
   /* A pair whose path is broken (an unreachable key point) is simply not kept. */
@@ -171,7 +180,8 @@ static void test_union_and_junctions(void **state) {
   assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, 2, keys2, 1.0, 0, dist), KARST_SUCCESS);
   assert_true(isinf(dist[1]));
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 2, keys2, dist, NULL, 2.0, 1.0, &sk, &kept), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 2, keys2, dist, NULL, 2.0, 1.0, &sk, &kept),
+                   KARST_SUCCESS);
   assert_int_equal(kept, 0);
   assert_int_equal(sk.net.n_nodes, 2); /* the two key points alone */
   assert_int_equal(sk.net.n_edges, 0);
@@ -195,25 +205,31 @@ static void test_skeleton_on_dense_graph(void **state) {
   karst_graph_t g;
   fx_knn_graph(&g, n, xyz, 16, fx_euclid_cost, NULL);
   karst_int_t keys[8];
-  for (int i = 0; i < 8; i++) keys[i] = (karst_int_t)karst_rng_below(&r, n);
+  for (int i = 0; i < 8; i++)
+    keys[i] = (karst_int_t)karst_rng_below(&r, n);
   double dist[64];
   assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, 8, keys, 1.0, 0, dist), KARST_SUCCESS);
   karst_skeleton_t sk;
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
   karst_int_t kept;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist, NULL, 2.0, 1.0, &sk, &kept), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist, NULL, 2.0, 1.0, &sk, &kept),
+                   KARST_SUCCESS);
   assert_true(kept >= 7); /* a connected proximity graph on 8 points has at least 7 edges */
   /* connectivity by union-find over the network edges */
   karst_int_t *parent = malloc((size_t)sk.net.n_nodes * sizeof *parent);
-  for (karst_int_t i = 0; i < sk.net.n_nodes; i++) parent[i] = i;
+  for (karst_int_t i = 0; i < sk.net.n_nodes; i++)
+    parent[i] = i;
   for (karst_int_t e = 0; e < sk.net.n_edges; e++) {
     karst_int_t a = sk.net.edges[2 * e], b = sk.net.edges[2 * e + 1];
-    while (parent[a] != a) a = parent[a];
-    while (parent[b] != b) b = parent[b];
+    while (parent[a] != a)
+      a = parent[a];
+    while (parent[b] != b)
+      b = parent[b];
     if (a != b) parent[a] = b;
   }
   int roots = 0;
-  for (karst_int_t i = 0; i < sk.net.n_nodes; i++) roots += parent[i] == i;
+  for (karst_int_t i = 0; i < sk.net.n_nodes; i++)
+    roots += parent[i] == i;
   assert_int_equal(roots, 1);
   free(parent);
   /* The same skeleton from the key points' shortest-path trees (one Dijkstra per key point
@@ -225,13 +241,15 @@ static void test_skeleton_on_dense_graph(void **state) {
   assert_memory_equal(dist, dist2, sizeof dist);
   karst_path_t p;
   karst_path_init(&p);
-  assert_int_equal(karst_paths_tree_path(&ctx, &g, pred + 2 * n, keys[2], keys[5], &p), KARST_SUCCESS);
+  assert_int_equal(karst_paths_tree_path(&ctx, &g, pred + 2 * n, keys[2], keys[5], &p),
+                   KARST_SUCCESS);
   assert_rel(p.cost, dist[2 * 8 + 5], 1e-12);
   karst_path_destroy(&p);
   karst_skeleton_t sk2;
   assert_int_equal(karst_skeleton_init(&ctx, &sk2, &g), KARST_SUCCESS);
   karst_int_t kept2;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist2, pred, 2.0, 1.0, &sk2, &kept2), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist2, pred, 2.0, 1.0, &sk2, &kept2),
+                   KARST_SUCCESS);
   assert_int_equal(kept2, kept);
   assert_int_equal(sk2.net.n_nodes, sk.net.n_nodes);
   assert_int_equal(sk2.net.n_edges, sk.net.n_edges);
