@@ -22,7 +22,7 @@ typedef struct {
 
 /* A 200 × 200 × 60 m block, terrain at 60, water table at 30, one horizon at 30, 5 key points as
  * the first samples (2 sinks near the top, 1 spring at the table, 2 waypoints), a jittered
- * 5 m lattice for the rest. */
+ * 7 m lattice for the rest. */
 static void make_fixture(fixture_t *f, int isolate_key) {
   karst_scenario_init(&f->sc);
   karst_scenario_t *sc = &f->sc;
@@ -51,13 +51,13 @@ static void make_fixture(fixture_t *f, int isolate_key) {
   }
   karst_rng_t r;
   karst_rng_init(&r, 99, 0);
-  const double o[3] = {2.5, 2.5, 2.5};
-  double *lat = fx_jittered_grid(40, 40, 11, 5.0, o, 0.3, &r);
-  f->n = 5 + 40 * 40 * 11;
+  const double o[3] = {3.5, 3.5, 3.5};
+  double *lat = fx_jittered_grid(29, 29, 8, 7.0, o, 0.3, &r);
+  f->n = 5 + 29 * 29 * 8;
   f->xyz = malloc((size_t)f->n * 3 * sizeof *f->xyz);
   for (int i = 0; i < 5; i++)
     memcpy(&f->xyz[3 * i], kp[i], sizeof kp[i]);
-  memcpy(&f->xyz[15], lat, 40 * 40 * 11 * 3 * sizeof *lat);
+  memcpy(&f->xyz[15], lat, 29 * 29 * 8 * 3 * sizeof *lat);
   free(lat);
   if (isolate_key)       /* move key point 4 far away: its k nearest neighbours are still found, */
     f->xyz[3 * 4] = 1e6; /* so make every edge touching it infinite below instead */
