@@ -251,7 +251,9 @@ static void test_fracture_strike(void **state) {
   sc.cost.horizon = 0;
   sc.cost.permeability = 0;
   sc.cost.fracture = 1;
-  karst_fracture_t fr = {90.0, 90.0, 50.0, 0}; /* dip direction east, vertical: normal (1, 0, 0) */
+  karst_fracture_t fr = {.dip_direction = 90.0,
+                         .dip = 90.0,
+                         .weight = 50.0}; /* dip direction east, vertical: normal (1, 0, 0) */
   sc.fractures = &fr;
   sc.n_fractures = 1;
   fx_cost_ctx_t cc = {&sc, 4};
@@ -357,7 +359,7 @@ static void test_horizon_corridor(void **state) {
   sc.cost.horizon = 1;
   sc.cost.fracture = 0;
   sc.cost.permeability = 0;
-  karst_horizon_t hz = {20.0, 0, 0, {0, 0}, 6.0, 0};
+  karst_horizon_t hz = {.elevation = 20.0, .radius = 6.0};
   for (int with = 1; with >= 0; with--) {
     sc.horizons = with ? &hz : NULL;
     sc.n_horizons = with;
