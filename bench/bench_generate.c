@@ -2,7 +2,7 @@
  * karst_generate on the shipped presets and on a 1.5-million-sample domain
  * with k = 100, and the measurement behind the choice of method for the
  * key-point distance matrix (multi-target Dijkstra rows vs A* pairs).
- * Usage: bench_generate [--threads N] [--skip-large] */
+ * Usage: bench_generate [--threads N] [--skip-large] [--presets-only] */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -108,10 +108,21 @@ static void run_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc, const cha
   double t0 = karst_i_now();
   karst_error_t err = karst_generate(ctx, sc, sc->seed, 0, &net, NULL, &st);
   double wall = karst_i_now() - t0;
-  if (err)
+  if (err) {
     printf("%-22s not run: %s\n", what, ctx->errmsg[0] ? ctx->errmsg : karst_strerror(err));
-  else
+  } else {
     print_stats(what, &st, wall);
+    /* Table 2 of Paris et al. 2021: the paper's presets and the 34-cave observed ranges. */
+    karst_metrics_t m;
+    karst_metrics_options_t mo;
+    karst_metrics_options_init(&mo);
+    if (karst_metrics_compute(ctx, &net, &mo, &m) == KARST_SUCCESS)
+      printf("%-22s Table 2 metrics: mean length %.0f m [8, 331], orientation entropy %.2f [0.8, "
+             "1.0], mean degree %.2f [1.8, 2.6], degree correlation %.2f [-0.6, -0.2], ASPL %.1f "
+             "[2.3, 55.7], CPD %.2f [0.0, 0.6]\n",
+             "", m.mean_length, m.orientation_entropy, m.mean_degree, m.correlation_vertex_degree,
+             m.aspl, m.cpd);
+  }
   karst_network_destroy(&net);
 }
 
@@ -149,13 +160,15 @@ static void large_scenario(karst_scenario_t *sc) {
 }
 
 int main(int argc, char **argv) {
-  int threads = 2, skip_large = 0;
+  int threads = 2, skip_large = 0, presets_only = 0;
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) threads = atoi(argv[++i]);
     if (strcmp(argv[i], "--skip-large") == 0) skip_large = 1;
+    if (strcmp(argv[i], "--presets-only") == 0) presets_only = skip_large = 1;
   }
   printf("bench_generate: %d thread(s)\n", threads);
-  bench_keypoint_methods(60, 60, 20, 47); /* 72 000 vertices: the size of the presets */
+  if (!presets_only)
+    bench_keypoint_methods(60, 60, 20, 47); /* 72 000 vertices: the presets' size */
   const char *presets[] = {"branchwork", "looping_cave", "rectilinear_maze", "superimposed"};
   for (int p = 0; p < 4; p++) {
     char path[1024];
