@@ -9,6 +9,8 @@
 #ifndef KARST_H
 #define KARST_H
 
+#include "karst/amplification.h"
+#include "karst/classification.h"
 #include "karst/common.h"
 #include "karst/compare.h"
 #include "karst/cost.h"
@@ -19,10 +21,12 @@
 #include "karst/io.h"
 #include "karst/metrics.h"
 #include "karst/network.h"
+#include "karst/paths.h"
 #include "karst/readers.h"
 #include "karst/report.h"
 #include "karst/sampling.h"
 #include "karst/scenario.h"
+#include "karst/skeleton.h"
 #include "karst/vtk.h"
 
 #endif
