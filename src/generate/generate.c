@@ -9,7 +9,8 @@
 #include <time.h>
 
 #include "generate/generate_internal.h"
-#include "generate/pending_sampling.h"
+#include "karst/cost.h"
+#include "karst/sampling.h"
 #include "karst/amplification.h"
 #include "karst/classification.h"
 #include "karst/skeleton.h"

@@ -174,7 +174,7 @@ karst_error_t karst_skeleton_add_path(karst_ctx_t *ctx, karst_skeleton_t *sk,
                                       int amplification_step) {
   karst_int_t prev = -1;
   for (karst_int_t i = 0; i < path->n; i++) {
-    karst_int_t node;
+    karst_int_t node = -1;
     karst_error_t err = node_for(ctx, sk, g, path->v[i], &node);
     if (err) return err;
     if (i > 0 && node != prev) {
@@ -211,7 +211,7 @@ karst_error_t karst_skeleton_add_path(karst_ctx_t *ctx, karst_skeleton_t *sk,
 karst_error_t karst_skeleton_mark_node(karst_ctx_t *ctx, karst_skeleton_t *sk,
                                        const karst_graph_t *g, karst_int_t vertex,
                                        karst_node_kind_t kind) {
-  karst_int_t node;
+  karst_int_t node = -1;
   karst_error_t err = node_for(ctx, sk, g, vertex, &node);
   if (err) return err;
   karst_network_attr_find(&sk->net, KARST_ATTR_NODE, "kind")->data[node] = kind;
