@@ -201,7 +201,20 @@ static int is_null(const yaml_node_t *n) {
          !strcmp(s, "NULL");
 }
 
-/* What a node is, for "got ..." in messages. */
+/* A plain scalar that reads as a number (including .nan, .inf and 1e999). */
+static int looks_numeric(const yaml_node_t *n) {
+  if (n->type != YAML_SCALAR_NODE || !is_plain(n) || n->data.scalar.length == 0) return 0;
+  const char *s = scalar(n);
+  const char *u = s + (*s == '+' || *s == '-');
+  if (!strcmp(u, ".nan") || !strcmp(u, ".NaN") || !strcmp(u, ".NAN") || !strcmp(u, ".inf") ||
+      !strcmp(u, ".Inf") || !strcmp(u, ".INF"))
+    return 1;
+  char *end;
+  (void)strtod(s, &end);
+  return end != s && *end == '\0' && (size_t)(end - s) == n->data.scalar.length;
+}
+
+/* What a node is, for "got ..." in messages: numbers as written, words quoted. */
 static const char *describe(const yaml_node_t *n, char *buf, size_t sz) {
   char t[64];
   switch (n->type) {
@@ -212,7 +225,7 @@ static const char *describe(const yaml_node_t *n, char *buf, size_t sz) {
   case YAML_SCALAR_NODE:
     if (is_null(n)) return n->data.scalar.length == 0 ? "an empty value" : "null";
     clip(scalar(n), n->data.scalar.length, t, sizeof t);
-    snprintf(buf, sz, is_plain(n) ? "'%s'" : "the string \"%s\"", t);
+    snprintf(buf, sz, looks_numeric(n) ? "%s" : is_plain(n) ? "'%s'" : "the string \"%s\"", t);
     return buf;
   default:
     return "nothing";
@@ -223,13 +236,20 @@ static const char *disp(const char *path) {
   return path[0] ? path : "the scenario";
 }
 
-/* Field paths for messages ("fractures[2].dip"); a path too long to show is cut. */
+/* "in fractures[2]", or "at the top level". */
+static const char *where(const char *path, char *buf, size_t sz) {
+  if (!path[0]) return "at the top level";
+  snprintf(buf, sz, "in %s", path);
+  return buf;
+}
+
+/* Field paths for messages ("fractures[2].dip"); a path too long to show ends in "...". */
 static void join(char *out, const char *path, const char *key) {
   if (snprintf(out, PATH_LEN, "%s%s%s", path, path[0] ? "." : "", key) >= PATH_LEN)
-    out[PATH_LEN - 1] = '\0';
+    memcpy(out + PATH_LEN - 4, "...", 4);
 }
 static void index_path(char *out, const char *path, long i) {
-  if (snprintf(out, PATH_LEN, "%s[%ld]", path, i) >= PATH_LEN) out[PATH_LEN - 1] = '\0';
+  if (snprintf(out, PATH_LEN, "%s[%ld]", path, i) >= PATH_LEN) memcpy(out + PATH_LEN - 4, "...", 4);
 }
 
 /* "within [0, 90) degrees", "> 0 m", ... */
@@ -413,10 +433,10 @@ static karst_error_t get_vec(reader_t *r, yaml_node_t *n, const char *path, int 
 static karst_error_t check_key(reader_t *r, yaml_node_t *map, yaml_node_pair_t *pair,
                                const char *const *keys, int nkeys, const char *path,
                                const schema_t *nested_hint, int *idx) {
-  char d[80], k1[64];
+  char d[80], k1[64], w[PATH_LEN + 8];
   yaml_node_t *key = yaml_document_get_node(r->doc, pair->key);
   if (key->type != YAML_SCALAR_NODE || is_null(key))
-    return fail_at(r, key, KARST_EINVAL, "keys in %s must be names, got %s", disp(path),
+    return fail_at(r, key, KARST_EINVAL, "keys %s must be names, got %s", where(path, w, sizeof w),
                    describe(key, d, sizeof d));
   const char *name = scalar(key);
   for (yaml_node_pair_t *p = map->data.mapping.pairs.start; p < pair; p++) {
@@ -424,8 +444,8 @@ static karst_error_t check_key(reader_t *r, yaml_node_t *map, yaml_node_pair_t *
     if (other->type == YAML_SCALAR_NODE && other->data.scalar.length == key->data.scalar.length &&
         !memcmp(scalar(other), name, key->data.scalar.length)) {
       clip(name, key->data.scalar.length, k1, sizeof k1);
-      return fail_at(r, key, KARST_EINVAL, "duplicate key '%s' in %s (first given at line %d)", k1,
-                     disp(path), line_of(other));
+      return fail_at(r, key, KARST_EINVAL, "duplicate key '%s' %s (first given at line %d)", k1,
+                     where(path, w, sizeof w), line_of(other));
     }
   }
   for (int i = 0; i < nkeys; i++) {
@@ -437,22 +457,22 @@ static karst_error_t check_key(reader_t *r, yaml_node_t *map, yaml_node_pair_t *
   clip(name, key->data.scalar.length, k1, sizeof k1);
   const char *hint = karst_i_suggest(name, keys, nkeys);
   if (hint)
-    return fail_at(r, key, KARST_EINVAL, "unknown key '%s' in %s (did you mean '%s'?)", k1,
-                   disp(path), hint);
+    return fail_at(r, key, KARST_EINVAL, "unknown key '%s' %s (did you mean '%s'?)", k1,
+                   where(path, w, sizeof w), hint);
   /* A nested key written at the wrong level, e.g. "gamma" instead of skeleton.gamma. */
   for (int i = 0; nested_hint && i < nested_hint->n; i++) {
     const field_t *f = &nested_hint->f[i];
     for (int j = 0; f->type == T_MAP && j < f->sub->n; j++) {
       if (!strcmp(f->sub->f[j].key, name))
-        return fail_at(r, key, KARST_EINVAL, "unknown key '%s' in %s (did you mean '%s.%s'?)", k1,
-                       disp(path), f->key, name);
+        return fail_at(r, key, KARST_EINVAL, "unknown key '%s' %s (did you mean '%s.%s'?)", k1,
+                       where(path, w, sizeof w), f->key, name);
     }
   }
   char list[512] = "";
   for (int i = 0; i < nkeys; i++)
     snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", keys[i]);
-  return fail_at(r, key, KARST_EINVAL, "unknown key '%s' in %s (the keys are %s)", k1, disp(path),
-                 list);
+  return fail_at(r, key, KARST_EINVAL, "unknown key '%s' %s (the keys are %s)", k1,
+                 where(path, w, sizeof w), list);
 }
 
 static karst_error_t read_field(reader_t *r, const field_t *f, yaml_node_t *val, char *base,
@@ -691,15 +711,14 @@ static karst_error_t defer_prescribed(reader_t *r, yaml_node_t *n, void *base, c
   return KARST_SUCCESS;
 }
 
+/* units: only metres ("m") are supported; every length in the file is in them. */
 static karst_error_t read_units(reader_t *r, yaml_node_t *n, void *base, const char *path) {
-  static const char *const units[] = {"m"};
-  int v;
+  char d[80];
   (void)base;
-  karst_error_t err = get_enum(r, n, path, units, 1, &v);
-  if (err)
-    snprintf(r->ctx->errmsg + strlen(r->ctx->errmsg), KARST_ERRMSG_MAX - strlen(r->ctx->errmsg),
-             " (lengths are in metres)");
-  return err;
+  if (n->type == YAML_SCALAR_NODE && !strcmp(scalar(n), "m") && n->data.scalar.length == 1)
+    return KARST_SUCCESS;
+  return fail_at(r, n, KARST_EUNSUPPORTED, "%s must be m (metres, the only unit supported), got %s",
+                 path, describe(n, d, sizeof d));
 }
 
 /* terrain: {elevation: z} or {heightfield: file.asc}, the file relative to the scenario. */
