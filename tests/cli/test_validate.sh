@@ -3,7 +3,7 @@
 # FILE:LINE:COLUMN: message format, on the shipped scenarios and the bad fixtures.
 set -u
 KARST=$1
-SRC=$2
+SRC=$(cd "$2" && pwd)
 DATA=$SRC/tests/data/scenarios
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -35,6 +35,8 @@ run 0 "several good files" "$KARST" validate "$DATA/good/minimal.yaml" "$DATA/go
 # Relative paths: the heightfield is found relative to the scenario, not the working directory.
 (cd "$tmp" && "$KARST" validate "$DATA/good/grid.yaml" >/dev/null 2>&1) \
   || { say "FAIL: grid.yaml from another directory"; fail=1; }
+(cd "$SRC/tests/data" && "$KARST" validate scenarios/good/grid.yaml >/dev/null 2>&1) \
+  || { say "FAIL: grid.yaml by a relative path"; fail=1; }
 
 # Exit 2: usage errors.
 run 2 "no file" "$KARST" validate
