@@ -771,7 +771,11 @@ static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const
     goto cleanup;
   }
   err = karst_i_terrain_read_grid(r->ctx, fp, resolved, &sc->terrain);
-  if (err) {
+  if (err == KARST_EIO) { /* unreadable (e.g. a directory): no grid position to give */
+    char msg[KARST_ERRMSG_MAX];
+    snprintf(msg, sizeof msg, "%s", r->ctx->errmsg);
+    err = fail_at(r, v, KARST_EIO, "%s: %s", sub, msg);
+  } else if (err) {
     size_t len = strlen(r->ctx->errmsg);
     snprintf(r->ctx->errmsg + len, KARST_ERRMSG_MAX - len, " (the heightfield of %s at %s:%d:%d)",
              path, r->file, line_of(v), col_of(v));
