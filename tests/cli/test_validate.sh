@@ -76,4 +76,9 @@ key_points:
 YAML
 run 1 "key point above the terrain" "$KARST" validate "$tmp/inline.yaml"
 expect_err "$tmp/inline.yaml:4:5: key_points[0] 'spring1' at z = 6 m is above the terrain (5 m at x = 5, y = 5); key points must lie in the bedrock"
+
+# The complete example in docs/scenario.md validates.
+awk '/^## A complete example/{f=1;next} f&&/^```yaml/{g=1;next} g&&/^```/{exit} g' \
+  "$SRC/docs/scenario.md" >"$tmp/doc_example.yaml"
+run 0 "the example in docs/scenario.md" "$KARST" validate "$tmp/doc_example.yaml"
 exit $fail

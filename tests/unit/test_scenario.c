@@ -33,6 +33,47 @@ static int count_type(const karst_scenario_t *sc, karst_keypoint_type_t t) {
   return n;
 }
 
+/* karst_scenario_init() gives the defaults documented in docs/scenario.md
+ * (values copied from its tables). */
+static void test_init_defaults(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  assert_close(sc.domain_min[0], 0, 0);
+  assert_close(sc.domain_max[2], 100, 0);
+  assert_int_equal(sc.terrain.is_grid, 0);
+  assert_close(sc.terrain.elevation, 100, 0);
+  assert_close(sc.water_table, 0, 0);
+  assert_close(sc.permeability.background, 1, 0);
+  assert_close(sc.cost.w0, 1, 0);
+  assert_close(sc.cost.horizon, 1, 0);
+  assert_close(sc.cost.fracture, 1, 0);
+  assert_close(sc.cost.permeability, 1, 0);
+  assert_close(sc.cost.prescribed, 0.1, 0);
+  assert_close(sc.sampling.fill_radius, 10, 0);
+  assert_close(sc.sampling.feature_radius, 3, 0);
+  assert_close(sc.sampling.permeable_threshold, 0.3, 0);
+  assert_close(sc.sampling.feature_band, 1, 0);
+  assert_int_equal(sc.sampling.k, 40);
+  assert_true(sc.sampling.max_samples == 5000000);
+  assert_close(sc.gamma, 2, 0);
+  assert_int_equal(sc.amplification.steps, 0);
+  assert_int_equal(sc.amplification.points, 0);
+  assert_close(sc.amplification.dead_end_fraction, 0, 0);
+  assert_close(sc.tortuosity, 0.1, 0);
+  assert_close(sc.classification.vertical_angle, 60, 0);
+  assert_close(sc.classification.water_table_band, 5, 0);
+  assert_close(sc.classification.epikarst_depth, 10, 0);
+  assert_close(sc.classification.chamber_resistance, 0.05, 0);
+  for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++) {
+    assert_close(sc.classification.radius[t].min, 0.5, 0);
+    assert_close(sc.classification.radius[t].max, t == KARST_TUNNEL_EPIKARST ? 0.5 : 4.0, 0);
+  }
+  assert_true(sc.seed == 1);
+  assert_int_equal(sc.realisations, 1);
+  karst_scenario_destroy(&sc);
+}
+
 /* The shipped default: values as written in datasets/scenarios/branchwork.yaml,
  * which follows Paris et al. 2021 Table 1 (branchwork: 0.4 x 0.6 x 0.1 km,
  * 17 key points, θ = 0.1, γ = 2) and §4.1 (k = 40). */
@@ -705,6 +746,7 @@ static void test_suggest(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_init_defaults),
       cmocka_unit_test(test_branchwork),
       cmocka_unit_test(test_minimal_defaults),
       cmocka_unit_test(test_full_file),
