@@ -1224,36 +1224,84 @@ static karst_error_t read_prescribed(reader_t *r, yaml_node_t *n) {
   return err;
 }
 
-/* Names given in the file must be unique; the others become sink1, spring1,
- * waypoint3 ... (the ordinal among key points of that type), skipping taken names. */
-static karst_error_t name_key_points(reader_t *r) {
-  karst_scenario_t *sc = r->sc;
-  for (int i = 0; i < sc->n_key_points; i++) {
-    karst_keypoint_t *kp = &sc->key_points[i];
-    if (!kp->name[0]) continue;
-    for (int j = 0; j < i; j++) {
-      if (!strcmp(sc->key_points[j].name, kp->name))
-        return karst_set_error(r->ctx, KARST_EINVAL,
-                               "%s:%d:%d: key_points[%d].name '%s' is already used by "
-                               "key_points[%d] (line %d); names must be unique",
-                               r->file, kp->line, kp->column, i, kp->name, j,
-                               sc->key_points[j].line);
+/* Key points by name, ties by position in the list (qsort is not stable). */
+static int cmp_kp_name(const void *a, const void *b) {
+  const karst_keypoint_t *x = *(const karst_keypoint_t *const *)a;
+  const karst_keypoint_t *y = *(const karst_keypoint_t *const *)b;
+  int c = strcmp(x->name, y->name);
+  return c ? c : (x < y ? -1 : x > y);
+}
+static int cmp_name_kp(const void *key, const void *elem) {
+  return strcmp((const char *)key, (*(const karst_keypoint_t *const *)elem)->name);
+}
+
+/* The named key points sorted by name (caller frees); NULL when out of memory. */
+static const karst_keypoint_t **sorted_named(const karst_scenario_t *sc, int *m) {
+  size_t n = sc->n_key_points > 0 ? (size_t)sc->n_key_points : 1;
+  const karst_keypoint_t **v = malloc(sizeof *v * n);
+  if (!v) return NULL;
+  *m = 0;
+  for (int i = 0; i < sc->n_key_points; i++)
+    if (sc->key_points[i].name[0]) v[(*m)++] = &sc->key_points[i];
+  qsort(v, (size_t)*m, sizeof *v, cmp_kp_name);
+  return v;
+}
+
+/* The first key point, in list order, whose name an earlier one already has:
+ * sets *dup and *first (the earlier holder), or *dup = -1. O(n log n). */
+static void first_duplicate(const karst_scenario_t *sc, const karst_keypoint_t **v, int m, int *dup,
+                            int *first) {
+  *dup = -1;
+  *first = -1;
+  int group = 0;
+  for (int k = 1; k < m; k++) {
+    if (strcmp(v[k]->name, v[k - 1]->name) != 0) {
+      group = k;
+      continue;
+    }
+    int idx = (int)(v[k] - sc->key_points);
+    if (*dup < 0 || idx < *dup) {
+      *dup = idx;
+      *first = (int)(v[group] - sc->key_points);
     }
   }
-  int ordinal[3] = {0, 0, 0};
+}
+
+/* Names given in the file must be unique; the others become sink1, spring1,
+ * waypoint3 ... (the ordinal among key points of that type), the number
+ * increased past names given in the file. Generated numbers only grow within
+ * a type, so generated names cannot collide with each other. O(n log n). */
+static karst_error_t name_key_points(reader_t *r) {
+  karst_scenario_t *sc = r->sc;
+  int m = 0, dup, first;
+  const karst_keypoint_t **v = sorted_named(sc, &m);
+  if (!v) return no_memory(r);
+  first_duplicate(sc, v, m, &dup, &first);
+  if (dup >= 0) {
+    const karst_keypoint_t *kp = &sc->key_points[dup];
+    free(v);
+    return karst_set_error(r->ctx, KARST_EINVAL,
+                           "%s:%d:%d: key_points[%d].name '%s' is already used by key_points[%d] "
+                           "(line %d); names must be unique",
+                           r->file, kp->line, kp->column, dup, kp->name, first,
+                           sc->key_points[first].line);
+  }
+  int ordinal[3] = {0, 0, 0}, last[3] = {0, 0, 0};
+  char name[sizeof sc->key_points[0].name];
   for (int i = 0; i < sc->n_key_points; i++) {
     karst_keypoint_t *kp = &sc->key_points[i];
     int t = (int)kp->type;
     int k = ++ordinal[t];
     if (kp->name[0]) continue;
+    if (k <= last[t]) k = last[t] + 1;
     for (;; k++) {
-      snprintf(kp->name, sizeof kp->name, "%s%d", keypoint_type_names[t], k);
-      int taken = 0;
-      for (int j = 0; j < sc->n_key_points && !taken; j++)
-        taken = j != i && !strcmp(sc->key_points[j].name, kp->name);
-      if (!taken) break;
+      snprintf(name, sizeof name, "%s%d", keypoint_type_names[t], k);
+      if (!bsearch(name, v, (size_t)m, sizeof *v, cmp_name_kp)) break;
     }
+    last[t] = k;
+    memcpy(kp->name, name, sizeof name);
   }
+  free(v);
   return KARST_SUCCESS;
 }
 
@@ -1475,6 +1523,24 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
       (err = check_perm(ctx, sc, sc->permeability.root, "permeability.tree", 0)))
     return err;
 
+  for (int i = 0; i < sc->n_key_points; i++) {
+    const karst_keypoint_t *kp = &sc->key_points[i];
+    if (!kp->name[0] || !memchr(kp->name, '\0', sizeof kp->name))
+      return check_fail(ctx, sc, kp->line, kp->column, KARST_EINVAL, "key_points[%d] has no name",
+                        i);
+  }
+  {
+    int m = 0, dup, first;
+    const karst_keypoint_t **v = sorted_named(sc, &m);
+    if (!v) return karst_set_error(ctx, KARST_ENOMEM, "out of memory checking key-point names");
+    first_duplicate(sc, v, m, &dup, &first);
+    free(v);
+    if (dup >= 0)
+      return check_fail(ctx, sc, sc->key_points[dup].line, sc->key_points[dup].column, KARST_EINVAL,
+                        "key_points[%d].name '%s' is already used by key_points[%d]; names "
+                        "must be unique",
+                        dup, sc->key_points[dup].name, first);
+  }
   int springs = 0;
   for (int i = 0; i < sc->n_key_points; i++) {
     const karst_keypoint_t *kp = &sc->key_points[i];
@@ -1484,15 +1550,6 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
                         "key_points[%d].type must be sink, spring or waypoint, got %d", i,
                         (int)kp->type);
     springs += kp->type == KARST_KEYPOINT_SPRING;
-    if (!kp->name[0] || !memchr(kp->name, '\0', sizeof kp->name))
-      return check_fail(ctx, sc, kp->line, kp->column, KARST_EINVAL, "key_points[%d] has no name",
-                        i);
-    for (int j = 0; j < i; j++)
-      if (!strcmp(sc->key_points[j].name, kp->name))
-        return check_fail(ctx, sc, kp->line, kp->column, KARST_EINVAL,
-                          "key_points[%d].name '%s' is already used by key_points[%d]; names "
-                          "must be unique",
-                          i, kp->name, j);
     for (int a = 0; a < 3; a++) {
       if (!isfinite(p[a]))
         return check_fail(ctx, sc, kp->line, kp->column, KARST_ERANGE,
