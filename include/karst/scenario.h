@@ -18,6 +18,8 @@ extern "C" {
 #define KARST_SCENARIO_PERM_MAX_DEPTH 64
 /** Most permeability-tree nodes accepted from a file (guards against alias blow-up). */
 #define KARST_SCENARIO_PERM_MAX_NODES 100000
+/** Deepest nesting of [ ] and { } accepted in a scenario file (libyaml slows down quadratically). */
+#define KARST_SCENARIO_MAX_NESTING 256
 /**
  * A heightfield covers the domain when its cells (edges, not centres) span the
  * domain's x-y extent; it may fall short by this fraction of a cell, so that
@@ -148,7 +150,7 @@ typedef struct karst_scenario {
   char *name;
   double domain_min[3], domain_max[3];
   karst_terrain_t terrain;
-  double water_table;          /**< elevation (m) */
+  double water_table;          /**< elevation (m); a file without water_table gets the domain bottom */
   int n_horizons;
   karst_horizon_t *horizons;
   int n_fractures;
@@ -174,7 +176,7 @@ typedef struct karst_scenario {
   karst_srcpos_t pos_sampling;    /**< the sampling map */
 } karst_scenario_t;
 
-/** Fill @p sc with every documented default (empty key-point list, flat terrain at 0). */
+/** Fill @p sc with every documented default (docs/scenario.md): no key points, flat terrain at 100 m. */
 void karst_scenario_init(karst_scenario_t *sc);
 /** Release what a scenario holds. */
 void karst_scenario_destroy(karst_scenario_t *sc);

@@ -1628,6 +1628,56 @@ static karst_error_t syntax_error(reader_t *r, const yaml_parser_t *p, const uns
                          p->problem ? p->problem : "malformed document", ctxt);
 }
 
+/* libyaml's parse time grows with the square of the flow-collection nesting
+ * depth (minutes at 200 000 levels), so absurd nesting is refused before
+ * parsing. Brackets count where YAML reads them as flow indicators: anywhere
+ * inside a flow collection, and where a value starts outside one; quoted
+ * scalars and comments are skipped. O(file size). */
+static karst_error_t check_nesting(reader_t *r, const unsigned char *buf, size_t len) {
+  int depth = 0, line = 1, col = 1, start = 1;
+  for (size_t i = 0; i < len; i++, col++) {
+    unsigned char c = buf[i];
+    if (c == '\n') {
+      line++;
+      col = 0;
+      start = 1;
+    } else if (c == ' ' || c == '\t' || c == '\r') {
+      /* a value may still start here */
+    } else if (c == '#' &&
+               (i == 0 || buf[i - 1] == ' ' || buf[i - 1] == '\t' || buf[i - 1] == '\n')) {
+      while (i + 1 < len && buf[i + 1] != '\n')
+        i++;
+    } else if ((c == '"' || c == '\'') && start) {
+      for (i++; i < len && buf[i] != c; i++) {
+        if (buf[i] == '\n') {
+          line++;
+          col = 0;
+        } else {
+          col++;
+        }
+        if (c == '"' && buf[i] == '\\' && i + 1 < len && buf[i + 1] != '\n') {
+          i++;
+          col++;
+        }
+      }
+      col++;
+      start = 0;
+    } else if ((c == '[' || c == '{') && (start || depth > 0)) {
+      if (++depth > KARST_SCENARIO_MAX_NESTING)
+        return karst_set_error(r->ctx, KARST_EPARSE,
+                               "%s:%d:%d: lists and maps are nested more than %d levels deep",
+                               r->file, line, col, KARST_SCENARIO_MAX_NESTING);
+      start = 1;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      depth--;
+      start = 0;
+    } else {
+      start = c == ':' || c == ',' || c == '-' || c == '?';
+    }
+  }
+  return KARST_SUCCESS;
+}
+
 static karst_error_t read_file(karst_ctx_t *ctx, const char *path, unsigned char **out,
                                size_t *len) {
   karst_error_t err = KARST_SUCCESS;
@@ -1705,6 +1755,7 @@ karst_error_t karst_scenario_load(karst_ctx_t *ctx, const char *path, karst_scen
     goto cleanup;
   }
   parser_ok = 1;
+  if ((err = check_nesting(&r, buf, len))) goto cleanup;
   yaml_parser_set_input_string(&parser, buf, len);
   if (!yaml_parser_load(&parser, &doc)) {
     err = syntax_error(&r, &parser, buf, len);

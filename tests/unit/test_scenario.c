@@ -302,6 +302,8 @@ BAD(comments_only, KARST_EPARSE, 1, 1, "the scenario file is empty")
 BAD(invalid_utf8, KARST_EPARSE, 4, 1, "invalid leading UTF-8 octet")
 BAD(two_documents, KARST_EPARSE, 13, 1, "holds one YAML document")
 BAD(root_list, KARST_EINVAL, 1, 1, "the scenario must be a map")
+/* 257th "[" after "horizons: " (10 columns); the quoted "[[[" on line 2 is not counted. */
+BAD(deep_nesting, KARST_EPARSE, 3, 267, "lists and maps are nested more than 256 levels deep")
 /* Keys. */
 BAD(unknown_key, KARST_EINVAL, 16, 5, "unknown key 'dipp' in fractures[1] (did you mean 'dip'?)")
 BAD(misplaced_key, KARST_EINVAL, 13, 1,
@@ -757,6 +759,7 @@ int main(void) {
       cmocka_unit_test(test_bad_invalid_utf8),
       cmocka_unit_test(test_bad_two_documents),
       cmocka_unit_test(test_bad_root_list),
+      cmocka_unit_test(test_bad_deep_nesting),
       cmocka_unit_test(test_bad_unknown_key),
       cmocka_unit_test(test_bad_misplaced_key),
       cmocka_unit_test(test_bad_duplicate_key),
