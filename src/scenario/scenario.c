@@ -490,7 +490,7 @@ static karst_error_t walk_map(reader_t *r, yaml_node_t *map, const schema_t *s, 
   for (int i = 0; i < s->n; i++)
     keys[i] = s->f[i].key;
   for (yaml_node_pair_t *p = map->data.mapping.pairs.start; p < map->data.mapping.pairs.top; p++) {
-    int idx;
+    int idx = 0;
     karst_error_t err = check_key(r, map, p, keys, s->n, path, nested_hint, &idx);
     if (err) return err;
     seen[idx] = 1;
@@ -615,7 +615,7 @@ _Static_assert(sizeof(karst_keypoint_type_t) == sizeof(int), "key point type is 
 
 static karst_error_t read_kp_name(reader_t *r, yaml_node_t *n, void *base, const char *path) {
   karst_keypoint_t *kp = base;
-  const char *s;
+  const char *s = NULL;
   karst_error_t err = get_string(r, n, path, &s);
   if (err) return err;
   if (strlen(s) >= sizeof kp->name)
@@ -736,7 +736,7 @@ static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const
                    "file), got %s",
                    path, describe(n, d, sizeof d));
   for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
-    int idx;
+    int idx = 0;
     if ((err = check_key(r, n, p, keys, 2, path, NULL, &idx))) return err;
     vals[idx] = yaml_document_get_node(r->doc, p->value);
   }
@@ -882,7 +882,7 @@ static karst_error_t read_perm_node(reader_t *r, yaml_node_t *n, karst_perm_node
   int kind = -1;
   yaml_node_t *kind_val = NULL, *kind_key = NULL;
   for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
-    int idx;
+    int idx = 0;
     if ((err = check_key(r, n, p, perm_keys, 6, path, NULL, &idx))) return err;
     yaml_node_t *v = yaml_document_get_node(r->doc, p->value);
     if (idx == 5) {
@@ -958,7 +958,7 @@ static karst_error_t read_radius(reader_t *r, yaml_node_t *n, void *base, const 
     return fail_at(r, n, KARST_EINVAL, "%s must be a map from tunnel type to [min, max], got %s",
                    path, describe(n, d, sizeof d));
   for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
-    int t;
+    int t = 0;
     karst_error_t err = check_key(r, n, p, names, KARST_TUNNEL_TYPE_COUNT, path, NULL, &t);
     if (err) return err;
     yaml_node_t *v = yaml_document_get_node(r->doc, p->value);
