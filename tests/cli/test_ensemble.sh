@@ -48,13 +48,9 @@ PY
 KARST_DATA_DIR="$SRC/datasets" "$KARST" compare "$T/hand" --format csv -o "$T/cmp.csv" || { echo "FAIL: compare -o"; fail=1; }
 grep -q "^,aspl,,,10,5.5," "$T/cmp.csv" || { echo "FAIL: compare csv row"; cat "$T/cmp.csv"; fail=1; }
 
-# --- the generation pipeline (skipped while karst generate is a placeholder) ----------------
+# --- the generation pipeline ----------------------------------------------------------------
 SCEN="$SRC/datasets/scenarios/branchwork.yaml"
 if ! "$KARST" ensemble "$SCEN" -n 4 -o "$T/a" -j 1 --seed 11 --quiet 2>"$T/err"; then
-  if grep -q "not available yet" "$T/err"; then
-    echo "SKIP: pipeline part (generation not in this build yet): $(cat "$T/err")"
-    exit $fail
-  fi
   echo "FAIL: karst ensemble"; cat "$T/err"; exit 1
 fi
 same_tree() { # A B: same files, same bytes (ensemble.json without its timings line)

@@ -197,7 +197,7 @@ static void test_single_key_point(void **state) {
   free_fixture(&f);
 }
 
-/* End to end through sampling and the graph (skipped while those stages are placeholders). */
+/* End to end through sampling and the graph . */
 static void test_generate_end_to_end(void **state) {
   (void)state;
   fixture_t f;
@@ -213,10 +213,6 @@ static void test_generate_end_to_end(void **state) {
   karst_samples_init(&s);
   karst_generate_stats_t st;
   karst_error_t err = karst_generate(&ctx, &f.sc, 7, 0, &a, &s, &st);
-  if (err == KARST_ENOTIMPL) {
-    free_fixture(&f);
-    skip();
-  }
   assert_int_equal(err, KARST_SUCCESS);
   assert_int_equal(s.n_key_points, 5);
   assert_int_equal(st.n_samples, s.n);

@@ -312,8 +312,8 @@ static void test_report_real_files(void **state) {
 static void test_report_chromium(void **state) {
   (void)state;
   if (system("command -v chromium >/dev/null 2>&1") != 0) {
-    print_message("chromium not installed (scripts/install-deps installs it): skipped\n");
-    skip();
+    print_error("chromium not installed: run scripts/install-deps\n");
+    fail();
   }
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
