@@ -154,8 +154,9 @@ static void test_union_and_junctions(void **state) {
   karst_skeleton_t sk;
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
   karst_int_t kept;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, 2.0, 1.0, &sk, &kept),
-                   KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, NULL, 2.0, 1.0, 1.0, &sk, &kept),
+      KARST_SUCCESS);
   assert_int_equal(kept, 3);
   karst_skeleton_mark_junctions(&sk);
   assert_int_equal(sk.net.n_nodes, 6);
@@ -180,8 +181,9 @@ static void test_union_and_junctions(void **state) {
   assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, 2, keys2, 1.0, 0, dist), KARST_SUCCESS);
   assert_true(isinf(dist[1]));
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 2, keys2, dist, NULL, 2.0, 1.0, &sk, &kept),
-                   KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, 2, keys2, dist, NULL, NULL, 2.0, 1.0, 1.0, &sk, &kept),
+      KARST_SUCCESS);
   assert_int_equal(kept, 0);
   assert_int_equal(sk.net.n_nodes, 2); /* the two key points alone */
   assert_int_equal(sk.net.n_edges, 0);
@@ -212,8 +214,9 @@ static void test_skeleton_on_dense_graph(void **state) {
   karst_skeleton_t sk;
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
   karst_int_t kept;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist, NULL, 2.0, 1.0, &sk, &kept),
-                   KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, 8, keys, dist, NULL, NULL, 2.0, 1.0, 1.0, &sk, &kept),
+      KARST_SUCCESS);
   assert_true(kept >= 7); /* a connected proximity graph on 8 points has at least 7 edges */
   /* connectivity by union-find over the network edges */
   karst_int_t *parent = malloc((size_t)sk.net.n_nodes * sizeof *parent);
@@ -248,8 +251,9 @@ static void test_skeleton_on_dense_graph(void **state) {
   karst_skeleton_t sk2;
   assert_int_equal(karst_skeleton_init(&ctx, &sk2, &g), KARST_SUCCESS);
   karst_int_t kept2;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist2, pred, 2.0, 1.0, &sk2, &kept2),
-                   KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, 8, keys, dist2, pred, NULL, 2.0, 1.0, 1.0, &sk2, &kept2),
+      KARST_SUCCESS);
   assert_int_equal(kept2, kept);
   assert_int_equal(sk2.net.n_nodes, sk.net.n_nodes);
   assert_int_equal(sk2.net.n_edges, sk.net.n_edges);
