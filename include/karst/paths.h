@@ -67,7 +67,8 @@ karst_error_t karst_paths_dijkstra(karst_ctx_t *ctx, karst_search_t *s, karst_in
 typedef struct karst_reuse {
   double factor;               /**< r in (0, 1] */
   const unsigned char *reused; /**< n_arcs flags, set on both arcs of each network edge, or NULL */
-  const double *dist_to_net;   /**< n least original costs to the nearest network vertex, or NULL */
+  const double *dist_to_net;   /**< n least original costs to the nearest network vertex, INFINITY
+                                    while the network is empty; NULL: taken as 0 (always safe) */
 } karst_reuse_t;
 
 karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst_int_t source,

@@ -327,7 +327,7 @@ static double reuse_h(const karst_graph_t *g, karst_int_t v, karst_int_t target,
                       const float *bound, const karst_reuse_t *ru) {
   double h = rlb > 0 ? rlb * euclid(g->xyz, v, target) : 0.0;
   if (bound) {
-    double D = bound[v], N = ru->dist_to_net ? ru->dist_to_net[v] : INFINITY;
+    double D = bound[v], N = ru->dist_to_net ? ru->dist_to_net[v] : 0.0;
     double hb = ru->factor * D + (1.0 - ru->factor) * (N < D ? N : D);
     if (hb > h) h = hb;
   }
@@ -376,7 +376,8 @@ static double reuse_h(const karst_graph_t *g, karst_int_t v, karst_int_t target,
  *                      above, or NULL (then only h_E is used).
  * @param reuse         the discount: factor in (0, 1], reused = n_arcs flags
  *                      set on both arcs of every network edge (NULL: no arc is
- *                      discounted), dist_to_net = n distances (NULL: INFINITY).
+ *                      discounted), dist_to_net = n distances (NULL: 0 everywhere,
+ *                      which is always safe: h_N = r·D).
  * @param path          receives source .. target; path->cost is the discounted cost.
  * @return KARST_SUCCESS; KARST_EUNREACHABLE; KARST_EINVAL for bad indices,
  *         bound or factor; KARST_ENOMEM.
