@@ -96,8 +96,8 @@ karst_error_t karst_paths_keypoint_trees(karst_ctx_t *ctx, const karst_graph_t *
                                          int32_t *pred);
 
 karst_error_t karst_paths_keypoint_bounds(karst_ctx_t *ctx, const karst_graph_t *g,
-                                          karst_int_t n_keys, const karst_int_t *keys,
-                                          double *dist, float *bound);
+                                          karst_int_t n_keys, const karst_int_t *keys, double *dist,
+                                          float *bound);
 
 karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
                                     const int32_t *pred_row, karst_int_t source, karst_int_t target,
