@@ -7,6 +7,8 @@
 #ifndef KARST_GENERATE_H
 #define KARST_GENERATE_H
 
+#include <stdio.h>
+
 #include "karst/common.h"
 #include "karst/graph.h"
 #include "karst/network.h"
@@ -63,6 +65,12 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
 karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
                                        const karst_scenario_t *sc, uint64_t seed,
                                        uint64_t realisation, const karst_generate_stats_t *stats);
+
+/**
+ * Write the effective parameters of @p sc as the members (no braces) of a JSON
+ * object, one per line, 4-space indent: shared by run.json and ensemble.json.
+ */
+void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc);
 
 /** Name of a stage ("sampling", "graph", ...). */
 const char *karst_stage_name(int stage);

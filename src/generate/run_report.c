@@ -85,40 +85,15 @@ static const char *keypoint_type(karst_keypoint_type_t t) {
 }
 
 /**
- * Write run.json for one realisation, atomically: karst version, scenario
- * path and FNV-1a hash (karst_file_hash; null when built in code), seed and
- * realisation, every effective parameter of @p sc and of the amplification
- * constants, the counts and the wall time of each stage of @p stats.
- * Timings appear only here, so the other outputs of a seed are byte-identical.
- *
- * @return KARST_SUCCESS, KARST_EIO (message names the file), KARST_ENOMEM.
+ * Write every effective parameter of @p sc (and the amplification constants)
+ * as the members of a JSON object, one per line at a 4-space indent, without
+ * the braces: the "parameters" object of run.json and of ensemble.json, so the
+ * two cannot drift apart. Numbers are written so that they round-trip.
  * Time complexity: O(size of the scenario).
  */
-karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
-                                       const karst_scenario_t *sc, uint64_t seed,
-                                       uint64_t realisation, const karst_generate_stats_t *st) {
-  char hash[17] = "";
-  karst_error_t err;
-  if (sc->path && (err = karst_file_hash(ctx, sc->path, hash))) return err;
-  karst_atomic_file_t f;
-  if ((err = karst_atomic_open(ctx, &f, path, "w"))) return err;
-  FILE *fp = f.fp;
+void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   const char *I = "    ";
-  fputs("{\n  \"karst_version\": ", fp);
-  json_string(fp, karst_version());
-  fputs(",\n  \"scenario\": ", fp);
-  if (sc->path)
-    json_string(fp, sc->path);
-  else
-    fputs("null", fp);
-  fputs(",\n  \"scenario_hash\": ", fp);
-  if (sc->path)
-    json_string(fp, hash);
-  else
-    fputs("null", fp);
-  fprintf(fp, ",\n  \"seed\": %llu,\n  \"realisation\": %llu,\n", (unsigned long long)seed,
-          (unsigned long long)realisation);
-  fputs("  \"parameters\": {\n    \"name\": ", fp);
+  fputs("    \"name\": ", fp);
   json_string(fp, sc->name);
   fputs(",\n    \"domain_min\": ", fp), vec3(fp, sc->domain_min);
   fputs(",\n    \"domain_max\": ", fp), vec3(fp, sc->domain_max);
@@ -223,7 +198,46 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
     json_num(fp, sc->classification.radius[t].max);
     fputc(']', fp);
   }
-  fputs("}}\n  },\n  \"counts\": {\n", fp);
+  fputs("}}\n", fp);
+}
+
+/**
+ * Write run.json for one realisation, atomically: karst version, scenario
+ * path and FNV-1a hash (karst_file_hash; null when built in code), seed and
+ * realisation, every effective parameter of @p sc and of the amplification
+ * constants, the counts and the wall time of each stage of @p stats.
+ * Timings appear only here, so the other outputs of a seed are byte-identical.
+ *
+ * @return KARST_SUCCESS, KARST_EIO (message names the file), KARST_ENOMEM.
+ * Time complexity: O(size of the scenario).
+ */
+karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
+                                       const karst_scenario_t *sc, uint64_t seed,
+                                       uint64_t realisation, const karst_generate_stats_t *st) {
+  char hash[17] = "";
+  karst_error_t err;
+  if (sc->path && (err = karst_file_hash(ctx, sc->path, hash))) return err;
+  karst_atomic_file_t f;
+  if ((err = karst_atomic_open(ctx, &f, path, "w"))) return err;
+  FILE *fp = f.fp;
+  const char *I = "    ";
+  fputs("{\n  \"karst_version\": ", fp);
+  json_string(fp, karst_version());
+  fputs(",\n  \"scenario\": ", fp);
+  if (sc->path)
+    json_string(fp, sc->path);
+  else
+    fputs("null", fp);
+  fputs(",\n  \"scenario_hash\": ", fp);
+  if (sc->path)
+    json_string(fp, hash);
+  else
+    fputs("null", fp);
+  fprintf(fp, ",\n  \"seed\": %llu,\n  \"realisation\": %llu,\n", (unsigned long long)seed,
+          (unsigned long long)realisation);
+  fputs("  \"parameters\": {\n", fp);
+  karst_generate_write_parameters(fp, sc);
+  fputs("  },\n  \"counts\": {\n", fp);
   fprintf(fp, "    \"samples\": %lld,\n    \"graph_edges\": %lld,\n    \"key_points\": %lld,\n",
           (long long)st->n_samples, (long long)st->n_graph_edges, (long long)st->n_key_points);
   fprintf(

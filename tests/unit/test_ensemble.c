@@ -640,15 +640,16 @@ static void test_table_errors(void **state) {
   free(d);
 }
 
-/* The parameters block of ensemble.json is valid JSON for a default scenario. */
+/* The parameters block of ensemble.json is valid JSON for a default scenario, with the
+ * same members as run.json (the defaults of karst_scenario_init, docs/scenario.md). */
 static void test_parameters_json(void **state) {
   (void)state;
   karst_scenario_t sc;
   karst_scenario_init(&sc);
   char *s = karst_ensemble_parameters_json(&sc);
   assert_non_null(s);
-  assert_non_null(strstr(s, "    \"skeleton.gamma\": 2,\n"));
-  assert_non_null(strstr(s, "\"classification.radius.epikarst\": [0.5, 0.5]"));
+  assert_non_null(strstr(s, "    \"gamma\": 2,\n"));
+  assert_non_null(strstr(s, "\"epikarst\": [0.5, 0.5]"));
   char *d = make_tmpdir(), p[1200], cmd[1500];
   snprintf(p, sizeof p, "%s/p.json", d);
   FILE *fp = fopen(p, "w");
@@ -656,7 +657,8 @@ static void test_parameters_json(void **state) {
   fclose(fp);
   snprintf(cmd, sizeof cmd,
            "/usr/bin/python3 -c \"import json; d=json.load(open('%s')); "
-           "assert d['sampling.k']==40 and d['name'] is None\"",
+           "assert d['sampling']['k']==40 and d['reuse']==0.5 and "
+           "d['cost']['fracture_combine']=='sum'\"",
            p);
   assert_int_equal(system(cmd), 0);
   free(s);
