@@ -13,12 +13,20 @@ extern "C" {
 #endif
 
 /**
- * Meridian convergence (degrees, the angle from grid north to true north,
- * positive when true north is west... see docs/metrics.md for the sign
- * convention) at grid point (x, y) of the coordinate system described by
- * @p crs (a Survex CS string such as "+proj=utm +zone=34 ..." or "EPSG:32634",
- * or a latitude/longitude system, where it is 0). Systems that cannot be
- * converted offline fail with KARST_EUNSUPPORTED and a message naming them.
+ * Meridian convergence, in degrees, at grid point (x, y) of the coordinate
+ * system described by @p crs (a .3d CS string such as "EPSG:32634",
+ * "EPSG:7405", "+proj=utm +zone=34 +datum=WGS84", a Survex name such as
+ * "UTM34N" or "OSGB:SD", or a latitude/longitude system, where it is 0).
+ *
+ * Sign convention (GeographicLib's gamma): the bearing of grid north measured
+ * clockwise from true north, i.e. the rotation to ADD to a grid azimuth to
+ * obtain a true azimuth: true = grid + degrees. Positive east of the central
+ * meridian in the northern hemisphere; about (lon - lon0) sin(lat).
+ *
+ * Systems that cannot be converted offline fail with KARST_EUNSUPPORTED
+ * ("coordinate system 'X' is not convertible offline"); a point outside the
+ * projection fails with KARST_ERANGE. Magnetic declination is not handled
+ * here: Survex's cavern applies it when it reduces the survey.
  */
 karst_error_t karst_crs_convergence(karst_ctx_t *ctx, const char *crs, double x, double y,
                                     double *degrees);

@@ -17,8 +17,8 @@ extern "C" {
 typedef struct karst_metrics {
   /* full graph */
   karst_int_t nodes, edges;
-  double total_length;        /**< sum of 3-D edge lengths (m) */
-  double vertical_extent;     /**< max z - min z (m) */
+  double total_length;    /**< sum of 3-D edge lengths (m) */
+  double vertical_extent; /**< max z - min z (m) */
   /* the ten metrics, names as Karstnet prints them */
   double mean_length;
   double cv_length;
@@ -37,12 +37,20 @@ typedef struct karst_metrics {
 } karst_metrics_t;
 
 typedef struct karst_metrics_options {
-  double azimuth_rotation;    /**< degrees added to every azimuth before the orientation entropy (e.g. meridian convergence for --true-north); default 0 */
+  /** Degrees added (clockwise) to every azimuth before the orientation entropy,
+   *  e.g. the meridian convergence gamma of karst_crs_convergence() for
+   *  --true-north (true azimuth = grid azimuth + gamma); default 0. */
+  double azimuth_rotation;
 } karst_metrics_options_t;
 
+/** Defaults: no azimuth rotation. */
 void karst_metrics_options_init(karst_metrics_options_t *opt);
 
-/** Compute every metric of @p net (see docs/metrics.md). */
+/**
+ * Compute every metric of @p net (see docs/metrics.md). @p opt may be NULL
+ * (defaults). Betweenness uses ctx->nthreads threads; the result does not
+ * depend on the thread count.
+ */
 karst_error_t karst_metrics_compute(karst_ctx_t *ctx, const karst_network_t *net,
                                     const karst_metrics_options_t *opt, karst_metrics_t *out);
 
@@ -56,6 +64,38 @@ typedef struct karst_metric_field {
 const karst_metric_field_t *karst_metric_fields(int *n);
 /** Value of a field as a double (integers converted). */
 double karst_metric_value(const karst_metrics_t *m, const karst_metric_field_t *f);
+
+/** Upper bound on the number of fields of karst_metric_fields(). */
+#define KARST_METRIC_FIELDS_MAX 32
+
+/**
+ * Range of each metric over the caves of a published table
+ * (datasets/published_metrics.csv, Collon et al. 2017 corrected 2021).
+ * Indexed like karst_metric_fields(); NAN when the table has no such column.
+ */
+typedef struct karst_metrics_observed {
+  int n_caves;
+  double min[KARST_METRIC_FIELDS_MAX];
+  double max[KARST_METRIC_FIELDS_MAX];
+  /** Half a unit in the last printed digit of min / max: the table is rounded. */
+  double min_rounding[KARST_METRIC_FIELDS_MAX];
+  double max_rounding[KARST_METRIC_FIELDS_MAX];
+} karst_metrics_observed_t;
+
+/**
+ * Non-zero when @p value of field @p k lies outside the observed range by more
+ * than the rounding of the printed bound (so a published cave is never outside
+ * its own range). 0 for NAN values or fields without a range.
+ */
+int karst_metrics_observed_outside(const karst_metrics_observed_t *obs, int k, double value);
+
+/**
+ * Read the published table (CSV with '#' comment lines, a header, quoted
+ * fields) and keep the min / max of each column that maps to one of our keys
+ * (docs/metrics.md lists the mapping). Errors name FILE:LINE.
+ */
+karst_error_t karst_metrics_observed_load(karst_ctx_t *ctx, const char *path,
+                                          karst_metrics_observed_t *obs);
 
 #ifdef __cplusplus
 }

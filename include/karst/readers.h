@@ -35,16 +35,28 @@ karst_error_t karst_read_karstnet(karst_ctx_t *ctx, const char *path, karst_netw
 karst_error_t karst_write_karstnet(karst_ctx_t *ctx, const char *prefix, const karst_network_t *net);
 /** GOCAD PLine (.pl): VRTX/PVRTX, ATOM aliases, SEG. */
 karst_error_t karst_read_pline(karst_ctx_t *ctx, const char *path, karst_network_t *net);
-/** Therion SQL export: STATION and SHOT tables; splay stations named "." are dropped. */
+/**
+ * Therion SQL export: STATION and SHOT tables (columns located by the file's
+ * "create table" statements); shots flagged 'srf', 'dpl' or 'spl' in
+ * SHOT_FLAG and shots to splay stations named "." or "-" are dropped;
+ * stations keyed by centimetre coordinates like the .3d reader; station names
+ * in net->node_labels. Errors as "FILE:LINE: message".
+ */
 karst_error_t karst_read_therion_sql(karst_ctx_t *ctx, const char *path, karst_network_t *net);
 /**
  * Survex .3d version 8 (Survex's doc/3dformat.htm): legs flagged splay,
  * surface or duplicate are dropped; stations keyed by centimetre coordinates
- * (which merges equated stations); LRUD as node attribute "lrud" (4 values,
- * NAN when absent); the CS string in net->crs.
+ * (which merges equated stations; a leg whose ends merge is dropped); nodes on
+ * no kept leg are dropped; station names in net->node_labels; LRUD as node
+ * attribute "lrud" (L, R, U, D in metres, NAN when absent); the CS string in
+ * net->crs, the title in net->title. Errors as "FILE: byte OFFSET: message".
  */
 karst_error_t karst_read_survex3d(karst_ctx_t *ctx, const char *path, karst_network_t *net);
-/** Survex .svx: run `cavern` to a temporary .3d and read it (clear message when cavern is missing). */
+/**
+ * Survex .svx: run `cavern` (Debian package survex) to a temporary .3d and
+ * read it as above; KARST_ENOTFOUND with what to install when cavern is
+ * missing, KARST_EEXTERNAL quoting cavern's output when it fails.
+ */
 karst_error_t karst_read_svx(karst_ctx_t *ctx, const char *path, karst_network_t *net);
 
 #ifdef __cplusplus
