@@ -111,13 +111,17 @@ typedef struct {
   karst_section_t s;
 } bend_section_t;
 
-/* Distance from v (relative to the bend node) to the filled section j. */
-static double section_region_distance(const bend_section_t *bs, const double v[3]) {
+/* Signed distance from v (relative to the bend node) to the filled section j.
+ * Within the wedge swept by the sections (@p in_wedge) a point that projects
+ * inside the section gets the in-plane distance (its offset from the plane is
+ * at most half the spacing of the sections, R/8, and is ignored); otherwise
+ * the 3-D distance to the planar region. */
+static double section_region_distance(const bend_section_t *bs, const double v[3], int in_wedge) {
   double h = dot3(v, bs->t);
   double q[2] = {dot3(v, bs->ex), dot3(v, bs->ey)};
   double w = karst_section_distance(&bs->s, q);
-  double wp = w > 0 ? w : 0;
-  return sqrt(h * h + wp * wp);
+  if (w < 0) return in_wedge ? w : fabs(h);
+  return sqrt(h * h + w * w);
 }
 
 /* Unit section of an edge, placed as a 3-D curve around the node: offsets
@@ -136,8 +140,12 @@ static void section_offsets(const karst_section_t *unit, const edge_geom_t *e, i
  * n+1 cross-sections interpolated between the two edges' sections, rotating
  * about the bend axis b = t1 x t2 through the node; Poisson disk samples
  * (Bridson 2007, minimum distance R/2) in their bounding box grown by R;
- * a sphere of radius R for every sample closer than R/2 to an interpolated
- * section. Appends the spheres to @p prims.
+ * a sphere of radius R for every sample whose sphere comes closer than R/2
+ * to the interpolated sections, read as: the sphere leaves the section by
+ * less than R/2 (centre at least R/2 inside it). The paper's "minimum distance
+ * lower than R/2" taken for the centre would let the union bulge 1.5 R out of
+ * the conduit; this reading bounds the bulge by R/2. Appends the spheres to
+ * @p prims.
  */
 static karst_error_t bend_spheres(karst_ctx_t *ctx, karst_sdf_t *sdf, const double node[3],
                                   const edge_geom_t *e1, const double t1[3], const edge_geom_t *e2,
@@ -178,6 +186,7 @@ static karst_error_t bend_spheres(karst_ctx_t *ctx, karst_sdf_t *sdf, const doub
   double s1r[3];
   rotate(e1->side, b, phi, s1r);
   int flip2 = dot3(s1r, e2->side) < 0;
+  int same = e1->type == e2->type;
   section_offsets(sec1, e1, 0, o1);
   section_offsets(sec2, e2, flip2, o2);
   double bbox[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
@@ -193,7 +202,10 @@ static karst_error_t bend_spheres(karst_ctx_t *ctx, karst_sdf_t *sdf, const doub
       rotate(o1[k], b, th, p1);
       rotate(o2[k], b, th - phi, p2);
       for (int c = 0; c < 3; c++) {
-        o[c] = (1 - s) * p1[c] + s * p2[c];
+        /* same section: interpolate the control points (and so the radius);
+         * different sections have no common parametrization (an
+         * interpolation could fold), so each keeps its own half of the bend */
+        o[c] = same ? (1 - s) * p1[c] + s * p2[c] : (2 * j <= n ? p1[c] : p2[c]);
         bbox[c] = fmin(bbox[c], o[c]);
         bbox[c + 3] = fmax(bbox[c + 3], o[c]);
       }
@@ -296,7 +308,8 @@ static karst_error_t bend_spheres(karst_ctx_t *ctx, karst_sdf_t *sdf, const doub
     double th = atan2(-dot3(v, t1), dot3(v, w1)); /* plane through v and the axis */
     if (th < 0) th += M_PI;
     int cand[5] = {0, n, -1, -1, -1};
-    if (th <= phi) {
+    int in_wedge = th <= phi;
+    if (in_wedge) {
       int j = (int)floor(th / phi * n + 0.5);
       cand[2] = j - 1, cand[3] = j, cand[4] = j + 1;
     }
@@ -305,10 +318,12 @@ static karst_error_t bend_spheres(karst_ctx_t *ctx, karst_sdf_t *sdf, const doub
     for (int c = 0; c < 5; c++) {
       int j = cand[c];
       if (j < 0 || j > n) continue;
-      double d = section_region_distance(&bs[j], v);
+      /* ignoring the offset from the plane is only right for the sections
+       * next to the point's own angle */
+      double d = section_region_distance(&bs[j], v, in_wedge && c >= 2);
       if (d < best) best = d, bj = j;
     }
-    if (!(best < 0.5 * R)) continue;
+    if (!(best + R < 0.5 * R)) continue;
     double cen[3] = {node[0] + v[0], node[1] + v[1], node[2] + v[2]};
     karst_int_t id;
     int label = 2 * bj <= n ? e1->type : e2->type;
@@ -443,6 +458,7 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
       int lab = KARST_TUNNEL_TUBE;
       for (karst_int_t i = 0; i < deg[v]; i++) {
         const edge_geom_t *g = &eg[inc[start[v] + i] / 2];
+        if (g->type == KARST_TUNNEL_CHAMBER) continue; /* its ellipsoid covers the node */
         double r = g->r * inscribed[g->type];
         if (r > rb) rb = r, lab = g->type;
       }

@@ -619,6 +619,11 @@ static void test_build_network(void **state) {
   int label = -9;
   assert_true(karst_sdf_eval(t, q, &label) < 0);
   assert_true(label == KARST_TUNNEL_KEYHOLE || label == KARST_TUNNEL_PASSAGE);
+  /* ... and does not bulge: at the axis height the sections reach 1.08 m
+   * (keyhole) and 1.5 m (passage) out, the spheres at most R/2 = 0.19 m more,
+   * the sweeps' caps nothing: 1.8 m out is outside */
+  double q2[3] = {P[2][0] + 1.8 * outer[0] / on, P[2][1] + 1.8 * outer[1] / on, 0};
+  assert_true(karst_sdf_eval(t, q2, NULL) > 0);
   double mid[3] = {10, 0, 0};
   assert_true(karst_sdf_eval(t, mid, &label) < -1.0);
   assert_int_equal(label, KARST_TUNNEL_TUBE);
