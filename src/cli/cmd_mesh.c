@@ -81,6 +81,11 @@ static int run(int argc, char **argv) {
         return cli_usage_error("mesh", "--noise needs an amplitude >= 0 in metres, got '%s'",
                                more ? argv[i + 1] : "");
       i++;
+    } else if (strcmp(a, "--radius") == 0) {
+      if (!more || cli_parse_double(argv[i + 1], &par.default_radius) || !(par.default_radius > 0))
+        return cli_usage_error("mesh", "--radius needs a radius > 0 in metres, got '%s'",
+                               more ? argv[i + 1] : "");
+      i++;
     } else if (strcmp(a, "--seed") == 0) {
       if (!more || cli_parse_u64(argv[i + 1], &par.seed))
         return cli_usage_error("mesh", "--seed needs a non-negative integer, got '%s'",
@@ -124,7 +129,7 @@ static int run(int argc, char **argv) {
   int status = CLI_OK;
   karst_error_t err;
   double t0 = now_s();
-  if ((err = karst_vtk_read_network(&ctx, in, &net))) goto fail;
+  if ((err = karst_read_network(&ctx, in, KARST_FORMAT_AUTO, &net))) goto fail;
   if (scen_path && (err = karst_scenario_load(&ctx, scen_path, &sc))) goto fail;
   if ((err = karst_sdf_create(&ctx, &sdf))) goto fail;
   karst_implicit_stats_t bst;
@@ -173,12 +178,14 @@ done:
 const cli_command_t cli_cmd_mesh = {
     "mesh", run, "polygonize the conduits of a network into a closed triangle mesh",
     "usage: karst mesh NETWORK.vtp -o cave.vtp [--voxel 0.5] [--box x0,y0,z0,x1,y1,z1]\n"
-    "                  [--carve --scenario S.yaml] [--sdf cave.vti] [--noise A] [--seed S]\n"
-    "                  [-j THREADS] [--quiet]\n\n"
+    "                  [--carve --scenario S.yaml] [--sdf cave.vti] [--noise A] [--radius R]\n"
+    "                  [--seed S] [-j THREADS] [--quiet]\n\n"
     "Builds the implicit geometry of the network's conduits (Paris et al. 2021, §6: one sweep\n"
     "of the tunnel type's cross-section per edge, scaled by its \"radius\", spheres around sharp\n"
     "bends, ellipsoids for chambers) and polygonizes it into a closed, manifold, consistently\n"
-    "oriented triangle mesh labelled by tunnel type (-1: terrain or box).\n\n"
+    "oriented triangle mesh labelled by tunnel type (-1: terrain or box). NETWORK may also be\n"
+    "any survey format karst reads (Karstnet, .pl, .sql, .3d, .svx): edges without a radius\n"
+    "get --radius, edges without a tunnel type are tubes.\n\n"
     "  -o FILE        output mesh; .vtp (ParaView), .ply (binary) or .stl (binary) by extension\n"
     "  --voxel H      grid spacing in metres (default 0.5)\n"
     "  --box ...      region to mesh; the mesh is closed where the solid leaves it (default:\n"
@@ -187,6 +194,7 @@ const cli_command_t cli_cmd_mesh = {
     "  --scenario S   scenario file (terrain for --carve, default box)\n"
     "  --sdf F.vti    also write the sampled field as VTK image data (contour it at 0)\n"
     "  --noise A      wall irregularities of at most A metres (default 0: smooth walls)\n"
+    "  --radius R     radius of edges without a \"radius\" attribute (default 1 m)\n"
     "  --seed S       seed of the spheres and the noise (default 1)\n"
     "  -j THREADS     worker threads (default: all processors)\n"
     "  --quiet        no progress bar and no summary line\n\n"

@@ -250,10 +250,18 @@ static karst_error_t bend_spheres(karst_ctx_t *ctx, karst_sdf_t *sdf, const doub
     if (ci[c_] < 0) ci[c_] = 0;                                                                    \
     if (ci[c_] >= gn[c_]) ci[c_] = gn[c_] - 1;                                                     \
   }
+  /* Only points of the wedge swept by the sections, within rho of the node,
+   * can be selected (below): the sampling is confined to that region. */
+  double w1[3];
+  cross3(b, t1, w1);
+#define USABLE(v)                                                                                  \
+  (dot3(v, v) <= rho * rho &&                                                                      \
+   (atan2(-dot3(v, t1), dot3(v, w1)) + (atan2(-dot3(v, t1), dot3(v, w1)) < 0 ? M_PI : 0)) <= phi)
   {
+    /* seed: half way out along the outer bisector, which is in the wedge */
     double p0[3];
     for (int c = 0; c < 3; c++)
-      p0[c] = karst_rng_uniform_range(rng, bbox[c], bbox[c + 3]);
+      p0[c] = 0.5 * rho * (t1[c] - t2[c]) / sqrt(2 - 2 * cos(phi));
     karst_int_t ci[3];
     CELL_OF(p0, ci)
     memcpy(pts, p0, sizeof p0);
@@ -275,7 +283,7 @@ static karst_error_t bend_spheres(karst_ctx_t *ctx, karst_sdf_t *sdf, const doub
         cand[c] = base[c] + rr * d[c];
         if (cand[c] < bbox[c] || cand[c] > bbox[c + 3]) inside = 0;
       }
-      if (!inside) continue;
+      if (!inside || !USABLE(cand)) continue;
       karst_int_t ci[3];
       CELL_OF(cand, ci)
       int ok = 1;
@@ -301,8 +309,7 @@ static karst_error_t bend_spheres(karst_ctx_t *ctx, karst_sdf_t *sdf, const doub
 #undef CELL_OF
   /* Selection by distance to the interpolated sections. A point's nearest
    * section planes are those whose angle about b is closest to its own. */
-  double w1[3];
-  cross3(b, t1, w1);
+#undef USABLE
   for (karst_int_t i = 0; i < npts; i++) {
     const double *v = pts + 3 * i;
     double th = atan2(-dot3(v, t1), dot3(v, w1)); /* plane through v and the axis */
