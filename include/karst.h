@@ -9,8 +9,13 @@
 #ifndef KARST_H
 #define KARST_H
 
+#include "karst/amplification.h"
+#include "karst/classification.h"
 #include "karst/common.h"
+#include "karst/compare.h"
+#include "karst/cost.h"
 #include "karst/crs.h"
+#include "karst/ensemble.h"
 #include "karst/generate.h"
 #include "karst/graph.h"
 #include "karst/implicit.h"
@@ -18,8 +23,12 @@
 #include "karst/mesh.h"
 #include "karst/metrics.h"
 #include "karst/network.h"
+#include "karst/paths.h"
 #include "karst/readers.h"
+#include "karst/report.h"
+#include "karst/sampling.h"
 #include "karst/scenario.h"
+#include "karst/skeleton.h"
 #include "karst/vtk.h"
 
 #endif

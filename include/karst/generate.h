@@ -52,6 +52,15 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
                              uint64_t realisation, karst_network_t *net, karst_samples_t *samples,
                              karst_generate_stats_t *stats);
 
+/**
+ * Write DIR/run.json-style provenance for one realisation to @p path,
+ * atomically: scenario path and hash, seed, realisation, every effective
+ * parameter, counts and stage wall times (the only place timings appear).
+ */
+karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
+                                       const karst_scenario_t *sc, uint64_t seed,
+                                       uint64_t realisation, const karst_generate_stats_t *stats);
+
 /** Name of a stage ("sampling", "graph", ...). */
 const char *karst_stage_name(int stage);
 

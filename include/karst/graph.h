@@ -15,13 +15,14 @@ extern "C" {
 #endif
 
 /** Which feature produced a sample (written as point data in samples.vtp). */
-#define KARST_SAMPLE_SOURCE_LIST(X)                                            \
-  X(KARST_SAMPLE_KEYPOINT, "key_point")                                        \
-  X(KARST_SAMPLE_HORIZON, "horizon")                                           \
-  X(KARST_SAMPLE_WATER_TABLE, "water_table")                                   \
-  X(KARST_SAMPLE_PERMEABILITY, "permeability")                                 \
-  X(KARST_SAMPLE_FILL, "fill")                                                 \
-  X(KARST_SAMPLE_AMPLIFICATION, "amplification")
+#define KARST_SAMPLE_SOURCE_LIST(X)                                                                \
+  X(KARST_SAMPLE_KEYPOINT, "key_point")                                                            \
+  X(KARST_SAMPLE_HORIZON, "horizon")                                                               \
+  X(KARST_SAMPLE_WATER_TABLE, "water_table")                                                       \
+  X(KARST_SAMPLE_PERMEABILITY, "permeability")                                                     \
+  X(KARST_SAMPLE_FILL, "fill")                                                                     \
+  X(KARST_SAMPLE_AMPLIFICATION, "amplification")                                                   \
+  X(KARST_SAMPLE_PRESCRIBED, "prescribed_path")
 
 typedef enum {
 #define KARST_X_ENUM(code, name) code,
@@ -32,7 +33,8 @@ typedef enum {
 
 const char *karst_sample_source_name(karst_sample_source_t s);
 
-/** A point cloud in the bedrock. Samples 0 .. n_key_points-1 are the scenario's key points, in order. */
+/** A point cloud in the bedrock. Samples 0 .. n_key_points-1 are the scenario's key points, in
+ * order. */
 typedef struct karst_samples {
   karst_int_t n, cap;
   double *xyz;           /**< 3 * n */
@@ -46,18 +48,19 @@ karst_error_t karst_samples_add(karst_samples_t *s, const double p[3], karst_sam
 
 /**
  * Undirected weighted graph in compressed sparse row form: the neighbours of
- * vertex v are adj[offsets[v] .. offsets[v+1]-1] and the cost of the arc
- * v -> adj[i] is cost[i]. Every edge appears in both directions with the
- * same cost (the line integral of Paris et al. 2021, §4, is symmetric
- * because c_F depends on (n·d)^2). A cost of INFINITY marks an excluded edge.
+ * vertex v are adj[offsets[v] .. offsets[v+1]-1], sorted by index, and the
+ * cost of the arc v -> adj[i] is cost[i]. Every edge appears in both
+ * directions with the same cost (the line integral of Paris et al. 2021, §4,
+ * is symmetric because c_F depends on (n·d)^2). Excluded edges (cost
+ * INFINITY: leaving the bedrock) are removed, so every stored cost is finite.
  */
 typedef struct karst_graph {
-  karst_int_t n;          /**< vertices */
-  karst_int_t n_arcs;     /**< directed arcs = 2 * undirected edges */
-  const double *xyz;      /**< vertex positions (3 * n), borrowed from the samples */
-  karst_int_t *offsets;   /**< n + 1 */
-  karst_int_t *adj;       /**< n_arcs */
-  double *cost;           /**< n_arcs */
+  karst_int_t n;        /**< vertices */
+  karst_int_t n_arcs;   /**< directed arcs = 2 * undirected edges */
+  const double *xyz;    /**< vertex positions (3 * n), borrowed from the samples */
+  karst_int_t *offsets; /**< n + 1 */
+  karst_int_t *adj;     /**< n_arcs */
+  double *cost;         /**< n_arcs */
 } karst_graph_t;
 
 void karst_graph_init(karst_graph_t *g);
@@ -65,12 +68,25 @@ void karst_graph_destroy(karst_graph_t *g);
 
 /**
  * Build a CSR graph from an undirected edge list (u[i], v[i], cost[i]),
- * dropping self-loops and keeping the cheaper of duplicated edges.
- * O(n + m log m).
+ * dropping self-loops and INFINITY costs and keeping the cheaper of
+ * duplicated edges. O(n + m log m).
  */
 karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
                                      const double *xyz, karst_int_t m, const karst_int_t *u,
                                      const karst_int_t *v, const double *cost);
+
+/**
+ * The geometric graph of Paris et al. 2021, §4.1–4.2, ready for shortest
+ * paths: exact k nearest neighbours (k = sampling.k) of every sample with
+ * FLANN, made undirected (union), edge costs the line integral of c
+ * (karst_cost_edge), edges leaving the bedrock removed. @p out must be
+ * initialised; it borrows samples->xyz. Deterministic for any ctx->nthreads.
+ */
+karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                const karst_samples_t *samples, karst_graph_t *out);
+
+/** Number of undirected edges of @p g (n_arcs / 2). */
+karst_int_t karst_graph_edge_count(const karst_graph_t *g);
 
 #ifdef __cplusplus
 }

@@ -14,6 +14,19 @@
 extern "C" {
 #endif
 
+/** Deepest nesting of the permeability tree accepted from a file (guards against cycles made with YAML aliases). */
+#define KARST_SCENARIO_PERM_MAX_DEPTH 64
+/** Most permeability-tree nodes accepted from a file (guards against alias blow-up). */
+#define KARST_SCENARIO_PERM_MAX_NODES 100000
+/** Deepest nesting of [ ] and { } accepted in a scenario file (libyaml slows down quadratically). */
+#define KARST_SCENARIO_MAX_NESTING 256
+/**
+ * A heightfield covers the domain when its cells (edges, not centres) span the
+ * domain's x-y extent; it may fall short by this fraction of a cell, so that
+ * rounding in corner + n * cellsize does not reject an exact fit.
+ */
+#define KARST_SCENARIO_GRID_COVER_SLACK 1e-6
+
 typedef enum { KARST_KEYPOINT_SINK = 0, KARST_KEYPOINT_SPRING = 1, KARST_KEYPOINT_WAYPOINT = 2 } karst_keypoint_type_t;
 
 typedef struct karst_keypoint {
@@ -21,6 +34,7 @@ typedef struct karst_keypoint {
   karst_keypoint_type_t type;
   double p[3];
   int line;                    /**< line of the entry in the scenario file (for messages), 0 if built in code */
+  int column;                  /**< column of the entry (1-based), 0 if built in code */
 } karst_keypoint_t;
 
 /** Terrain: flat, or an ESRI ASCII grid heightfield (bilinear interpolation). */
@@ -43,6 +57,7 @@ typedef struct karst_horizon {
   double origin[2];            /**< (x, y) where the elevation is given; default: domain centre */
   double radius;               /**< influence radius r of the smooth step (m), > 0 */
   int line;
+  int column;                  /**< position of the entry in the file (1-based), 0 if built in code */
 } karst_horizon_t;
 
 /** Fracture family (§4.2): plane orientation and weight w_k. */
@@ -51,6 +66,7 @@ typedef struct karst_fracture {
   double dip;                  /**< degrees, [0, 90] */
   double weight;               /**< w_k >= 0 */
   int line;
+  int column;                  /**< position of the entry in the file (1-based), 0 if built in code */
 } karst_fracture_t;
 
 /** Permeability construction tree (§4.2): leaves are primitives, inner nodes combine children. */
@@ -72,6 +88,7 @@ typedef struct karst_perm_node {
   int n_children;
   struct karst_perm_node *children;
   int line;
+  int column;                  /**< position of the node in the file (1-based), 0 if built in code */
 } karst_perm_node_t;
 
 typedef struct karst_permeability {
@@ -83,7 +100,13 @@ typedef struct karst_permeability {
 typedef struct karst_prescribed_path {
   int a, b;                    /**< indices into key_points */
   int line;
+  int column;                  /**< position of the pair in the file (1-based), 0 if built in code */
 } karst_prescribed_path_t;
+
+/** A position in the scenario file (1-based line and column; 0 when not read from a file). */
+typedef struct karst_srcpos {
+  int line, column;
+} karst_srcpos_t;
 
 /** Cost weights of c(p, d) = w0 + wL cL(p) + wF cF(d) + wπ cπ(p) (§4.2). */
 typedef struct karst_cost_weights {
@@ -127,7 +150,7 @@ typedef struct karst_scenario {
   char *name;
   double domain_min[3], domain_max[3];
   karst_terrain_t terrain;
-  double water_table;          /**< elevation (m) */
+  double water_table;          /**< elevation (m); a file without water_table gets the domain bottom */
   int n_horizons;
   karst_horizon_t *horizons;
   int n_fractures;
@@ -145,9 +168,15 @@ typedef struct karst_scenario {
   karst_classification_t classification;
   uint64_t seed;
   int realisations;            /**< >= 1 */
+  /* Where blocks named by cross-field messages were given (0 when defaulted or built in code). */
+  karst_srcpos_t pos_domain;      /**< the domain map */
+  karst_srcpos_t pos_terrain;     /**< terrain.elevation or terrain.heightfield value */
+  karst_srcpos_t pos_water_table; /**< water_table.elevation value */
+  karst_srcpos_t pos_key_points;  /**< the key_points list */
+  karst_srcpos_t pos_sampling;    /**< the sampling map */
 } karst_scenario_t;
 
-/** Fill @p sc with every documented default (empty key-point list, flat terrain at 0). */
+/** Fill @p sc with every documented default (docs/scenario.md): no key points, flat terrain at 100 m. */
 void karst_scenario_init(karst_scenario_t *sc);
 /** Release what a scenario holds. */
 void karst_scenario_destroy(karst_scenario_t *sc);

@@ -17,27 +17,40 @@ extern "C" {
 #endif
 
 /**
- * Write a network as .vtp polylines (one line cell per edge), with every
- * node attribute as point data and every edge attribute as cell data
- * (integer attributes as Int32), node labels as a string array "label" when
- * present, and the CRS / title as field data.
+ * Write a network as .vtp polylines (one 2-point line cell per edge, in edge
+ * order, so cell data maps 1:1 to edges), with every node attribute as point
+ * data and every edge attribute as cell data (integer attributes as Int32,
+ * others Float64, ncomp components), node labels as a string array "label"
+ * when present, and the CRS / title as field data. Field data also carries
+ * the string arrays "tunnel_type_names" and "node_kind_names" (value i names
+ * code i) so a ParaView user can read the integer codes.
  */
 karst_error_t karst_vtk_write_network(karst_ctx_t *ctx, const char *path,
                                       const karst_network_t *net);
-/** Read a .vtp written by karst (or any PolyData with lines) back into @p net. */
+/**
+ * Read a .vtp written by karst (or any PolyData with lines) into @p net:
+ * points become nodes, a polyline of k points becomes k - 1 consecutive
+ * edges (its cell data repeated on each), numeric point/cell arrays become
+ * node/edge attributes, and "label", "crs" and "title" are restored.
+ * @p net must be initialised; it is replaced on success and untouched on
+ * failure. Errors (missing, truncated or foreign files) name the file.
+ */
 karst_error_t karst_vtk_read_network(karst_ctx_t *ctx, const char *path, karst_network_t *net);
 
-/** Write a sample cloud as .vtp vertices with a "source" point array (karst_sample_source_t). */
-karst_error_t karst_vtk_write_samples(karst_ctx_t *ctx, const char *path,
-                                      const karst_samples_t *s);
+/**
+ * Write a sample cloud as .vtp vertices with a "source" Int32 point array
+ * (karst_sample_source_t), the names of the sources in field data
+ * ("source_names") and "n_key_points".
+ */
+karst_error_t karst_vtk_write_samples(karst_ctx_t *ctx, const char *path, const karst_samples_t *s);
 
-/** A triangle mesh with optional per-triangle and per-vertex integer/double arrays. */
+/** A triangle mesh with an optional per-triangle integer label. */
 typedef struct karst_mesh {
   karst_int_t n_vertices, n_triangles;
-  double *xyz;          /**< 3 * n_vertices */
-  karst_int_t *tri;     /**< 3 * n_triangles, counter-clockwise seen from outside */
-  int *tri_label;       /**< per-triangle label (e.g. tunnel type) or NULL */
-  const char *tri_label_name; /**< name of that cell array (e.g. "tunnel_type") */
+  double *xyz;                /**< 3 * n_vertices */
+  karst_int_t *tri;           /**< 3 * n_triangles, counter-clockwise seen from outside */
+  int *tri_label;             /**< per-triangle label (e.g. tunnel type) or NULL */
+  const char *tri_label_name; /**< name of that cell array (e.g. "tunnel_type"); NULL: "label" */
 } karst_mesh_t;
 
 /** Write a triangle mesh as .vtp polygons. */
@@ -53,7 +66,8 @@ karst_error_t karst_vtk_write_image(karst_ctx_t *ctx, const char *path, const in
 
 /**
  * Write a ParaView collection (.pvd) listing @p n files (paths relative to
- * the .pvd) as time steps 0 .. n-1.
+ * the .pvd; absolute paths are refused so the collection can be moved) as
+ * time steps 0 .. n-1, XML-escaped, atomically.
  */
 karst_error_t karst_vtk_write_pvd(karst_ctx_t *ctx, const char *path, int n,
                                   const char *const *files);

@@ -4,7 +4,9 @@
 
 #include "karst/scenario.h"
 
-static double clamp(double x, double a, double b) { return x < a ? a : (x > b ? b : x); }
+static double clamp(double x, double a, double b) {
+  return x < a ? a : (x > b ? b : x);
+}
 
 /* Smooth step g(x) = 3x^2 - 2x^3 on [0, 1] (Paris et al. 2021, §4.2). */
 static double smoothstep(double x) {

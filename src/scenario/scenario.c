@@ -1,9 +1,35 @@
-/* Scenario lifecycle and defaults. The YAML reader is not written yet. */
+/* Scenario lifecycle, defaults, the YAML reader and the cross-field checks.
+ *
+ * The file is parsed with libyaml's document API (yaml_parser_load), so every
+ * node keeps its line and column, and then walked with small tables that say,
+ * for each key, its type, where it is stored and its allowed range. The same
+ * tables drive the range checks of karst_scenario_check(), so a rule is
+ * written once. The format is documented in docs/scenario.md. */
+#include <errno.h>
+#include <inttypes.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "karst/scenario.h"
+#include <yaml.h>
 
+#include "scenario_internal.h"
+
+/* ------------------------------------------------------------------------ */
+/* Lifecycle and defaults                                                   */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Fill @p sc with every documented default (docs/scenario.md): a 100 m cube,
+ * flat terrain at 100 m, water table at 0 m, no key points, the cost weights,
+ * sampling radii, γ = 2 and θ = 0.1 of Paris et al. 2021 (Table 1,
+ * "branchwork"), k = 40 (§4.1) and radii 0.5–4 m (epikarst 0.5 m, §5.3).
+ * Time complexity: O(1).
+ */
 void karst_scenario_init(karst_scenario_t *sc) {
   memset(sc, 0, sizeof *sc);
   sc->domain_max[0] = sc->domain_max[1] = sc->domain_max[2] = 100.0;
@@ -36,10 +62,12 @@ void karst_scenario_init(karst_scenario_t *sc) {
 }
 
 static void free_perm(karst_perm_node_t *n) {
-  for (int i = 0; i < n->n_children; i++) free_perm(&n->children[i]);
+  for (int i = 0; i < n->n_children; i++)
+    free_perm(&n->children[i]);
   free(n->children);
 }
 
+/** Release what a scenario holds and leave it zeroed. O(size). */
 void karst_scenario_destroy(karst_scenario_t *sc) {
   free(sc->path);
   free(sc->name);
@@ -56,7 +84,1725 @@ void karst_scenario_destroy(karst_scenario_t *sc) {
   memset(sc, 0, sizeof *sc);
 }
 
+/* ------------------------------------------------------------------------ */
+/* Schema tables                                                            */
+/* ------------------------------------------------------------------------ */
+
+typedef struct reader reader_t;
+typedef karst_error_t (*field_fn)(reader_t *r, yaml_node_t *val, void *base, const char *path);
+
+typedef enum { T_NUM, T_INT, T_I64, T_U64, T_STR, T_VEC2, T_VEC3, T_ENUM, T_MAP, T_FN } ftype_t;
+
+enum { R_LO = 1, R_LO_OPEN = 2, R_HI = 4, R_HI_OPEN = 8 };
+typedef struct range {
+  unsigned flags;
+  double lo, hi;
+  const char *unit; /* " m", " degrees" or "" */
+} range_t;
+
+#define RANGE_NONE                                                                                 \
+  { 0, 0, 0, "" }
+#define RANGE_GT(lo, u)                                                                            \
+  { R_LO | R_LO_OPEN, lo, 0, u }
+#define RANGE_GE(lo, u)                                                                            \
+  { R_LO, lo, 0, u }
+#define RANGE_CLOSED(lo, hi, u)                                                                    \
+  { R_LO | R_HI, lo, hi, u }
+#define RANGE_CLOSED_OPEN(lo, hi, u)                                                               \
+  { R_LO | R_HI | R_HI_OPEN, lo, hi, u }
+#define RANGE_OPEN_CLOSED(lo, hi, u)                                                               \
+  { R_LO | R_LO_OPEN | R_HI, lo, hi, u }
+
+typedef struct schema schema_t;
+typedef struct field {
+  const char *key;
+  ftype_t type;
+  size_t off;    /* where the value lives, from the base of the map's object */
+  range_t range; /* T_NUM, T_INT, T_I64 */
+  int required;
+  const schema_t *sub;      /* T_MAP: the nested map, whose offsets start from base + off */
+  field_fn fn;              /* T_FN: custom reader */
+  const char *const *names; /* T_ENUM: allowed values, stored as their index (an int) */
+  int n_names;
+  size_t pos; /* offset of a karst_srcpos_t in karst_scenario_t to record, or 0 */
+} field_t;
+
+struct schema {
+  const field_t *f;
+  int n;
+};
+
+#define MAX_FIELDS 24
+#define PATH_LEN 256
+
+/* Everything the walk needs. */
+struct reader {
+  karst_ctx_t *ctx;
+  const char *file; /* scenario path as given, for messages */
+  yaml_document_t *doc;
+  karst_scenario_t *sc;
+  long perm_nodes;
+  yaml_node_t *prescribed; /* read after the key points, whose names it uses */
+};
+
+/* ------------------------------------------------------------------------ */
+/* Messages                                                                 */
+/* ------------------------------------------------------------------------ */
+
+static int line_of(const yaml_node_t *n) {
+  return (int)n->start_mark.line + 1;
+}
+static int col_of(const yaml_node_t *n) {
+  return (int)n->start_mark.column + 1;
+}
+
+static karst_error_t fail_at(reader_t *r, const yaml_node_t *n, karst_error_t code, const char *fmt,
+                             ...) __attribute__((format(printf, 4, 5)));
+/* "FILE:LINE:COLUMN: message" at node @p n. */
+static karst_error_t fail_at(reader_t *r, const yaml_node_t *n, karst_error_t code, const char *fmt,
+                             ...) {
+  char msg[KARST_ERRMSG_MAX];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  return karst_set_error(r->ctx, code, "%s:%d:%d: %s", r->file, line_of(n), col_of(n), msg);
+}
+
+static karst_error_t no_memory(reader_t *r) {
+  return karst_set_error(r->ctx, KARST_ENOMEM, "%s: out of memory", r->file);
+}
+
+/* A scalar's text for a message: at most ~40 characters, control characters shown as '?'. */
+static void clip(const char *s, size_t len, char *out, size_t outsz) {
+  size_t k = 0, i;
+  for (i = 0; i < len && k + 4 < outsz && k < 40; i++) {
+    unsigned char c = (unsigned char)s[i];
+    out[k++] = (c < 32 || c == 127) ? '?' : (char)c;
+  }
+  if (i < len) {
+    memcpy(out + k, "...", 3);
+    k += 3;
+  }
+  out[k] = '\0';
+}
+
+static const char *scalar(const yaml_node_t *n) {
+  return (const char *)n->data.scalar.value;
+}
+static int is_plain(const yaml_node_t *n) {
+  return n->data.scalar.style == YAML_PLAIN_SCALAR_STYLE ||
+         n->data.scalar.style == YAML_ANY_SCALAR_STYLE;
+}
+static int is_null(const yaml_node_t *n) {
+  if (n->type != YAML_SCALAR_NODE || !is_plain(n)) return 0;
+  const char *s = scalar(n);
+  return !strcmp(s, "") || !strcmp(s, "~") || !strcmp(s, "null") || !strcmp(s, "Null") ||
+         !strcmp(s, "NULL");
+}
+
+/* A plain scalar that reads as a number (including .nan, .inf and 1e999). */
+static int looks_numeric(const yaml_node_t *n) {
+  if (n->type != YAML_SCALAR_NODE || !is_plain(n) || n->data.scalar.length == 0) return 0;
+  const char *s = scalar(n);
+  const char *u = s + (*s == '+' || *s == '-');
+  if (!strcmp(u, ".nan") || !strcmp(u, ".NaN") || !strcmp(u, ".NAN") || !strcmp(u, ".inf") ||
+      !strcmp(u, ".Inf") || !strcmp(u, ".INF"))
+    return 1;
+  char *end;
+  (void)strtod(s, &end);
+  return end != s && *end == '\0' && (size_t)(end - s) == n->data.scalar.length;
+}
+
+/* What a node is, for "got ..." in messages: numbers as written, words quoted. */
+static const char *describe(const yaml_node_t *n, char *buf, size_t sz) {
+  char t[64];
+  switch (n->type) {
+  case YAML_MAPPING_NODE:
+    return "a map";
+  case YAML_SEQUENCE_NODE:
+    return "a list";
+  case YAML_SCALAR_NODE:
+    if (is_null(n)) return n->data.scalar.length == 0 ? "an empty value" : "null";
+    clip(scalar(n), n->data.scalar.length, t, sizeof t);
+    snprintf(buf, sz, looks_numeric(n) ? "%s" : is_plain(n) ? "'%s'" : "the string \"%s\"", t);
+    return buf;
+  default:
+    return "nothing";
+  }
+}
+
+static const char *disp(const char *path) {
+  return path[0] ? path : "the scenario";
+}
+
+/* "in fractures[2]", or "at the top level". */
+static const char *where(const char *path, char *buf, size_t sz) {
+  if (!path[0]) return "at the top level";
+  snprintf(buf, sz, "in %s", path);
+  return buf;
+}
+
+/* Field paths for messages ("fractures[2].dip"); a path too long to show ends in "...". */
+static void join(char *out, const char *path, const char *key) {
+  if (snprintf(out, PATH_LEN, "%s%s%s", path, path[0] ? "." : "", key) >= PATH_LEN)
+    memcpy(out + PATH_LEN - 4, "...", 4);
+}
+static void index_path(char *out, const char *path, long i) {
+  if (snprintf(out, PATH_LEN, "%s[%ld]", path, i) >= PATH_LEN) memcpy(out + PATH_LEN - 4, "...", 4);
+}
+
+/* "within [0, 90) degrees", "> 0 m", ... */
+static void range_text(const range_t *g, char *buf, size_t sz) {
+  if ((g->flags & R_LO) && (g->flags & R_HI))
+    snprintf(buf, sz, "within %c%g, %g%c%s", g->flags & R_LO_OPEN ? '(' : '[', g->lo, g->hi,
+             g->flags & R_HI_OPEN ? ')' : ']', g->unit);
+  else if (g->flags & R_LO)
+    snprintf(buf, sz, "%s %g%s", g->flags & R_LO_OPEN ? ">" : ">=", g->lo, g->unit);
+  else if (g->flags & R_HI)
+    snprintf(buf, sz, "%s %g%s", g->flags & R_HI_OPEN ? "<" : "<=", g->hi, g->unit);
+  else
+    snprintf(buf, sz, "any number");
+}
+
+static int in_range(const range_t *g, double v) {
+  if (g->flags & R_LO) {
+    if ((g->flags & R_LO_OPEN) ? !(v > g->lo) : !(v >= g->lo)) return 0;
+  }
+  if (g->flags & R_HI) {
+    if ((g->flags & R_HI_OPEN) ? !(v < g->hi) : !(v <= g->hi)) return 0;
+  }
+  return 1;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Scalars                                                                  */
+/* ------------------------------------------------------------------------ */
+
+/* A finite number. Quoted scalars are strings, not numbers; .nan, .inf and
+ * overflowing literals such as 1e999 are refused as non-finite. */
+static karst_error_t get_number(reader_t *r, yaml_node_t *n, const char *path, double *out) {
+  char d[80];
+  if (n->type != YAML_SCALAR_NODE || !is_plain(n) || is_null(n))
+    return fail_at(r, n, KARST_EINVAL, "%s must be a number, got %s", path,
+                   describe(n, d, sizeof d));
+  const char *s = scalar(n);
+  const char *u = s + (*s == '+' || *s == '-');
+  if (!strcmp(u, ".nan") || !strcmp(u, ".NaN") || !strcmp(u, ".NAN") || !strcmp(u, ".inf") ||
+      !strcmp(u, ".Inf") || !strcmp(u, ".INF"))
+    return fail_at(r, n, KARST_ERANGE, "%s must be a finite number, got %s", path,
+                   describe(n, d, sizeof d));
+  char *end;
+  errno = 0;
+  double v = strtod(s, &end);
+  if (end == s || *end != '\0' || (size_t)(end - s) != n->data.scalar.length)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a number, got %s", path,
+                   describe(n, d, sizeof d));
+  if (!isfinite(v) || (errno == ERANGE && fabs(v) > 1.0))
+    return fail_at(r, n, KARST_ERANGE, "%s must be a finite number, got %s", path,
+                   describe(n, d, sizeof d));
+  *out = v;
+  return KARST_SUCCESS;
+}
+
+/* An integer within [lo, hi] (the limits of the C type). Integer literals are
+ * read exactly; a floating literal is accepted only when it is a whole
+ * number below 2^53 (so "5e6" works and "2.5" does not). */
+static karst_error_t get_integer(reader_t *r, yaml_node_t *n, const char *path, int64_t lo,
+                                 int64_t hi, int64_t *out) {
+  char d[80];
+  if (n->type != YAML_SCALAR_NODE || !is_plain(n) || is_null(n))
+    return fail_at(r, n, KARST_EINVAL, "%s must be an integer, got %s", path,
+                   describe(n, d, sizeof d));
+  const char *s = scalar(n);
+  size_t i = (*s == '+' || *s == '-');
+  int digits = s[i] != '\0';
+  for (; s[i]; i++)
+    if (s[i] < '0' || s[i] > '9') digits = 0;
+  int64_t v;
+  if (digits) {
+    errno = 0;
+    long long x = strtoll(s, NULL, 10);
+    if (errno == ERANGE || x < lo || x > hi)
+      return fail_at(r, n, KARST_ERANGE,
+                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, lo,
+                     hi, describe(n, d, sizeof d));
+    v = (int64_t)x;
+  } else {
+    char *end;
+    double x = strtod(s, &end);
+    if (end == s || *end != '\0' || !isfinite(x) || x != floor(x) || fabs(x) > 9007199254740992.0)
+      return fail_at(r, n, KARST_EINVAL, "%s must be an integer, got %s", path,
+                     describe(n, d, sizeof d));
+    if (x < (double)lo || x > (double)hi)
+      return fail_at(r, n, KARST_ERANGE,
+                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, lo,
+                     hi, describe(n, d, sizeof d));
+    v = (int64_t)x;
+  }
+  *out = v;
+  return KARST_SUCCESS;
+}
+
+static karst_error_t get_u64(reader_t *r, yaml_node_t *n, const char *path, uint64_t *out) {
+  char d[80];
+  int ok = n->type == YAML_SCALAR_NODE && is_plain(n) && !is_null(n);
+  const char *s = ok ? scalar(n) : "";
+  size_t i = ok && *s == '+';
+  if (!s[i]) ok = 0;
+  for (; ok && s[i]; i++)
+    if (s[i] < '0' || s[i] > '9') ok = 0;
+  unsigned long long x = 0;
+  if (ok) {
+    errno = 0;
+    x = strtoull(s, NULL, 10);
+    if (errno == ERANGE) ok = 0;
+  }
+  if (!ok)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s must be an unsigned 64-bit integer (0 to 18446744073709551615), got %s",
+                   path, describe(n, d, sizeof d));
+  *out = (uint64_t)x;
+  return KARST_SUCCESS;
+}
+
+/* A non-empty string without NUL or control characters (names end up in output files). */
+static karst_error_t get_string(reader_t *r, yaml_node_t *n, const char *path, const char **out) {
+  char d[80];
+  if (n->type != YAML_SCALAR_NODE || is_null(n) || n->data.scalar.length == 0)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a non-empty string, got %s", path,
+                   describe(n, d, sizeof d));
+  const char *s = scalar(n);
+  for (size_t i = 0; i < n->data.scalar.length; i++)
+    if ((unsigned char)s[i] < 32 || s[i] == 127)
+      return fail_at(r, n, KARST_EINVAL, "%s must not contain control characters, got %s", path,
+                     describe(n, d, sizeof d));
+  *out = s;
+  return KARST_SUCCESS;
+}
+
+/* One of @p names; returns its index. Misspellings get the allowed values and a suggestion. */
+static karst_error_t get_enum(reader_t *r, yaml_node_t *n, const char *path,
+                              const char *const *names, int count, int *out) {
+  char d[80], list[256] = "";
+  for (int i = 0; i < count; i++)
+    snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", names[i]);
+  if (n->type != YAML_SCALAR_NODE || is_null(n))
+    return fail_at(r, n, KARST_EINVAL, "%s must be one of %s, got %s", path, list,
+                   describe(n, d, sizeof d));
+  for (int i = 0; i < count; i++) {
+    if (strlen(names[i]) == n->data.scalar.length && !strcmp(scalar(n), names[i])) {
+      *out = i;
+      return KARST_SUCCESS;
+    }
+  }
+  const char *hint = karst_i_suggest(scalar(n), names, count);
+  return fail_at(r, n, KARST_EINVAL, "%s must be one of %s, got %s%s%s%s", path, list,
+                 describe(n, d, sizeof d), hint ? " (did you mean '" : "", hint ? hint : "",
+                 hint ? "'?)" : "");
+}
+
+/* A list of exactly @p k finite numbers, e.g. [x, y, z]. */
+static karst_error_t get_vec(reader_t *r, yaml_node_t *n, const char *path, int k, double *out) {
+  char d[80], sub[PATH_LEN];
+  const char *form = k == 3 ? "[x, y, z]" : k == 2 ? "[x, y]" : "[...]";
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of %d numbers %s, got %s", path, k, form,
+                   describe(n, d, sizeof d));
+  long count = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (count != k)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of %d numbers %s, got %ld item%s", path,
+                   k, form, count, count == 1 ? "" : "s");
+  for (int i = 0; i < k; i++) {
+    yaml_node_t *item = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    index_path(sub, path, i);
+    karst_error_t err = get_number(r, item, sub, &out[i]);
+    if (err) return err;
+  }
+  return KARST_SUCCESS;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Maps                                                                     */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * Check the key of pair @p k of @p map: a plain name, not given twice, one of
+ * @p keys (unknown keys get a "did you mean"). Sets *idx to its index.
+ */
+static karst_error_t check_key(reader_t *r, yaml_node_t *map, yaml_node_pair_t *pair,
+                               const char *const *keys, int nkeys, const char *path,
+                               const schema_t *nested_hint, int *idx) {
+  char d[80], k1[64], w[PATH_LEN + 8];
+  yaml_node_t *key = yaml_document_get_node(r->doc, pair->key);
+  if (key->type != YAML_SCALAR_NODE || is_null(key))
+    return fail_at(r, key, KARST_EINVAL, "keys %s must be names, got %s", where(path, w, sizeof w),
+                   describe(key, d, sizeof d));
+  const char *name = scalar(key);
+  for (yaml_node_pair_t *p = map->data.mapping.pairs.start; p < pair; p++) {
+    yaml_node_t *other = yaml_document_get_node(r->doc, p->key);
+    if (other->type == YAML_SCALAR_NODE && other->data.scalar.length == key->data.scalar.length &&
+        !memcmp(scalar(other), name, key->data.scalar.length)) {
+      clip(name, key->data.scalar.length, k1, sizeof k1);
+      return fail_at(r, key, KARST_EINVAL, "duplicate key '%s' %s (first given at line %d)", k1,
+                     where(path, w, sizeof w), line_of(other));
+    }
+  }
+  for (int i = 0; i < nkeys; i++) {
+    if (strlen(keys[i]) == key->data.scalar.length && !strcmp(keys[i], name)) {
+      *idx = i;
+      return KARST_SUCCESS;
+    }
+  }
+  clip(name, key->data.scalar.length, k1, sizeof k1);
+  const char *hint = karst_i_suggest(name, keys, nkeys);
+  if (hint)
+    return fail_at(r, key, KARST_EINVAL, "unknown key '%s' %s (did you mean '%s'?)", k1,
+                   where(path, w, sizeof w), hint);
+  /* A nested key written at the wrong level, e.g. "gamma" instead of skeleton.gamma. */
+  for (int i = 0; nested_hint && i < nested_hint->n; i++) {
+    const field_t *f = &nested_hint->f[i];
+    for (int j = 0; f->type == T_MAP && j < f->sub->n; j++) {
+      if (!strcmp(f->sub->f[j].key, name))
+        return fail_at(r, key, KARST_EINVAL, "unknown key '%s' %s (did you mean '%s.%s'?)", k1,
+                       where(path, w, sizeof w), f->key, name);
+    }
+  }
+  char list[512] = "";
+  for (int i = 0; i < nkeys; i++)
+    snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", keys[i]);
+  return fail_at(r, key, KARST_EINVAL, "unknown key '%s' %s (the keys are %s)", k1,
+                 where(path, w, sizeof w), list);
+}
+
+static karst_error_t read_field(reader_t *r, const field_t *f, yaml_node_t *val, char *base,
+                                const char *path);
+
+/* Read a map against @p s, in file order, then report missing required keys. */
+static karst_error_t walk_map(reader_t *r, yaml_node_t *map, const schema_t *s, void *base,
+                              const char *path, const schema_t *nested_hint) {
+  char d[80], sub[PATH_LEN];
+  const char *keys[MAX_FIELDS];
+  int seen[MAX_FIELDS] = {0};
+  if (map->type != YAML_MAPPING_NODE)
+    return fail_at(r, map, KARST_EINVAL, "%s must be a map of keys, got %s", disp(path),
+                   describe(map, d, sizeof d));
+  for (int i = 0; i < s->n; i++)
+    keys[i] = s->f[i].key;
+  for (yaml_node_pair_t *p = map->data.mapping.pairs.start; p < map->data.mapping.pairs.top; p++) {
+    int idx = 0;
+    karst_error_t err = check_key(r, map, p, keys, s->n, path, nested_hint, &idx);
+    if (err) return err;
+    seen[idx] = 1;
+    join(sub, path, keys[idx]);
+    err = read_field(r, &s->f[idx], yaml_document_get_node(r->doc, p->value), base, sub);
+    if (err) return err;
+  }
+  for (int i = 0; i < s->n; i++)
+    if (s->f[i].required && !seen[i])
+      return fail_at(r, map, KARST_EINVAL, "%s is missing the required key '%s'", disp(path),
+                     s->f[i].key);
+  return KARST_SUCCESS;
+}
+
+static karst_error_t check_range(reader_t *r, const field_t *f, yaml_node_t *val, const char *path,
+                                 double v) {
+  char rt[96], d[80];
+  if (in_range(&f->range, v)) return KARST_SUCCESS;
+  range_text(&f->range, rt, sizeof rt);
+  return fail_at(r, val, KARST_ERANGE, "%s must be %s, got %s", path, rt,
+                 describe(val, d, sizeof d));
+}
+
+static karst_error_t read_field(reader_t *r, const field_t *f, yaml_node_t *val, char *base,
+                                const char *path) {
+  karst_error_t err = KARST_SUCCESS;
+  void *at = base + f->off;
+  switch (f->type) {
+  case T_NUM: {
+    double v = 0;
+    if ((err = get_number(r, val, path, &v))) return err;
+    if ((err = check_range(r, f, val, path, v))) return err;
+    *(double *)at = v;
+    break;
+  }
+  case T_INT:
+  case T_I64: {
+    int64_t v = 0;
+    int64_t lo = f->type == T_INT ? INT_MIN : INT64_MIN,
+            hi = f->type == T_INT ? INT_MAX : INT64_MAX;
+    if ((err = get_integer(r, val, path, lo, hi, &v))) return err;
+    if ((err = check_range(r, f, val, path, (double)v))) return err;
+    if (f->type == T_INT)
+      *(int *)at = (int)v;
+    else
+      *(karst_int_t *)at = v;
+    break;
+  }
+  case T_U64:
+    if ((err = get_u64(r, val, path, (uint64_t *)at))) return err;
+    break;
+  case T_STR: {
+    const char *s;
+    if ((err = get_string(r, val, path, &s))) return err;
+    char *copy = strdup(s);
+    if (!copy) return no_memory(r);
+    free(*(char **)at);
+    *(char **)at = copy;
+    break;
+  }
+  case T_VEC2:
+  case T_VEC3:
+    if ((err = get_vec(r, val, path, f->type == T_VEC2 ? 2 : 3, (double *)at))) return err;
+    break;
+  case T_ENUM: {
+    int v = 0;
+    if ((err = get_enum(r, val, path, f->names, f->n_names, &v))) return err;
+    *(int *)at = v;
+    break;
+  }
+  case T_MAP:
+    if ((err = walk_map(r, val, f->sub, at, path, NULL))) return err;
+    break;
+  case T_FN:
+    if ((err = f->fn(r, val, base, path))) return err;
+    break;
+  }
+  if (f->pos) {
+    karst_srcpos_t *pos = (karst_srcpos_t *)((char *)r->sc + f->pos);
+    pos->line = line_of(val);
+    pos->column = col_of(val);
+  }
+  return KARST_SUCCESS;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Lists and custom readers                                                 */
+/* ------------------------------------------------------------------------ */
+
+/* A list of maps read against @p s into a new array; an empty value is an empty list. */
+static karst_error_t read_list(reader_t *r, yaml_node_t *n, const char *path, size_t item_size,
+                               const schema_t *s, void (*init)(void *item), size_t line_off,
+                               size_t col_off, void **out, int *count) {
+  char d[80], sub[PATH_LEN];
+  if (is_null(n)) return KARST_SUCCESS;
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of maps, got %s", path,
+                   describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m > INT_MAX / 2) return fail_at(r, n, KARST_ERANGE, "%s has too many items (%ld)", path, m);
+  if (m == 0) return KARST_SUCCESS;
+  char *items = calloc((size_t)m, item_size);
+  if (!items) return no_memory(r);
+  free(*out);
+  *out = items;
+  *count = (int)m;
+  for (long i = 0; i < m; i++) {
+    char *item = items + i * item_size;
+    yaml_node_t *in = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    init(item);
+    *(int *)(item + line_off) = line_of(in);
+    *(int *)(item + col_off) = col_of(in);
+    index_path(sub, path, i);
+    karst_error_t err = walk_map(r, in, s, item, sub, NULL);
+    if (err) return err;
+  }
+  return KARST_SUCCESS;
+}
+
+static const char *const keypoint_type_names[] = {"sink", "spring", "waypoint"};
+_Static_assert(sizeof(karst_keypoint_type_t) == sizeof(int), "key point type is stored as an int");
+
+static karst_error_t read_kp_name(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_keypoint_t *kp = base;
+  const char *s = NULL;
+  karst_error_t err = get_string(r, n, path, &s);
+  if (err) return err;
+  if (strlen(s) >= sizeof kp->name)
+    return fail_at(r, n, KARST_ERANGE, "%s must be at most %d characters, got %zu", path,
+                   (int)sizeof kp->name - 1, strlen(s));
+  memcpy(kp->name, s, strlen(s) + 1);
+  return KARST_SUCCESS;
+}
+
+static const field_t horizon_fields[] = {
+    {.key = "elevation", .type = T_NUM, .off = offsetof(karst_horizon_t, elevation), .required = 1},
+    {.key = "dip",
+     .type = T_NUM,
+     .off = offsetof(karst_horizon_t, dip),
+     .range = RANGE_CLOSED_OPEN(0, 90, " degrees")},
+    {.key = "dip_direction",
+     .type = T_NUM,
+     .off = offsetof(karst_horizon_t, dip_direction),
+     .range = RANGE_CLOSED_OPEN(0, 360, " degrees")},
+    {.key = "origin", .type = T_VEC2, .off = offsetof(karst_horizon_t, origin)},
+    {.key = "radius",
+     .type = T_NUM,
+     .off = offsetof(karst_horizon_t, radius),
+     .range = RANGE_GT(0, " m"),
+     .required = 1},
+};
+static const schema_t horizon_schema = {horizon_fields, 5};
+
+static const field_t fracture_fields[] = {
+    {.key = "dip_direction",
+     .type = T_NUM,
+     .off = offsetof(karst_fracture_t, dip_direction),
+     .range = RANGE_CLOSED_OPEN(0, 360, " degrees"),
+     .required = 1},
+    {.key = "dip",
+     .type = T_NUM,
+     .off = offsetof(karst_fracture_t, dip),
+     .range = RANGE_CLOSED(0, 90, " degrees"),
+     .required = 1},
+    {.key = "weight",
+     .type = T_NUM,
+     .off = offsetof(karst_fracture_t, weight),
+     .range = RANGE_GE(0, "")},
+};
+static const schema_t fracture_schema = {fracture_fields, 3};
+
+static const field_t keypoint_fields[] = {
+    {.key = "name", .type = T_FN, .fn = read_kp_name},
+    {.key = "type",
+     .type = T_ENUM,
+     .off = offsetof(karst_keypoint_t, type),
+     .required = 1,
+     .names = keypoint_type_names,
+     .n_names = 3},
+    {.key = "position", .type = T_VEC3, .off = offsetof(karst_keypoint_t, p), .required = 1},
+};
+static const schema_t keypoint_schema = {keypoint_fields, 3};
+
+static void init_horizon(void *item) {
+  karst_horizon_t *h = item;
+  h->origin[0] = h->origin[1] = NAN; /* domain centre, once the domain is known */
+}
+static void init_fracture(void *item) {
+  ((karst_fracture_t *)item)->weight = 1.0;
+}
+static void init_keypoint(void *item) {
+  (void)item;
+}
+
+static karst_error_t read_horizons(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_scenario_t *sc = base;
+  return read_list(r, n, path, sizeof(karst_horizon_t), &horizon_schema, init_horizon,
+                   offsetof(karst_horizon_t, line), offsetof(karst_horizon_t, column),
+                   (void **)&sc->horizons, &sc->n_horizons);
+}
+static karst_error_t read_fractures(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_scenario_t *sc = base;
+  return read_list(r, n, path, sizeof(karst_fracture_t), &fracture_schema, init_fracture,
+                   offsetof(karst_fracture_t, line), offsetof(karst_fracture_t, column),
+                   (void **)&sc->fractures, &sc->n_fractures);
+}
+static karst_error_t read_key_points(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_scenario_t *sc = base;
+  return read_list(r, n, path, sizeof(karst_keypoint_t), &keypoint_schema, init_keypoint,
+                   offsetof(karst_keypoint_t, line), offsetof(karst_keypoint_t, column),
+                   (void **)&sc->key_points, &sc->n_key_points);
+}
+
+static karst_error_t defer_prescribed(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  (void)base;
+  (void)path;
+  r->prescribed = n;
+  return KARST_SUCCESS;
+}
+
+/* units: only metres ("m") are supported; every length in the file is in them. */
+static karst_error_t read_units(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  char d[80];
+  (void)base;
+  if (n->type == YAML_SCALAR_NODE && !strcmp(scalar(n), "m") && n->data.scalar.length == 1)
+    return KARST_SUCCESS;
+  return fail_at(r, n, KARST_EUNSUPPORTED, "%s must be m (metres, the only unit supported), got %s",
+                 path, describe(n, d, sizeof d));
+}
+
+/* terrain: {elevation: z} or {heightfield: file.asc}, the file relative to the scenario. */
+static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  static const char *const keys[] = {"elevation", "heightfield"};
+  karst_scenario_t *sc = base;
+  yaml_node_t *vals[2] = {NULL, NULL};
+  char d[80], sub[PATH_LEN];
+  karst_error_t err = KARST_SUCCESS;
+  char *resolved = NULL;
+  FILE *fp = NULL;
+  if (n->type != YAML_MAPPING_NODE)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s must be a map with elevation (flat, m) or heightfield (an ESRI ASCII grid "
+                   "file), got %s",
+                   path, describe(n, d, sizeof d));
+  for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
+    int idx = 0;
+    if ((err = check_key(r, n, p, keys, 2, path, NULL, &idx))) return err;
+    vals[idx] = yaml_document_get_node(r->doc, p->value);
+  }
+  if (vals[0] && vals[1])
+    return fail_at(r, n, KARST_EINVAL, "%s gives both elevation and heightfield; give one of them",
+                   path);
+  if (!vals[0] && !vals[1])
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s must give elevation (flat, m) or heightfield (an ESRI ASCII grid file)",
+                   path);
+  yaml_node_t *v = vals[0] ? vals[0] : vals[1];
+  sc->pos_terrain.line = line_of(v);
+  sc->pos_terrain.column = col_of(v);
+  if (vals[0]) {
+    join(sub, path, "elevation");
+    if ((err = get_number(r, v, sub, &sc->terrain.elevation))) return err;
+    sc->terrain.is_grid = 0;
+    return KARST_SUCCESS;
+  }
+  join(sub, path, "heightfield");
+  const char *hf;
+  if ((err = get_string(r, v, sub, &hf))) return err;
+  const char *slash = strrchr(r->file, '/');
+  size_t dirlen = (hf[0] == '/' || !slash) ? 0 : (size_t)(slash - r->file) + 1;
+  resolved = malloc(dirlen + strlen(hf) + 1);
+  if (!resolved) return no_memory(r);
+  memcpy(resolved, r->file, dirlen);
+  strcpy(resolved + dirlen, hf);
+  fp = fopen(resolved, "r");
+  if (!fp) {
+    err = fail_at(r, v, KARST_EIO, "%s: cannot open '%s': %s", sub, resolved, strerror(errno));
+    goto cleanup;
+  }
+  err = karst_i_terrain_read_grid(r->ctx, fp, resolved, &sc->terrain);
+  if (err == KARST_EIO) { /* unreadable (e.g. a directory): no grid position to give */
+    char msg[KARST_ERRMSG_MAX];
+    snprintf(msg, sizeof msg, "%s", r->ctx->errmsg);
+    err = fail_at(r, v, KARST_EIO, "%s: %s", sub, msg);
+  } else if (err) {
+    size_t len = strlen(r->ctx->errmsg);
+    snprintf(r->ctx->errmsg + len, KARST_ERRMSG_MAX - len, " (the heightfield of %s at %s:%d:%d)",
+             path, r->file, line_of(v), col_of(v));
+  }
+cleanup:
+  if (fp) fclose(fp);
+  free(resolved);
+  return err;
+}
+
+/* --- permeability construction tree ------------------------------------- */
+
+static const field_t sphere_fields[] = {
+    {.key = "center", .type = T_VEC3, .off = offsetof(karst_perm_node_t, center), .required = 1},
+    {.key = "radius",
+     .type = T_NUM,
+     .off = offsetof(karst_perm_node_t, radius),
+     .range = RANGE_GT(0, " m"),
+     .required = 1},
+    {.key = "resistance",
+     .type = T_NUM,
+     .off = offsetof(karst_perm_node_t, resistance),
+     .range = RANGE_CLOSED(0, 1, ""),
+     .required = 1},
+    {.key = "falloff",
+     .type = T_NUM,
+     .off = offsetof(karst_perm_node_t, falloff),
+     .range = RANGE_GE(0, " m")},
+};
+static const schema_t sphere_schema = {sphere_fields, 4};
+
+static const field_t stratum_fields[] = {
+    {.key = "bottom", .type = T_NUM, .off = offsetof(karst_perm_node_t, bottom), .required = 1},
+    {.key = "top", .type = T_NUM, .off = offsetof(karst_perm_node_t, top), .required = 1},
+    {.key = "resistance",
+     .type = T_NUM,
+     .off = offsetof(karst_perm_node_t, resistance),
+     .range = RANGE_CLOSED(0, 1, ""),
+     .required = 1},
+};
+static const schema_t stratum_schema = {stratum_fields, 3};
+
+static const range_t perm_weight_range = RANGE_GT(0, "");
+
+/* Node keys: the kind (exactly one) and an optional blend weight. */
+static const char *const perm_keys[] = {"sphere",       "stratum", "union",
+                                        "intersection", "blend",   "weight"};
+static const karst_perm_kind_t perm_kinds[] = {KARST_PERM_SPHERE, KARST_PERM_STRATUM,
+                                               KARST_PERM_UNION, KARST_PERM_INTERSECTION,
+                                               KARST_PERM_BLEND};
+#define PERM_KIND_KEYS "sphere, stratum, union, intersection or blend"
+
+static void init_perm_node(karst_perm_node_t *node, const yaml_node_t *n) {
+  memset(node, 0, sizeof *node);
+  node->weight = 1.0;
+  node->line = line_of(n);
+  node->column = col_of(n);
+}
+
+static karst_error_t read_perm_node(reader_t *r, yaml_node_t *n, karst_perm_node_t *node,
+                                    const char *path, int depth);
+
+/* The children of an operator: a non-empty list of nodes. */
+static karst_error_t read_perm_children(reader_t *r, yaml_node_t *n, karst_perm_node_t *node,
+                                        const char *path, int depth) {
+  char d[80], sub[PATH_LEN];
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of nodes, got %s", path,
+                   describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m == 0)
+    return fail_at(r, n, KARST_EINVAL, "%s must list at least one node, got an empty list", path);
+  if (m > KARST_SCENARIO_PERM_MAX_NODES)
+    return fail_at(r, n, KARST_ERANGE, "%s has %ld nodes, more than the limit of %d", path, m,
+                   KARST_SCENARIO_PERM_MAX_NODES);
+  node->children = calloc((size_t)m, sizeof *node->children);
+  if (!node->children) return no_memory(r);
+  node->n_children = (int)m;
+  for (long i = 0; i < m; i++) {
+    yaml_node_t *c = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    init_perm_node(&node->children[i], c);
+    index_path(sub, path, i);
+    karst_error_t err = read_perm_node(r, c, &node->children[i], sub, depth + 1);
+    if (err) return err;
+  }
+  return KARST_SUCCESS;
+}
+
+static karst_error_t read_perm_node(reader_t *r, yaml_node_t *n, karst_perm_node_t *node,
+                                    const char *path, int depth) {
+  char d[80], sub[PATH_LEN];
+  karst_error_t err;
+  if (depth > KARST_SCENARIO_PERM_MAX_DEPTH)
+    return fail_at(r, n, KARST_ERANGE,
+                   "%s: the permeability tree is nested deeper than %d levels (a YAML alias "
+                   "cycle?)",
+                   path, KARST_SCENARIO_PERM_MAX_DEPTH);
+  if (++r->perm_nodes > KARST_SCENARIO_PERM_MAX_NODES)
+    return fail_at(r, n, KARST_ERANGE, "%s: the permeability tree has more than %d nodes", path,
+                   KARST_SCENARIO_PERM_MAX_NODES);
+  if (n->type != YAML_MAPPING_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a map with one of " PERM_KIND_KEYS ", got %s",
+                   path, describe(n, d, sizeof d));
+  int kind = -1;
+  yaml_node_t *kind_val = NULL, *kind_key = NULL;
+  for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
+    int idx = 0;
+    if ((err = check_key(r, n, p, perm_keys, 6, path, NULL, &idx))) return err;
+    yaml_node_t *v = yaml_document_get_node(r->doc, p->value);
+    if (idx == 5) {
+      join(sub, path, "weight");
+      if ((err = get_number(r, v, sub, &node->weight))) return err;
+      if (!in_range(&perm_weight_range, node->weight))
+        return fail_at(r, v, KARST_ERANGE, "%s must be > 0, got %s", sub, describe(v, d, sizeof d));
+      continue;
+    }
+    if (kind >= 0)
+      return fail_at(r, yaml_document_get_node(r->doc, p->key), KARST_EINVAL,
+                     "%s has both '%s' and '%s': a node is one primitive or one operator", path,
+                     perm_keys[kind], perm_keys[idx]);
+    kind = idx;
+    kind_val = v;
+    kind_key = yaml_document_get_node(r->doc, p->key);
+  }
+  if (kind < 0) return fail_at(r, n, KARST_EINVAL, "%s must contain one of " PERM_KIND_KEYS, path);
+  (void)kind_key;
+  node->kind = perm_kinds[kind];
+  join(sub, path, perm_keys[kind]);
+  switch (node->kind) {
+  case KARST_PERM_SPHERE:
+    return walk_map(r, kind_val, &sphere_schema, node, sub, NULL);
+  case KARST_PERM_STRATUM:
+    if ((err = walk_map(r, kind_val, &stratum_schema, node, sub, NULL))) return err;
+    if (!(node->bottom < node->top))
+      return fail_at(r, kind_val, KARST_ERANGE, "%s: bottom (%g m) must be below top (%g m)", sub,
+                     node->bottom, node->top);
+    return KARST_SUCCESS;
+  default:
+    return read_perm_children(r, kind_val, node, sub, depth);
+  }
+}
+
+static karst_error_t new_root(reader_t *r, yaml_node_t *n, karst_permeability_t *p,
+                              const char *path) {
+  if (p->root)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s: give either permeability.tree or permeability.primitives, not both", path);
+  p->root = malloc(sizeof *p->root);
+  if (!p->root) return no_memory(r);
+  init_perm_node(p->root, n);
+  return KARST_SUCCESS;
+}
+
+static karst_error_t read_perm_tree(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_permeability_t *p = base;
+  karst_error_t err = new_root(r, n, p, path);
+  if (err) return err;
+  return read_perm_node(r, n, p->root, path, 0);
+}
+
+/* primitives: [...] is the union of the listed nodes. */
+static karst_error_t read_perm_primitives(reader_t *r, yaml_node_t *n, void *base,
+                                          const char *path) {
+  karst_permeability_t *p = base;
+  karst_error_t err = new_root(r, n, p, path);
+  if (err) return err;
+  p->root->kind = KARST_PERM_UNION;
+  ++r->perm_nodes;
+  return read_perm_children(r, n, p->root, path, 0);
+}
+
+/* classification.radius: {tube: [min, max], ...} for any of the tunnel types. */
+static karst_error_t read_radius(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_classification_t *c = base;
+  const char *names[KARST_TUNNEL_TYPE_COUNT];
+  char d[80], sub[PATH_LEN];
+  for (int i = 0; i < KARST_TUNNEL_TYPE_COUNT; i++)
+    names[i] = karst_tunnel_type_name((karst_tunnel_type_t)i);
+  if (n->type != YAML_MAPPING_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a map from tunnel type to [min, max], got %s",
+                   path, describe(n, d, sizeof d));
+  for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
+    int t = 0;
+    karst_error_t err = check_key(r, n, p, names, KARST_TUNNEL_TYPE_COUNT, path, NULL, &t);
+    if (err) return err;
+    yaml_node_t *v = yaml_document_get_node(r->doc, p->value);
+    double mm[2];
+    join(sub, path, names[t]);
+    if (v->type != YAML_SEQUENCE_NODE ||
+        v->data.sequence.items.top - v->data.sequence.items.start != 2)
+      return fail_at(r, v, KARST_EINVAL, "%s must be a list [min, max] of 2 numbers (m), got %s",
+                     sub, describe(v, d, sizeof d));
+    if ((err = get_vec(r, v, sub, 2, mm))) return err;
+    if (!(mm[0] > 0))
+      return fail_at(r, v, KARST_ERANGE, "%s: min must be > 0 m, got %g", sub, mm[0]);
+    if (!(mm[0] <= mm[1]))
+      return fail_at(r, v, KARST_ERANGE, "%s: min must be <= max, got [%g, %g]", sub, mm[0], mm[1]);
+    c->radius[t].min = mm[0];
+    c->radius[t].max = mm[1];
+  }
+  return KARST_SUCCESS;
+}
+
+/* --- the top level --------------------------------------------------------- */
+
+static const field_t domain_fields[] = {
+    {.key = "min", .type = T_VEC3, .off = offsetof(karst_scenario_t, domain_min), .required = 1},
+    {.key = "max", .type = T_VEC3, .off = offsetof(karst_scenario_t, domain_max), .required = 1},
+};
+static const schema_t domain_schema = {domain_fields, 2};
+
+static const field_t water_table_fields[] = {
+    {.key = "elevation",
+     .type = T_NUM,
+     .off = offsetof(karst_scenario_t, water_table),
+     .required = 1,
+     .pos = offsetof(karst_scenario_t, pos_water_table)},
+};
+static const schema_t water_table_schema = {water_table_fields, 1};
+
+static const field_t permeability_fields[] = {
+    {.key = "background",
+     .type = T_NUM,
+     .off = offsetof(karst_permeability_t, background),
+     .range = RANGE_CLOSED(0, 1, "")},
+    {.key = "tree", .type = T_FN, .fn = read_perm_tree},
+    {.key = "primitives", .type = T_FN, .fn = read_perm_primitives},
+};
+static const schema_t permeability_schema = {permeability_fields, 3};
+
+static const field_t cost_fields[] = {
+    {.key = "w0",
+     .type = T_NUM,
+     .off = offsetof(karst_cost_weights_t, w0),
+     .range = RANGE_GT(0, "")},
+    {.key = "horizon",
+     .type = T_NUM,
+     .off = offsetof(karst_cost_weights_t, horizon),
+     .range = RANGE_GE(0, "")},
+    {.key = "fracture",
+     .type = T_NUM,
+     .off = offsetof(karst_cost_weights_t, fracture),
+     .range = RANGE_GE(0, "")},
+    {.key = "permeability",
+     .type = T_NUM,
+     .off = offsetof(karst_cost_weights_t, permeability),
+     .range = RANGE_GE(0, "")},
+    {.key = "prescribed",
+     .type = T_NUM,
+     .off = offsetof(karst_cost_weights_t, prescribed),
+     .range = RANGE_OPEN_CLOSED(0, 1, "")},
+};
+static const schema_t cost_schema = {cost_fields, 5};
+
+static const field_t sampling_fields[] = {
+    {.key = "fill_radius",
+     .type = T_NUM,
+     .off = offsetof(karst_sampling_t, fill_radius),
+     .range = RANGE_GT(0, " m")},
+    {.key = "feature_radius",
+     .type = T_NUM,
+     .off = offsetof(karst_sampling_t, feature_radius),
+     .range = RANGE_GT(0, " m")},
+    {.key = "permeable_threshold",
+     .type = T_NUM,
+     .off = offsetof(karst_sampling_t, permeable_threshold),
+     .range = RANGE_CLOSED(0, 1, "")},
+    {.key = "feature_band",
+     .type = T_NUM,
+     .off = offsetof(karst_sampling_t, feature_band),
+     .range = RANGE_GE(0, " m")},
+    {.key = "k", .type = T_INT, .off = offsetof(karst_sampling_t, k), .range = RANGE_GE(1, "")},
+    {.key = "max_samples",
+     .type = T_I64,
+     .off = offsetof(karst_sampling_t, max_samples),
+     .range = RANGE_GE(1, "")},
+};
+static const schema_t sampling_schema = {sampling_fields, 6};
+
+static const field_t skeleton_fields[] = {
+    {.key = "gamma",
+     .type = T_NUM,
+     .off = offsetof(karst_scenario_t, gamma),
+     .range = RANGE_GT(0, "")},
+};
+static const schema_t skeleton_schema = {skeleton_fields, 1};
+
+static const field_t amplification_fields[] = {
+    {.key = "steps",
+     .type = T_INT,
+     .off = offsetof(karst_amplification_t, steps),
+     .range = RANGE_GE(0, "")},
+    {.key = "points",
+     .type = T_INT,
+     .off = offsetof(karst_amplification_t, points),
+     .range = RANGE_GE(0, "")},
+    {.key = "dead_end_fraction",
+     .type = T_NUM,
+     .off = offsetof(karst_amplification_t, dead_end_fraction),
+     .range = RANGE_CLOSED(0, 1, "")},
+};
+static const schema_t amplification_schema = {amplification_fields, 3};
+
+static const field_t classification_fields[] = {
+    {.key = "vertical_angle",
+     .type = T_NUM,
+     .off = offsetof(karst_classification_t, vertical_angle),
+     .range = RANGE_CLOSED(0, 90, " degrees")},
+    {.key = "water_table_band",
+     .type = T_NUM,
+     .off = offsetof(karst_classification_t, water_table_band),
+     .range = RANGE_GE(0, " m")},
+    {.key = "epikarst_depth",
+     .type = T_NUM,
+     .off = offsetof(karst_classification_t, epikarst_depth),
+     .range = RANGE_GE(0, " m")},
+    {.key = "chamber_resistance",
+     .type = T_NUM,
+     .off = offsetof(karst_classification_t, chamber_resistance),
+     .range = RANGE_CLOSED(0, 1, "")},
+    {.key = "radius", .type = T_FN, .fn = read_radius},
+};
+static const schema_t classification_schema = {classification_fields, 5};
+
+static const field_t random_fields[] = {
+    {.key = "seed", .type = T_U64, .off = offsetof(karst_scenario_t, seed)},
+    {.key = "realisations",
+     .type = T_INT,
+     .off = offsetof(karst_scenario_t, realisations),
+     .range = RANGE_GE(1, "")},
+};
+static const schema_t random_schema = {random_fields, 2};
+
+static const field_t top_fields[] = {
+    {.key = "name", .type = T_STR, .off = offsetof(karst_scenario_t, name)},
+    {.key = "units", .type = T_FN, .fn = read_units},
+    {.key = "domain",
+     .type = T_MAP,
+     .sub = &domain_schema,
+     .pos = offsetof(karst_scenario_t, pos_domain)},
+    {.key = "terrain", .type = T_FN, .fn = read_terrain},
+    {.key = "water_table", .type = T_MAP, .sub = &water_table_schema},
+    {.key = "horizons", .type = T_FN, .fn = read_horizons},
+    {.key = "fractures", .type = T_FN, .fn = read_fractures},
+    {.key = "permeability",
+     .type = T_MAP,
+     .off = offsetof(karst_scenario_t, permeability),
+     .sub = &permeability_schema},
+    {.key = "key_points",
+     .type = T_FN,
+     .fn = read_key_points,
+     .pos = offsetof(karst_scenario_t, pos_key_points)},
+    {.key = "prescribed_paths", .type = T_FN, .fn = defer_prescribed},
+    {.key = "cost", .type = T_MAP, .off = offsetof(karst_scenario_t, cost), .sub = &cost_schema},
+    {.key = "sampling",
+     .type = T_MAP,
+     .off = offsetof(karst_scenario_t, sampling),
+     .sub = &sampling_schema,
+     .pos = offsetof(karst_scenario_t, pos_sampling)},
+    {.key = "skeleton", .type = T_MAP, .sub = &skeleton_schema},
+    {.key = "amplification",
+     .type = T_MAP,
+     .off = offsetof(karst_scenario_t, amplification),
+     .sub = &amplification_schema},
+    {.key = "tortuosity",
+     .type = T_NUM,
+     .off = offsetof(karst_scenario_t, tortuosity),
+     .range = RANGE_CLOSED(0, 1, "")},
+    {.key = "classification",
+     .type = T_MAP,
+     .off = offsetof(karst_scenario_t, classification),
+     .sub = &classification_schema},
+    {.key = "random", .type = T_MAP, .sub = &random_schema},
+};
+static const schema_t top_schema = {top_fields, 17};
+_Static_assert(sizeof top_fields / sizeof top_fields[0] <= MAX_FIELDS, "raise MAX_FIELDS");
+
+/* ------------------------------------------------------------------------ */
+/* After the walk: defaults that depend on other keys, names, paths          */
+/* ------------------------------------------------------------------------ */
+
+static int find_key_point(const karst_scenario_t *sc, const char *name) {
+  for (int i = 0; i < sc->n_key_points; i++)
+    if (!strcmp(sc->key_points[i].name, name)) return i;
+  return -1;
+}
+
+/* prescribed_paths: [[from, to], ...] naming key points. */
+static karst_error_t read_prescribed(reader_t *r, yaml_node_t *n) {
+  karst_scenario_t *sc = r->sc;
+  char d[80], sub[PATH_LEN], nm[64];
+  const char *path = "prescribed_paths";
+  if (is_null(n)) return KARST_SUCCESS;
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s must be a list of pairs [from, to] of key-point names, got %s", path,
+                   describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m == 0) return KARST_SUCCESS;
+  if (m > INT_MAX / 2) return fail_at(r, n, KARST_ERANGE, "%s has too many items", path);
+  sc->prescribed = calloc((size_t)m, sizeof *sc->prescribed);
+  if (!sc->prescribed) return no_memory(r);
+  sc->n_prescribed = (int)m;
+  const char **names = malloc(sizeof(char *) * (sc->n_key_points > 0 ? sc->n_key_points : 1));
+  if (!names) return no_memory(r);
+  for (int i = 0; i < sc->n_key_points; i++)
+    names[i] = sc->key_points[i].name;
+  karst_error_t err = KARST_SUCCESS;
+  for (long i = 0; i < m && !err; i++) {
+    yaml_node_t *it = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    karst_prescribed_path_t *pp = &sc->prescribed[i];
+    index_path(sub, path, i);
+    pp->line = line_of(it);
+    pp->column = col_of(it);
+    if (it->type != YAML_SEQUENCE_NODE ||
+        it->data.sequence.items.top - it->data.sequence.items.start != 2) {
+      err = fail_at(r, it, KARST_EINVAL, "%s must be a pair [from, to] of key-point names, got %s",
+                    sub, describe(it, d, sizeof d));
+      break;
+    }
+    int ends[2];
+    for (int e = 0; e < 2 && !err; e++) {
+      yaml_node_t *v = yaml_document_get_node(r->doc, it->data.sequence.items.start[e]);
+      char esub[PATH_LEN];
+      const char *name;
+      index_path(esub, sub, e);
+      if ((err = get_string(r, v, esub, &name))) break;
+      ends[e] = find_key_point(sc, name);
+      if (ends[e] < 0) {
+        const char *hint = karst_i_suggest(name, names, sc->n_key_points);
+        clip(name, strlen(name), nm, sizeof nm);
+        err = fail_at(r, v, KARST_ENOTFOUND, "%s names an unknown key point '%s'%s%s%s", esub, nm,
+                      hint ? " (did you mean '" : "", hint ? hint : "", hint ? "'?)" : "");
+      }
+    }
+    if (err) break;
+    if (ends[0] == ends[1]) {
+      err = fail_at(r, it, KARST_EINVAL, "%s joins key point '%s' to itself", sub,
+                    sc->key_points[ends[0]].name);
+      break;
+    }
+    pp->a = ends[0];
+    pp->b = ends[1];
+  }
+  free(names);
+  return err;
+}
+
+/* Key points by name, ties by position in the list (qsort is not stable). */
+static int cmp_kp_name(const void *a, const void *b) {
+  const karst_keypoint_t *x = *(const karst_keypoint_t *const *)a;
+  const karst_keypoint_t *y = *(const karst_keypoint_t *const *)b;
+  int c = strcmp(x->name, y->name);
+  return c ? c : (x < y ? -1 : x > y);
+}
+static int cmp_name_kp(const void *key, const void *elem) {
+  return strcmp((const char *)key, (*(const karst_keypoint_t *const *)elem)->name);
+}
+
+/* The named key points sorted by name (caller frees); NULL when out of memory. */
+static const karst_keypoint_t **sorted_named(const karst_scenario_t *sc, int *m) {
+  size_t n = sc->n_key_points > 0 ? (size_t)sc->n_key_points : 1;
+  const karst_keypoint_t **v = malloc(sizeof *v * n);
+  if (!v) return NULL;
+  *m = 0;
+  for (int i = 0; i < sc->n_key_points; i++)
+    if (sc->key_points[i].name[0]) v[(*m)++] = &sc->key_points[i];
+  qsort(v, (size_t)*m, sizeof *v, cmp_kp_name);
+  return v;
+}
+
+/* The first key point, in list order, whose name an earlier one already has:
+ * sets *dup and *first (the earlier holder), or *dup = -1. O(n log n). */
+static void first_duplicate(const karst_scenario_t *sc, const karst_keypoint_t **v, int m, int *dup,
+                            int *first) {
+  *dup = -1;
+  *first = -1;
+  int group = 0;
+  for (int k = 1; k < m; k++) {
+    if (strcmp(v[k]->name, v[k - 1]->name) != 0) {
+      group = k;
+      continue;
+    }
+    int idx = (int)(v[k] - sc->key_points);
+    if (*dup < 0 || idx < *dup) {
+      *dup = idx;
+      *first = (int)(v[group] - sc->key_points);
+    }
+  }
+}
+
+/* Names given in the file must be unique; the others become sink1, spring1,
+ * waypoint3 ... (the ordinal among key points of that type), the number
+ * increased past names given in the file. Generated numbers only grow within
+ * a type, so generated names cannot collide with each other. O(n log n). */
+static karst_error_t name_key_points(reader_t *r) {
+  karst_scenario_t *sc = r->sc;
+  int m = 0, dup, first;
+  const karst_keypoint_t **v = sorted_named(sc, &m);
+  if (!v) return no_memory(r);
+  first_duplicate(sc, v, m, &dup, &first);
+  if (dup >= 0) {
+    const karst_keypoint_t *kp = &sc->key_points[dup];
+    free(v);
+    return karst_set_error(r->ctx, KARST_EINVAL,
+                           "%s:%d:%d: key_points[%d].name '%s' is already used by key_points[%d] "
+                           "(line %d); names must be unique",
+                           r->file, kp->line, kp->column, dup, kp->name, first,
+                           sc->key_points[first].line);
+  }
+  int ordinal[3] = {0, 0, 0}, last[3] = {0, 0, 0};
+  char name[sizeof sc->key_points[0].name];
+  for (int i = 0; i < sc->n_key_points; i++) {
+    karst_keypoint_t *kp = &sc->key_points[i];
+    int t = (int)kp->type;
+    int k = ++ordinal[t];
+    if (kp->name[0]) continue;
+    if (k <= last[t]) k = last[t] + 1;
+    for (;; k++) {
+      snprintf(name, sizeof name, "%s%d", keypoint_type_names[t], k);
+      if (!bsearch(name, v, (size_t)m, sizeof *v, cmp_name_kp)) break;
+    }
+    last[t] = k;
+    memcpy(kp->name, name, sizeof name);
+  }
+  free(v);
+  return KARST_SUCCESS;
+}
+
+static karst_error_t finish(reader_t *r) {
+  karst_scenario_t *sc = r->sc;
+  karst_error_t err;
+  if (!sc->name) {
+    const char *base = strrchr(r->file, '/');
+    base = base ? base + 1 : r->file;
+    const char *dot = strrchr(base, '.');
+    size_t len = dot && dot > base ? (size_t)(dot - base) : strlen(base);
+    sc->name = strndup(base, len);
+    if (!sc->name) return no_memory(r);
+  }
+  if (!sc->pos_water_table.line) sc->water_table = sc->domain_min[2];
+  for (int i = 0; i < sc->n_horizons; i++) {
+    for (int a = 0; a < 2; a++)
+      if (isnan(sc->horizons[i].origin[a]))
+        sc->horizons[i].origin[a] = 0.5 * (sc->domain_min[a] + sc->domain_max[a]);
+  }
+  if ((err = name_key_points(r))) return err;
+  if (r->prescribed && (err = read_prescribed(r, r->prescribed))) return err;
+  return KARST_SUCCESS;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Cross-field checks                                                       */
+/* ------------------------------------------------------------------------ */
+
+static karst_error_t check_fail(karst_ctx_t *ctx, const karst_scenario_t *sc, int line, int col,
+                                karst_error_t code, const char *fmt, ...)
+    __attribute__((format(printf, 6, 7)));
+/* Prefix "FILE:LINE:COLUMN: " when the scenario came from a file (1:1 for a
+ * rule about something the file left out). */
+static karst_error_t check_fail(karst_ctx_t *ctx, const karst_scenario_t *sc, int line, int col,
+                                karst_error_t code, const char *fmt, ...) {
+  char msg[KARST_ERRMSG_MAX];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  if (!sc->path) return karst_set_error(ctx, code, "%s", msg);
+  return karst_set_error(ctx, code, "%s:%d:%d: %s", sc->path, line > 0 ? line : 1,
+                         line > 0 && col > 0 ? col : 1, msg);
+}
+
+/* The per-field rules of a schema, applied to values already in memory
+ * (they matter for scenarios built in code; the reader checked them on the way in). */
+static karst_error_t check_values(karst_ctx_t *ctx, const karst_scenario_t *sc, const schema_t *s,
+                                  const char *base, const char *path, int line, int col) {
+  char rt[96], sub[PATH_LEN];
+  for (int i = 0; i < s->n; i++) {
+    const field_t *f = &s->f[i];
+    const char *at = base + f->off;
+    join(sub, path, f->key);
+    double v;
+    switch (f->type) {
+    case T_NUM:
+      v = *(const double *)at;
+      if (!isfinite(v))
+        return check_fail(ctx, sc, line, col, KARST_ERANGE, "%s must be a finite number, got %g",
+                          sub, v);
+      break;
+    case T_INT:
+      v = *(const int *)at;
+      break;
+    case T_I64:
+      v = (double)*(const karst_int_t *)at;
+      break;
+    case T_VEC2:
+    case T_VEC3:
+      for (int k = 0; k < (f->type == T_VEC2 ? 2 : 3); k++)
+        if (!isfinite(((const double *)at)[k]))
+          return check_fail(ctx, sc, line, col, KARST_ERANGE,
+                            "%s[%d] must be a finite number, got %g", sub, k,
+                            ((const double *)at)[k]);
+      continue;
+    case T_MAP: {
+      karst_error_t err = check_values(ctx, sc, f->sub, at, sub, line, col);
+      if (err) return err;
+      continue;
+    }
+    default:
+      continue;
+    }
+    if (!in_range(&f->range, v)) {
+      range_text(&f->range, rt, sizeof rt);
+      return check_fail(ctx, sc, line, col, KARST_ERANGE, "%s must be %s, got %.15g", sub, rt, v);
+    }
+  }
+  return KARST_SUCCESS;
+}
+
+static karst_error_t check_perm(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                const karst_perm_node_t *n, const char *path, int depth) {
+  char sub[PATH_LEN];
+  karst_error_t err;
+  if (depth > KARST_SCENARIO_PERM_MAX_DEPTH)
+    return check_fail(ctx, sc, n->line, n->column, KARST_ERANGE,
+                      "%s: the permeability tree is nested deeper than %d levels", path,
+                      KARST_SCENARIO_PERM_MAX_DEPTH);
+  if (!(n->weight > 0) || !isfinite(n->weight))
+    return check_fail(ctx, sc, n->line, n->column, KARST_ERANGE, "%s.weight must be > 0, got %g",
+                      path, n->weight);
+  switch (n->kind) {
+  case KARST_PERM_SPHERE:
+    join(sub, path, "sphere");
+    return check_values(ctx, sc, &sphere_schema, (const char *)n, sub, n->line, n->column);
+  case KARST_PERM_STRATUM:
+    join(sub, path, "stratum");
+    if ((err = check_values(ctx, sc, &stratum_schema, (const char *)n, sub, n->line, n->column)))
+      return err;
+    if (!(n->bottom < n->top))
+      return check_fail(ctx, sc, n->line, n->column, KARST_ERANGE,
+                        "%s: bottom (%g m) must be below top (%g m)", sub, n->bottom, n->top);
+    return KARST_SUCCESS;
+  case KARST_PERM_UNION:
+  case KARST_PERM_INTERSECTION:
+  case KARST_PERM_BLEND:
+    if (n->n_children < 1 || !n->children)
+      return check_fail(ctx, sc, n->line, n->column, KARST_EINVAL,
+                        "%s: an operator node needs at least one child", path);
+    for (int i = 0; i < n->n_children; i++) {
+      index_path(sub, path, i);
+      if ((err = check_perm(ctx, sc, &n->children[i], sub, depth + 1))) return err;
+    }
+    return KARST_SUCCESS;
+  }
+  return check_fail(ctx, sc, n->line, n->column, KARST_EINVAL, "%s: unknown node kind %d", path,
+                    (int)n->kind);
+}
+
+/**
+ * Check the rules of a scenario: every field within its documented range,
+ * and the cross-field rules — domain min < max, the terrain above the domain
+ * bottom and (for a heightfield) covering the domain's x-y extent, the water
+ * table inside the domain's z range, key points with unique names inside the
+ * domain and not above the terrain (the heightfield evaluated at the point),
+ * at least one spring, prescribed paths joining two different existing key
+ * points, feature_radius <= fill_radius.
+ * @param ctx context; the message is "FILE:LINE:COLUMN: ..." when the
+ *            scenario was read from a file (the position of the entry at fault)
+ * @param sc  scenario to check
+ * @return KARST_SUCCESS, or KARST_EINVAL / KARST_ERANGE with the first rule broken.
+ * Time complexity: O(n_key_points^2 + size of the permeability tree + other lists).
+ */
+karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc) {
+  char sub[PATH_LEN];
+  karst_error_t err;
+  const karst_srcpos_t *pd = &sc->pos_domain, *pt = &sc->pos_terrain;
+  static const char axis[3] = {'x', 'y', 'z'};
+
+  /* Per-field ranges of the top-level scalar and map keys. */
+  if ((err = check_values(ctx, sc, &top_schema, (const char *)sc, "", 0, 0))) return err;
+  if (!isfinite(sc->permeability.background))
+    return check_fail(ctx, sc, 0, 0, KARST_ERANGE, "permeability.background must be finite");
+  for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++) {
+    const karst_radius_range_t *rr = &sc->classification.radius[t];
+    if (!(rr->min > 0) || !(rr->min <= rr->max) || !isfinite(rr->max))
+      return check_fail(ctx, sc, 0, 0, KARST_ERANGE,
+                        "classification.radius.%s must have 0 < min <= max, got [%g, %g]",
+                        karst_tunnel_type_name((karst_tunnel_type_t)t), rr->min, rr->max);
+  }
+
+  for (int a = 0; a < 3; a++) {
+    if (!(sc->domain_min[a] < sc->domain_max[a]))
+      return check_fail(ctx, sc, pd->line, pd->column, KARST_ERANGE,
+                        "domain.max %c (%g m) must be greater than domain.min %c (%g m)", axis[a],
+                        sc->domain_max[a], axis[a], sc->domain_min[a]);
+  }
+
+  const karst_terrain_t *tr = &sc->terrain;
+  if (tr->is_grid) {
+    if (!tr->z || tr->ncols < 1 || tr->nrows < 1 || !(tr->cellsize > 0))
+      return check_fail(ctx, sc, pt->line, pt->column, KARST_EINVAL,
+                        "terrain.heightfield holds no grid");
+    double cs = tr->cellsize, slack = KARST_SCENARIO_GRID_COVER_SLACK * cs;
+    double x0 = tr->xll - 0.5 * cs, x1 = tr->xll + ((double)tr->ncols - 0.5) * cs;
+    double y0 = tr->yll - 0.5 * cs, y1 = tr->yll + ((double)tr->nrows - 0.5) * cs;
+    if (sc->domain_min[0] < x0 - slack || sc->domain_max[0] > x1 + slack ||
+        sc->domain_min[1] < y0 - slack || sc->domain_max[1] > y1 + slack)
+      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE,
+                        "terrain.heightfield '%s' covers x in [%g, %g], y in [%g, %g] m but the "
+                        "domain spans x in [%g, %g], y in [%g, %g] m",
+                        tr->path ? tr->path : "", x0, x1, y0, y1, sc->domain_min[0],
+                        sc->domain_max[0], sc->domain_min[1], sc->domain_max[1]);
+    if (!(tr->zmax > sc->domain_min[2]))
+      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE,
+                        "terrain.heightfield '%s' peaks at %g m, not above domain.min z (%g m): "
+                        "there is no bedrock",
+                        tr->path ? tr->path : "", tr->zmax, sc->domain_min[2]);
+  } else {
+    if (!isfinite(tr->elevation) || !(tr->elevation > sc->domain_min[2]))
+      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE,
+                        "terrain.elevation (%g m) must be above domain.min z (%g m): there would "
+                        "be no bedrock",
+                        tr->elevation, sc->domain_min[2]);
+  }
+
+  if (!(sc->water_table >= sc->domain_min[2] && sc->water_table <= sc->domain_max[2]))
+    return check_fail(
+        ctx, sc, sc->pos_water_table.line, sc->pos_water_table.column, KARST_ERANGE,
+        "water_table.elevation must be within the domain's z range [%g, %g] m, got %g",
+        sc->domain_min[2], sc->domain_max[2], sc->water_table);
+
+  for (int i = 0; i < sc->n_horizons; i++) {
+    const karst_horizon_t *h = &sc->horizons[i];
+    index_path(sub, "horizons", i);
+    if ((err = check_values(ctx, sc, &horizon_schema, (const char *)h, sub, h->line, h->column)))
+      return err;
+  }
+  for (int i = 0; i < sc->n_fractures; i++) {
+    const karst_fracture_t *f = &sc->fractures[i];
+    index_path(sub, "fractures", i);
+    if ((err = check_values(ctx, sc, &fracture_schema, (const char *)f, sub, f->line, f->column)))
+      return err;
+  }
+  if (sc->permeability.root &&
+      (err = check_perm(ctx, sc, sc->permeability.root, "permeability.tree", 0)))
+    return err;
+
+  for (int i = 0; i < sc->n_key_points; i++) {
+    const karst_keypoint_t *kp = &sc->key_points[i];
+    if (!kp->name[0] || !memchr(kp->name, '\0', sizeof kp->name))
+      return check_fail(ctx, sc, kp->line, kp->column, KARST_EINVAL, "key_points[%d] has no name",
+                        i);
+  }
+  {
+    int m = 0, dup, first;
+    const karst_keypoint_t **v = sorted_named(sc, &m);
+    if (!v) return karst_set_error(ctx, KARST_ENOMEM, "out of memory checking key-point names");
+    first_duplicate(sc, v, m, &dup, &first);
+    free(v);
+    if (dup >= 0)
+      return check_fail(ctx, sc, sc->key_points[dup].line, sc->key_points[dup].column, KARST_EINVAL,
+                        "key_points[%d].name '%s' is already used by key_points[%d]; names "
+                        "must be unique",
+                        dup, sc->key_points[dup].name, first);
+  }
+  int springs = 0;
+  for (int i = 0; i < sc->n_key_points; i++) {
+    const karst_keypoint_t *kp = &sc->key_points[i];
+    const double *p = kp->p;
+    if ((int)kp->type < 0 || (int)kp->type > 2)
+      return check_fail(ctx, sc, kp->line, kp->column, KARST_EINVAL,
+                        "key_points[%d].type must be sink, spring or waypoint, got %d", i,
+                        (int)kp->type);
+    springs += kp->type == KARST_KEYPOINT_SPRING;
+    for (int a = 0; a < 3; a++) {
+      if (!isfinite(p[a]))
+        return check_fail(ctx, sc, kp->line, kp->column, KARST_ERANGE,
+                          "key_points[%d] '%s': position[%d] must be finite, got %g", i, kp->name,
+                          a, p[a]);
+    }
+    for (int a = 0; a < 3; a++) {
+      if (p[a] < sc->domain_min[a] || p[a] > sc->domain_max[a])
+        return check_fail(ctx, sc, kp->line, kp->column, KARST_ERANGE,
+                          "key_points[%d] '%s' at (%g, %g, %g) is outside the domain: %c must be "
+                          "within [%g, %g] m, got %g",
+                          i, kp->name, p[0], p[1], p[2], axis[a], sc->domain_min[a],
+                          sc->domain_max[a], p[a]);
+    }
+    double h = karst_terrain_height(&sc->terrain, p[0], p[1]);
+    if (p[2] > h)
+      return check_fail(ctx, sc, kp->line, kp->column, KARST_ERANGE,
+                        "key_points[%d] '%s' at z = %g m is above the terrain (%g m at x = %g, "
+                        "y = %g); key points must lie in the bedrock",
+                        i, kp->name, p[2], h, p[0], p[1]);
+  }
+  if (springs == 0)
+    return check_fail(ctx, sc, sc->pos_key_points.line, sc->pos_key_points.column, KARST_EINVAL,
+                      "no spring among the %d key points: the network needs at least one "
+                      "(key_points: - {type: spring, position: [x, y, z]})",
+                      sc->n_key_points);
+
+  for (int i = 0; i < sc->n_prescribed; i++) {
+    const karst_prescribed_path_t *pp = &sc->prescribed[i];
+    if (pp->a < 0 || pp->a >= sc->n_key_points || pp->b < 0 || pp->b >= sc->n_key_points)
+      return check_fail(ctx, sc, pp->line, pp->column, KARST_EINVAL,
+                        "prescribed_paths[%d] refers to key points %d and %d; there are %d", i,
+                        pp->a, pp->b, sc->n_key_points);
+    if (pp->a == pp->b)
+      return check_fail(ctx, sc, pp->line, pp->column, KARST_EINVAL,
+                        "prescribed_paths[%d] joins key point '%s' to itself", i,
+                        sc->key_points[pp->a].name);
+  }
+
+  if (sc->sampling.feature_radius > sc->sampling.fill_radius)
+    return check_fail(ctx, sc, sc->pos_sampling.line, sc->pos_sampling.column, KARST_ERANGE,
+                      "sampling.feature_radius (%g m) must not exceed sampling.fill_radius (%g m): "
+                      "features are sampled more finely than the fill",
+                      sc->sampling.feature_radius, sc->sampling.fill_radius);
+  return KARST_SUCCESS;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Loading                                                                  */
+/* ------------------------------------------------------------------------ */
+
+/* libyaml's own problem and position (1-based), or the byte offset for encoding errors. */
+static karst_error_t syntax_error(reader_t *r, const yaml_parser_t *p, const unsigned char *buf,
+                                  size_t len) {
+  if (p->error == YAML_MEMORY_ERROR) return no_memory(r);
+  if (p->error == YAML_READER_ERROR) {
+    int line = 1, col = 1;
+    for (size_t i = 0; i < p->problem_offset && i < len; i++) {
+      if (buf[i] == '\n') {
+        line++;
+        col = 1;
+      } else {
+        col++;
+      }
+    }
+    return karst_set_error(r->ctx, KARST_EPARSE, "%s:%d:%d: invalid text: %s (byte 0x%02x)",
+                           r->file, line, col, p->problem ? p->problem : "unreadable",
+                           (unsigned)(p->problem_value & 0xff));
+  }
+  char ctxt[160] = "";
+  if (p->context)
+    snprintf(ctxt, sizeof ctxt, " (%s at line %d, column %d)", p->context,
+             (int)p->context_mark.line + 1, (int)p->context_mark.column + 1);
+  return karst_set_error(r->ctx, KARST_EPARSE, "%s:%d:%d: YAML syntax error: %s%s", r->file,
+                         (int)p->problem_mark.line + 1, (int)p->problem_mark.column + 1,
+                         p->problem ? p->problem : "malformed document", ctxt);
+}
+
+/* libyaml's parse time grows with the square of the flow-collection nesting
+ * depth (minutes at 200 000 levels), so absurd nesting is refused before
+ * parsing. Brackets count where YAML reads them as flow indicators: anywhere
+ * inside a flow collection, and where a value starts outside one; quoted
+ * scalars and comments are skipped. O(file size). */
+static karst_error_t check_nesting(reader_t *r, const unsigned char *buf, size_t len) {
+  int depth = 0, line = 1, col = 1, start = 1;
+  for (size_t i = 0; i < len; i++, col++) {
+    unsigned char c = buf[i];
+    if (c == '\n') {
+      line++;
+      col = 0;
+      start = 1;
+    } else if (c == ' ' || c == '\t' || c == '\r') {
+      /* a value may still start here */
+    } else if (c == '#' &&
+               (i == 0 || buf[i - 1] == ' ' || buf[i - 1] == '\t' || buf[i - 1] == '\n')) {
+      while (i + 1 < len && buf[i + 1] != '\n')
+        i++;
+    } else if ((c == '"' || c == '\'') && start) {
+      for (i++; i < len && buf[i] != c; i++) {
+        if (buf[i] == '\n') {
+          line++;
+          col = 0;
+        } else {
+          col++;
+        }
+        if (c == '"' && buf[i] == '\\' && i + 1 < len && buf[i + 1] != '\n') {
+          i++;
+          col++;
+        }
+      }
+      col++;
+      start = 0;
+    } else if ((c == '[' || c == '{') && (start || depth > 0)) {
+      if (++depth > KARST_SCENARIO_MAX_NESTING)
+        return karst_set_error(r->ctx, KARST_EPARSE,
+                               "%s:%d:%d: lists and maps are nested more than %d levels deep",
+                               r->file, line, col, KARST_SCENARIO_MAX_NESTING);
+      start = 1;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      depth--;
+      start = 0;
+    } else {
+      start = c == ':' || c == ',' || c == '-' || c == '?';
+    }
+  }
+  return KARST_SUCCESS;
+}
+
+static karst_error_t read_file(karst_ctx_t *ctx, const char *path, unsigned char **out,
+                               size_t *len) {
+  karst_error_t err = KARST_SUCCESS;
+  unsigned char *buf = NULL;
+  size_t n = 0, cap = 0;
+  FILE *fp = fopen(path, "rb");
+  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  for (;;) {
+    if (n == cap) {
+      size_t ncap = cap ? 2 * cap : 65536;
+      unsigned char *nb = realloc(buf, ncap);
+      if (!nb) {
+        err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+        goto cleanup;
+      }
+      buf = nb;
+      cap = ncap;
+    }
+    size_t got = fread(buf + n, 1, cap - n, fp);
+    n += got;
+    if (got == 0) break;
+  }
+  if (ferror(fp)) {
+    err = karst_set_error(ctx, KARST_EIO, "%s: cannot read: %s", path, strerror(errno));
+    goto cleanup;
+  }
+  *out = buf;
+  *len = n;
+  buf = NULL;
+cleanup:
+  free(buf);
+  fclose(fp);
+  return err;
+}
+
+/**
+ * Read and validate a YAML scenario (format: docs/scenario.md).
+ * Keys absent from the file keep the values @p sc had from
+ * karst_scenario_init(); water_table defaults to the domain bottom and a
+ * horizon's origin to the domain centre; unnamed key points are named sink1,
+ * spring1, waypoint1 ... Then karst_scenario_check() is applied.
+ * @param ctx  context; on failure ctx->errmsg is "FILE:LINE:COLUMN: message"
+ *             naming the field path (e.g. fractures[2].dip) and the value
+ * @param path scenario file; a heightfield is resolved relative to it
+ * @param sc   initialised scenario; replaced on success, untouched on failure
+ * @return KARST_SUCCESS, KARST_EIO (unreadable file), KARST_EPARSE (YAML
+ *         syntax, empty file), KARST_EINVAL (unknown key, wrong type, bad
+ *         enum, broken rule), KARST_ERANGE (value out of range, non-finite),
+ *         KARST_ENOTFOUND (prescribed path naming an unknown key point) or
+ *         KARST_ENOMEM.
+ * Time complexity: O(file size + heightfield size + n_key_points^2).
+ */
 karst_error_t karst_scenario_load(karst_ctx_t *ctx, const char *path, karst_scenario_t *sc) {
-  (void)sc;
-  return karst_set_error(ctx, KARST_ENOTIMPL, "%s: the scenario reader is not available yet", path);
+  karst_error_t err = KARST_SUCCESS;
+  karst_scenario_t tmp;
+  yaml_parser_t parser;
+  yaml_document_t doc, doc2;
+  int parser_ok = 0, doc_ok = 0;
+  unsigned char *buf = NULL;
+  size_t len = 0;
+  reader_t r = {ctx, path, &doc, &tmp, 0, NULL};
+
+  karst_scenario_init(&tmp);
+  if (!path || !sc) {
+    err = karst_set_error(ctx, KARST_EINVAL, "karst_scenario_load: NULL argument");
+    goto cleanup;
+  }
+  if ((err = read_file(ctx, path, &buf, &len))) goto cleanup;
+  if (!(tmp.path = strdup(path))) {
+    err = no_memory(&r);
+    goto cleanup;
+  }
+  if (!yaml_parser_initialize(&parser)) {
+    err = no_memory(&r);
+    goto cleanup;
+  }
+  parser_ok = 1;
+  if ((err = check_nesting(&r, buf, len))) goto cleanup;
+  yaml_parser_set_input_string(&parser, buf, len);
+  if (!yaml_parser_load(&parser, &doc)) {
+    err = syntax_error(&r, &parser, buf, len);
+    goto cleanup;
+  }
+  doc_ok = 1;
+  yaml_node_t *root = yaml_document_get_root_node(&doc);
+  if (!root) {
+    err = karst_set_error(ctx, KARST_EPARSE,
+                          "%s:1:1: the scenario file is empty (expected a map with keys such as "
+                          "domain, terrain and key_points; see docs/scenario.md)",
+                          path);
+    goto cleanup;
+  }
+  /* A second document would be silently ignored: refuse it. */
+  if (!yaml_parser_load(&parser, &doc2)) {
+    err = syntax_error(&r, &parser, buf, len);
+    goto cleanup;
+  }
+  yaml_node_t *root2 = yaml_document_get_root_node(&doc2);
+  if (root2) {
+    err = karst_set_error(ctx, KARST_EPARSE,
+                          "%s:%d:%d: a scenario file holds one YAML document; a second one "
+                          "starts here",
+                          path, (int)doc2.start_mark.line + 1, (int)doc2.start_mark.column + 1);
+  }
+  yaml_document_delete(&doc2);
+  if (err) goto cleanup;
+  if (root->type != YAML_MAPPING_NODE) {
+    char d[80];
+    err = fail_at(&r, root, KARST_EINVAL,
+                  "the scenario must be a map with keys such as domain, terrain and key_points, "
+                  "got %s",
+                  describe(root, d, sizeof d));
+    goto cleanup;
+  }
+  if ((err = walk_map(&r, root, &top_schema, &tmp, "", &top_schema))) goto cleanup;
+  if ((err = finish(&r))) goto cleanup;
+  if ((err = karst_scenario_check(ctx, &tmp))) goto cleanup;
+  karst_scenario_destroy(sc);
+  *sc = tmp;
+  karst_scenario_init(&tmp); /* ownership moved to sc */
+
+cleanup:
+  if (doc_ok) yaml_document_delete(&doc);
+  if (parser_ok) yaml_parser_delete(&parser);
+  free(buf);
+  karst_scenario_destroy(&tmp);
+  return err;
 }

@@ -1,0 +1,197 @@
+/* Benchmark (not a test): per-stage wall times and peak memory of
+ * karst_generate on the shipped presets and on a 1.5-million-sample domain
+ * with k = 100, and the measurement behind the choice of method for the
+ * key-point distance matrix (multi-target Dijkstra rows vs A* pairs).
+ * Usage: bench_generate [--threads N] [--skip-large] [--presets-only] */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "generate/generate_internal.h"
+#include "karst.h"
+
+static void print_stats(const char *what, const karst_generate_stats_t *st, double wall) {
+  printf("%-22s samples %8lld  edges %9lld  keys %3lld  paths %5lld  nodes %6lld  length %8.0f m\n",
+         what, (long long)st->n_samples, (long long)st->n_graph_edges, (long long)st->n_key_points,
+         (long long)st->n_skeleton_paths, (long long)st->n_nodes, st->total_length);
+  printf("%-22s", "");
+  for (int s = 0; s < KARST_STAGE_COUNT; s++)
+    printf(" %s %.3f s", karst_stage_name(s), st->stage_seconds[s]);
+  double to_skel = 0;
+  for (int s = KARST_STAGE_SAMPLING; s <= KARST_STAGE_SKELETON; s++)
+    to_skel += st->stage_seconds[s];
+  printf("\n%-22s sampling-to-skeleton %.3f s, total %.3f s, peak RSS so far %.0f MiB\n", "",
+         to_skel, wall, st->peak_bytes / 1048576.0);
+}
+
+/* Key-point distance matrix on a jittered 3-D lattice with 26-neighbour edges and costs
+ * length × (1 + u), u uniform in [0, 1] (so the A* bound of 1 per metre is as loose as in a real
+ * cost field, where c varies between w0 and several times w0). */
+static void bench_keypoint_methods(int nx, int ny, int nz, int K) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_rng_t r;
+  karst_rng_init(&r, 1, 0);
+  karst_int_t n = (karst_int_t)nx * ny * nz;
+  double *xyz = malloc((size_t)n * 3 * sizeof *xyz);
+  for (karst_int_t i = 0; i < n; i++) {
+    karst_int_t x = i % nx, y = (i / nx) % ny, z = i / ((karst_int_t)nx * ny);
+    xyz[3 * i] = 5.0 * (x + 0.3 * (2 * karst_rng_uniform(&r) - 1));
+    xyz[3 * i + 1] = 5.0 * (y + 0.3 * (2 * karst_rng_uniform(&r) - 1));
+    xyz[3 * i + 2] = 5.0 * (z + 0.3 * (2 * karst_rng_uniform(&r) - 1));
+  }
+  karst_graph_t g;
+  memset(&g, 0, sizeof g);
+  g.n = n;
+  g.xyz = xyz;
+  g.offsets = malloc((size_t)(n + 1) * sizeof *g.offsets);
+  g.adj = malloc((size_t)n * 26 * sizeof *g.adj);
+  g.cost = malloc((size_t)n * 26 * sizeof *g.cost);
+  karst_int_t a = 0;
+  for (karst_int_t i = 0; i < n; i++) {
+    g.offsets[i] = a;
+    karst_int_t x = i % nx, y = (i / nx) % ny, z = i / ((karst_int_t)nx * ny);
+    for (int dz = -1; dz <= 1; dz++)
+      for (int dy = -1; dy <= 1; dy++)
+        for (int dx = -1; dx <= 1; dx++) {
+          if (!dx && !dy && !dz) continue;
+          if (x + dx < 0 || x + dx >= nx || y + dy < 0 || y + dy >= ny || z + dz < 0 ||
+              z + dz >= nz)
+            continue;
+          karst_int_t j = i + dx + (karst_int_t)dy * nx + (karst_int_t)dz * nx * ny;
+          double ex = xyz[3 * j] - xyz[3 * i], ey = xyz[3 * j + 1] - xyz[3 * i + 1],
+                 ez = xyz[3 * j + 2] - xyz[3 * i + 2];
+          /* symmetric perturbation: hash of the unordered pair */
+          uint64_t lo = i < j ? (uint64_t)i : (uint64_t)j, hi = i < j ? (uint64_t)j : (uint64_t)i;
+          karst_rng_t h;
+          karst_rng_init(&h, lo, hi);
+          g.adj[a] = j;
+          g.cost[a] = sqrt(ex * ex + ey * ey + ez * ez) * (1 + karst_rng_uniform(&h));
+          a++;
+        }
+  }
+  g.offsets[n] = a;
+  g.n_arcs = a;
+  karst_int_t *keys = malloc((size_t)K * sizeof *keys);
+  for (int k = 0; k < K; k++)
+    keys[k] = (karst_int_t)karst_rng_below(&r, (uint64_t)n);
+  double *d1 = malloc((size_t)K * K * sizeof *d1), *d2 = malloc((size_t)K * K * sizeof *d2);
+  ctx.nthreads = 1;
+  double t0 = karst_i_now();
+  karst_paths_keypoint_distances(&ctx, &g, K, keys, 1.0, KARST_PATHS_DIJKSTRA_MULTI, d1);
+  double t1 = karst_i_now();
+  karst_paths_keypoint_distances(&ctx, &g, K, keys, 1.0, KARST_PATHS_ASTAR_PAIRS, d2);
+  double t2 = karst_i_now();
+  ctx.nthreads = 2;
+  karst_paths_keypoint_distances(&ctx, &g, K, keys, 1.0, KARST_PATHS_DIJKSTRA_MULTI, d1);
+  double t3 = karst_i_now();
+  int32_t *pred = malloc((size_t)(K - 1) * (size_t)n * sizeof *pred);
+  karst_paths_keypoint_trees(&ctx, &g, K, keys, d1, pred);
+  double t4 = karst_i_now();
+  free(pred);
+  double maxdiff = 0;
+  for (int i = 0; i < K * K; i++)
+    if (isfinite(d1[i])) maxdiff = fmax(maxdiff, fabs(d1[i] - d2[i]) / fmax(1, d1[i]));
+  printf("key-point distances, %lld vertices, %lld arcs, %d key points (1 thread): Dijkstra rows "
+         "%.3f s, A* pairs %.3f s (x%.1f); on 2 threads: Dijkstra rows %.3f s, rows with trees "
+         "%.3f s; max rel. diff %.1e\n",
+         (long long)n, (long long)g.n_arcs, K, t1 - t0, t2 - t1, (t2 - t1) / (t1 - t0), t3 - t2,
+         t4 - t3, maxdiff);
+  free(d1), free(d2), free(keys), free(xyz), free(g.offsets), free(g.adj), free(g.cost);
+}
+
+static void run_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc, const char *what) {
+  karst_network_t net;
+  karst_network_init(&net);
+  karst_generate_stats_t st;
+  double t0 = karst_i_now();
+  karst_error_t err = karst_generate(ctx, sc, sc->seed, 0, &net, NULL, &st);
+  double wall = karst_i_now() - t0;
+  if (err) {
+    printf("%-22s not run: %s\n", what, ctx->errmsg[0] ? ctx->errmsg : karst_strerror(err));
+  } else {
+    print_stats(what, &st, wall);
+    /* Table 2 of Paris et al. 2021: the paper's presets and the 34-cave observed ranges. */
+    karst_metrics_t m;
+    karst_metrics_options_t mo;
+    karst_metrics_options_init(&mo);
+    if (karst_metrics_compute(ctx, &net, &mo, &m) == KARST_SUCCESS)
+      printf("%-22s Table 2 metrics: mean length %.0f m [8, 331], orientation entropy %.2f [0.8, "
+             "1.0], mean degree %.2f [1.8, 2.6], degree correlation %.2f [-0.6, -0.2], ASPL %.1f "
+             "[2.3, 55.7], CPD %.2f [0.0, 0.6]\n",
+             "", m.mean_length, m.orientation_entropy, m.mean_degree, m.correlation_vertex_degree,
+             m.aspl, m.cpd);
+  }
+  karst_network_destroy(&net);
+}
+
+/* A 1.5-million-sample block with k = 100 (the size on which the most complete published
+ * generator takes 417 s single-threaded): 1000 × 1000 × 300 m with fill radius 5.2 m
+ * (≈ V / (1.41 r³) samples), 20 key points. */
+static void large_scenario(karst_scenario_t *sc) {
+  karst_scenario_init(sc);
+  sc->name = strdup("large_1p5M");
+  sc->domain_max[0] = sc->domain_max[1] = 1000;
+  sc->domain_max[2] = 300;
+  sc->terrain.elevation = 300;
+  sc->water_table = 80;
+  sc->sampling.fill_radius = 5.2;
+  sc->sampling.feature_radius = 5.2;
+  sc->sampling.k = 100;
+  sc->gamma = 2.0;
+  sc->tortuosity = 0.2;
+  sc->amplification.steps = 1;
+  sc->amplification.points = 20;
+  sc->amplification.dead_end_fraction = 0.5;
+  sc->n_key_points = 20;
+  sc->key_points = calloc(20, sizeof *sc->key_points);
+  karst_rng_t r;
+  karst_rng_init(&r, 1500000, 0);
+  for (int i = 0; i < 20; i++) {
+    karst_keypoint_t *k = &sc->key_points[i];
+    k->type =
+        i == 0 ? KARST_KEYPOINT_SPRING : (i < 12 ? KARST_KEYPOINT_SINK : KARST_KEYPOINT_WAYPOINT);
+    snprintf(k->name, sizeof k->name, "k%d", i);
+    k->p[0] = 50 + 900 * karst_rng_uniform(&r);
+    k->p[1] = 50 + 900 * karst_rng_uniform(&r);
+    k->p[2] = i == 0 ? 80 : (i < 12 ? 295 : 100 + 150 * karst_rng_uniform(&r));
+  }
+}
+
+int main(int argc, char **argv) {
+  int threads = 2, skip_large = 0, presets_only = 0;
+  for (int i = 1; i < argc; i++) {
+    if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) threads = atoi(argv[++i]);
+    if (strcmp(argv[i], "--skip-large") == 0) skip_large = 1;
+    if (strcmp(argv[i], "--presets-only") == 0) presets_only = skip_large = 1;
+  }
+  printf("bench_generate: %d thread(s)\n", threads);
+  if (!presets_only)
+    bench_keypoint_methods(60, 60, 20, 47); /* 72 000 vertices: the presets' size */
+  const char *presets[] = {"branchwork", "looping_cave", "rectilinear_maze", "superimposed"};
+  for (int p = 0; p < 4; p++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/datasets/scenarios/%s.yaml", KARST_SOURCE_DIR, presets[p]);
+    karst_ctx_t ctx;
+    karst_ctx_init(&ctx);
+    ctx.nthreads = threads;
+    karst_scenario_t sc;
+    karst_scenario_init(&sc);
+    if (karst_scenario_load(&ctx, path, &sc))
+      printf("%-22s not run: %s\n", presets[p], ctx.errmsg);
+    else
+      run_scenario(&ctx, &sc, presets[p]);
+    karst_scenario_destroy(&sc);
+  }
+  if (!skip_large) {
+    karst_ctx_t ctx;
+    karst_ctx_init(&ctx);
+    ctx.nthreads = threads;
+    karst_scenario_t sc;
+    large_scenario(&sc);
+    run_scenario(&ctx, &sc, "1.5M samples, k=100");
+    karst_scenario_destroy(&sc);
+  }
+  return 0;
+}

@@ -1,0 +1,57 @@
+/**
+ * @file amplification.h
+ * @brief Network amplification of Paris et al. 2021, §5.2: new dead-end and
+ *        interior points connected to the skeleton by least-cost paths, then
+ *        stochastic midpoint displacement controlled by the tortuosity θ.
+ */
+#ifndef KARST_AMPLIFICATION_H
+#define KARST_AMPLIFICATION_H
+
+#include "karst/common.h"
+#include "karst/graph.h"
+#include "karst/network.h"
+#include "karst/scenario.h"
+#include "karst/skeleton.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Constants of the amplification stage; karst_amplification_options_init gives the documented
+ * defaults. */
+typedef struct karst_amplification_options {
+  double displacement_at_theta0; /**< max midpoint displacement (m) for θ = 0: 0.05 ("a few
+                                    centimetres") */
+  double displacement_at_theta1; /**< max midpoint displacement (m) for θ = 1: 4.0 (§5.2) */
+  double max_displacement_ratio; /**< displacement ≤ this × segment length, so pieces never fold
+                                    back: 0.5 */
+  double min_segment;            /**< segments shorter than 2 × this (m) are not subdivided: 1.0 */
+  int max_levels; /**< recursion depth of the subdivision: 3 (an edge becomes ≤ 8 pieces) */
+  int max_tries;  /**< rejection-sampling attempts for a point in the bedrock: 32 */
+  double loop_separation; /**< an interior point's second path must end farther than
+                               this × |p − first end| from the first end: 1.0 */
+} karst_amplification_options_t;
+
+void karst_amplification_options_init(karst_amplification_options_t *opt);
+
+/** Maximum first-level midpoint displacement (m) for tortuosity θ ∈ [0, 1]. */
+double karst_amplification_max_displacement(const karst_amplification_options_t *opt, double theta);
+
+karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                         const karst_graph_t *g, karst_rng_t *rng,
+                                         const karst_amplification_options_t *opt,
+                                         karst_skeleton_t *sk, karst_int_t *n_points,
+                                         karst_int_t *n_paths);
+
+karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                           double theta, karst_rng_t *rng,
+                                           const karst_amplification_options_t *opt,
+                                           const karst_network_t *in, karst_network_t *out);
+
+/** Non-zero when @p p is inside the domain box and strictly below the terrain. */
+int karst_amplification_in_bedrock(const karst_scenario_t *sc, const double p[3]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,37 @@
+/**
+ * @file classification.h
+ * @brief Tunnel types and radii of Paris et al. 2021, §5.3 and Fig. 11:
+ *        each segment labelled from its verticality, its position relative to
+ *        the water table, its depth below the terrain and the resistance of
+ *        the bedrock (decision table in docs/generation.md).
+ */
+#ifndef KARST_CLASSIFICATION_H
+#define KARST_CLASSIFICATION_H
+
+#include "karst/common.h"
+#include "karst/network.h"
+#include "karst/scenario.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Water-table zone of a point: above the band, within it, below it. */
+typedef enum {
+  KARST_ZONE_VADOSE = 0,
+  KARST_ZONE_WATER_TABLE = 1,
+  KARST_ZONE_PHREATIC = 2
+} karst_zone_t;
+
+karst_zone_t karst_classification_zone(const karst_scenario_t *sc, double z);
+
+karst_tunnel_type_t karst_classification_type(const karst_scenario_t *sc, const double a[3],
+                                              const double b[3]);
+
+karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                       karst_rng_t *rng, karst_network_t *net);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,389 @@
+/* Network amplification (Paris et al. 2021, §5.2): ramification by new
+ * dead-end and interior points, then stochastic midpoint displacement. */
+#include "karst/amplification.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "karst/paths.h"
+
+/** Fill @p opt with the documented defaults (see the field comments). O(1). */
+void karst_amplification_options_init(karst_amplification_options_t *opt) {
+  opt->displacement_at_theta0 = 0.05;
+  opt->displacement_at_theta1 = 4.0;
+  opt->max_displacement_ratio = 0.5;
+  opt->min_segment = 1.0;
+  opt->max_levels = 3;
+  opt->max_tries = 32;
+  opt->loop_separation = 1.0;
+}
+
+/**
+ * Tortuosity θ → maximum first-level midpoint displacement, linear between
+ * the two ends Paris et al. 2021, §5.2 give: "from a few centimeters (θ = 0)
+ * to 4 meters (θ = 1)": A(θ) = A0 + θ (A1 − A0), A0 = 0.05 m, A1 = 4 m by
+ * default. θ is clamped to [0, 1]. O(1).
+ */
+double karst_amplification_max_displacement(const karst_amplification_options_t *opt,
+                                            double theta) {
+  double t = theta < 0 ? 0 : (theta > 1 ? 1 : theta);
+  return opt->displacement_at_theta0 +
+         t * (opt->displacement_at_theta1 - opt->displacement_at_theta0);
+}
+
+/**
+ * Inside the bedrock: within the domain box and strictly below the terrain
+ * (the same definition the sampling stage uses). O(1).
+ */
+int karst_amplification_in_bedrock(const karst_scenario_t *sc, const double p[3]) {
+  for (int k = 0; k < 3; k++)
+    if (!(p[k] >= sc->domain_min[k] && p[k] <= sc->domain_max[k])) return 0;
+  return p[2] < karst_terrain_height(&sc->terrain, p[0], p[1]);
+}
+
+static double dist3(const double *a, const double *b) {
+  double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+  return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/**
+ * Ramification (Paris et al. 2021, §5.2): sc->amplification.steps steps; in
+ * each, sc->amplification.points points are drawn uniformly in the bounding
+ * box of the current network (clipped to the domain) and kept only inside
+ * the bedrock (rejection, at most opt->max_tries draws per point; a point
+ * that finds no bedrock is dropped). Each point is snapped to the nearest
+ * graph vertex that is not yet on the network (the sample cloud is a Poisson
+ * set, so the snap moves it by at most about the fill radius). The first
+ * round(dead_end_fraction × points) points of a step are dead ends: one
+ * least-cost path to the nearest network vertex (a Dijkstra from the point
+ * that stops at the first network vertex it settles — the same as a
+ * multi-source Dijkstra from the network, since costs are symmetric). The
+ * others are interior points: a second least-cost path, vertex-disjoint from
+ * the first, to a network vertex farther than opt->loop_separation ×
+ * |p − first end| from the first end, so the two paths close a loop through
+ * distinct parts of the network (when no such path exists the point stays a
+ * dead end). Points connect in order, each to the network grown so far.
+ * New edges get amplification_step = s (1-based) and a new branch id.
+ *
+ * @param sc       bedrock (domain, terrain) and amplification parameters.
+ * @param g        the sample graph the network lives on.
+ * @param rng      the amplification stream.
+ * @param opt      constants (NULL: defaults).
+ * @param sk       the network to grow.
+ * @param n_points receives the number of points connected (may be NULL).
+ * @param n_paths  receives the number of paths added (may be NULL).
+ * @return KARST_SUCCESS, KARST_EINVAL (bad parameters), KARST_ENOMEM, KARST_EINTERRUPTED.
+ * Time complexity: O(steps × points × (n + local Dijkstra)).
+ */
+karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                         const karst_graph_t *g, karst_rng_t *rng,
+                                         const karst_amplification_options_t *opt,
+                                         karst_skeleton_t *sk, karst_int_t *n_points,
+                                         karst_int_t *n_paths) {
+  karst_amplification_options_t defaults;
+  if (!opt) karst_amplification_options_init(&defaults), opt = &defaults;
+  const karst_amplification_t *am = &sc->amplification;
+  karst_error_t err = KARST_SUCCESS;
+  karst_search_t *s = NULL;
+  unsigned char *in_net = NULL, *blocked = NULL;
+  double *pts = NULL;
+  karst_int_t *snap = NULL;
+  double *snap_d = NULL;
+  karst_int_t *cleared = NULL;
+  karst_path_t p1, p2;
+  karst_path_init(&p1);
+  karst_path_init(&p2);
+  karst_int_t added_points = 0, added_paths = 0;
+  if (am->steps < 0 || am->points < 0 ||
+      !(am->dead_end_fraction >= 0 && am->dead_end_fraction <= 1))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "amplification: steps (%d) and points (%d) must be >= 0 and "
+                           "dead_end_fraction (%g) within [0, 1]",
+                           am->steps, am->points, am->dead_end_fraction);
+  if (am->steps == 0 || am->points == 0 || sk->net.n_nodes == 0) goto cleanup;
+  if ((err = karst_search_create(ctx, g, &s))) goto cleanup;
+  size_t n = (size_t)(g->n > 0 ? g->n : 1);
+  in_net = calloc(n, 1);
+  blocked = calloc(n, 1);
+  pts = malloc((size_t)am->points * 3 * sizeof *pts);
+  snap = malloc((size_t)am->points * sizeof *snap);
+  snap_d = malloc((size_t)am->points * sizeof *snap_d);
+  if (!in_net || !blocked || !pts || !snap || !snap_d) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
+    goto cleanup;
+  }
+  for (karst_int_t v = 0; v < g->n; v++)
+    in_net[v] = sk->node_of_vertex[v] >= 0;
+  const karst_int_t n_dead = (karst_int_t)llround(am->dead_end_fraction * am->points);
+
+  for (int step = 1; step <= am->steps; step++) {
+    /* Bounding box of the current network, clipped to the domain. */
+    double lo[3], hi[3];
+    const karst_network_t *net = &sk->net;
+    for (int k = 0; k < 3; k++)
+      lo[k] = hi[k] = net->xyz[k];
+    for (karst_int_t v = 1; v < net->n_nodes; v++)
+      for (int k = 0; k < 3; k++) {
+        lo[k] = fmin(lo[k], net->xyz[3 * v + k]);
+        hi[k] = fmax(hi[k], net->xyz[3 * v + k]);
+      }
+    for (int k = 0; k < 3; k++) {
+      lo[k] = fmax(lo[k], sc->domain_min[k]);
+      hi[k] = fmin(hi[k], sc->domain_max[k]);
+    }
+    /* Draw the step's points (all draws first, so the stream does not depend on the graph). */
+    int n_pts = 0;
+    for (int i = 0; i < am->points; i++) {
+      for (int t = 0; t < opt->max_tries; t++) {
+        double p[3];
+        for (int k = 0; k < 3; k++)
+          p[k] = karst_rng_uniform_range(rng, lo[k], hi[k] > lo[k] ? hi[k] : lo[k]);
+        if (hi[2] <= lo[2]) p[2] = lo[2];
+        if (karst_amplification_in_bedrock(sc, p)) {
+          memcpy(&pts[3 * n_pts], p, sizeof p);
+          n_pts++;
+          break;
+        }
+      }
+    }
+    /* Snap every point to its nearest vertex off the network: one pass over the graph. */
+    for (int i = 0; i < n_pts; i++)
+      snap[i] = -1, snap_d[i] = INFINITY;
+    for (karst_int_t v = 0; v < g->n; v++) {
+      if (in_net[v]) continue;
+      for (int i = 0; i < n_pts; i++) {
+        double d = dist3(&g->xyz[3 * v], &pts[3 * i]);
+        if (d < snap_d[i]) snap_d[i] = d, snap[i] = v;
+      }
+    }
+    for (int i = 0; i < n_pts; i++) {
+      if (karst_interrupted(ctx)) {
+        err = karst_set_error(ctx, KARST_EINTERRUPTED, "amplification interrupted");
+        goto cleanup;
+      }
+      karst_int_t pv = snap[i];
+      if (pv < 0 || in_net[pv]) continue; /* no free vertex, or taken by an earlier point */
+      karst_int_t v1 = -1, v2 = -1;
+      if ((err = karst_paths_dijkstra(ctx, s, 1, &pv, NULL, in_net, 1, &v1))) goto cleanup;
+      if (v1 < 0) {
+        karst_log(ctx, KARST_LOG_DEBUG,
+                  "amplification: point at vertex %lld cannot reach the network", (long long)pv);
+        continue;
+      }
+      if ((err = karst_search_path_to(ctx, s, v1, &p1))) goto cleanup;
+      p2.n = 0;
+      if (i >= n_dead) {
+        /* Interior point: a second path, disjoint from the first, to a distinct part. */
+        double sep = opt->loop_separation * dist3(&g->xyz[3 * pv], &g->xyz[3 * v1]);
+        karst_int_t n_cleared = 0;
+        free(cleared);
+        cleared = malloc((size_t)(sk->net.n_nodes > 0 ? sk->net.n_nodes : 1) * sizeof *cleared);
+        if (!cleared) {
+          err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
+          goto cleanup;
+        }
+        for (karst_int_t u = 0; u < sk->net.n_nodes; u++)
+          if (dist3(&sk->net.xyz[3 * u], &g->xyz[3 * v1]) <= sep) {
+            karst_int_t w = sk->vertex_of_node[u];
+            in_net[w] = 0;
+            cleared[n_cleared++] = w;
+          }
+        for (karst_int_t k = 1; k < p1.n; k++)
+          blocked[p1.v[k]] = 1;
+        err = karst_paths_dijkstra(ctx, s, 1, &pv, blocked, in_net, 1, &v2);
+        for (karst_int_t k = 1; k < p1.n; k++)
+          blocked[p1.v[k]] = 0;
+        for (karst_int_t k = 0; k < n_cleared; k++)
+          in_net[cleared[k]] = 1;
+        if (err) goto cleanup;
+        if (v2 >= 0 && (err = karst_search_path_to(ctx, s, v2, &p2))) goto cleanup;
+      }
+      if ((err = karst_skeleton_add_path(ctx, sk, g, &p1, step))) goto cleanup;
+      added_paths++;
+      if (p2.n > 0) {
+        if ((err = karst_skeleton_add_path(ctx, sk, g, &p2, step))) goto cleanup;
+        added_paths++;
+      }
+      if ((err = karst_skeleton_mark_node(ctx, sk, g, pv, KARST_NODE_AMPLIFICATION))) goto cleanup;
+      for (karst_int_t k = 0; k < p1.n; k++)
+        in_net[p1.v[k]] = 1;
+      for (karst_int_t k = 0; k < p2.n; k++)
+        in_net[p2.v[k]] = 1;
+      added_points++;
+    }
+  }
+cleanup:
+  if (n_points) *n_points = added_points;
+  if (n_paths) *n_paths = added_paths;
+  karst_path_destroy(&p1);
+  karst_path_destroy(&p2);
+  karst_search_free(s);
+  free(in_net);
+  free(blocked);
+  free(pts);
+  free(snap);
+  free(snap_d);
+  free(cleared);
+  return err;
+}
+
+/* A uniformly random unit vector orthogonal to unit vector t (rejection on degenerate draws). */
+static void random_orthogonal(karst_rng_t *rng, const double t[3], double u[3]) {
+  for (;;) {
+    karst_rng_unit_vector(rng, u);
+    double d = u[0] * t[0] + u[1] * t[1] + u[2] * t[2];
+    for (int k = 0; k < 3; k++)
+      u[k] -= d * t[k];
+    double l = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    if (l > 1e-3) { /* the unit draw was not (nearly) parallel to t */
+      for (int k = 0; k < 3; k++)
+        u[k] /= l;
+      return;
+    }
+  }
+}
+
+typedef struct {
+  const karst_scenario_t *sc;
+  const karst_amplification_options_t *opt;
+  karst_rng_t *rng;
+  double *pts; /* growing list of intermediate points of the current edge */
+  karst_int_t n, cap;
+} subdiv_t;
+
+static int push_point(subdiv_t *sd, const double p[3]) {
+  if (sd->n == sd->cap) {
+    karst_int_t cap = sd->cap ? 2 * sd->cap : 16;
+    double *np = realloc(sd->pts, (size_t)cap * 3 * sizeof *np);
+    if (!np) return -1;
+    sd->pts = np;
+    sd->cap = cap;
+  }
+  memcpy(&sd->pts[3 * sd->n++], p, 3 * sizeof *p);
+  return 0;
+}
+
+/* Midpoint displacement of segment a–b: emits the interior points in order. */
+static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double amp, int level) {
+  double len = dist3(a, b);
+  if (level >= sd->opt->max_levels || len < 2 * sd->opt->min_segment) return 0;
+  double t[3] = {(b[0] - a[0]) / len, (b[1] - a[1]) / len, (b[2] - a[2]) / len};
+  double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+  double A = fmin(amp, sd->opt->max_displacement_ratio * len);
+  double q[3];
+  memcpy(q, m, sizeof q);
+  for (int tries = 0; tries < sd->opt->max_tries; tries++) {
+    double u[3];
+    random_orthogonal(sd->rng, t, u);
+    double r = A * karst_rng_uniform(sd->rng);
+    double c[3] = {m[0] + r * u[0], m[1] + r * u[1], m[2] + r * u[2]};
+    if (karst_amplification_in_bedrock(sd->sc, c)) {
+      memcpy(q, c, sizeof q);
+      break;
+    }
+  }
+  if (subdivide(sd, a, q, 0.5 * amp, level + 1)) return -1;
+  if (push_point(sd, q)) return -1;
+  return subdivide(sd, q, b, 0.5 * amp, level + 1);
+}
+
+/**
+ * Stochastic midpoint displacement (Paris et al. 2021, §5.2; Fournier,
+ * Fussell & Carpenter 1982): every edge a–b longer than 2 × min_segment is
+ * split at its midpoint, displaced perpendicular to a–b in a uniformly random
+ * direction by a uniform distance in [0, A], A = min(A(θ) / 2^level,
+ * max_displacement_ratio × length), A(θ) from
+ * karst_amplification_max_displacement; both halves are refined again up to
+ * max_levels. A displacement that would put the point outside the domain or
+ * above the terrain is rejected and redrawn (max_tries times; then the
+ * midpoint stays on the segment), so no node leaves the bedrock. Original
+ * nodes keep their position and attributes; new nodes get zero attributes
+ * (kind interior); each piece copies its edge's attributes, except "cost",
+ * which is shared among the pieces in proportion to their length.
+ * Edges are processed in index order with @p rng, so the output is
+ * deterministic.
+ *
+ * @param in   the network to refine (unchanged).
+ * @param out  initialised by the caller; receives the refined network.
+ * @return KARST_SUCCESS, KARST_EINVAL (θ outside [0, 1]), KARST_ENOMEM.
+ * Time complexity: O(edges × 2^max_levels).
+ */
+karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                           double theta, karst_rng_t *rng,
+                                           const karst_amplification_options_t *opt,
+                                           const karst_network_t *in, karst_network_t *out) {
+  karst_amplification_options_t defaults;
+  if (!opt) karst_amplification_options_init(&defaults), opt = &defaults;
+  if (!(theta >= 0 && theta <= 1))
+    return karst_set_error(ctx, KARST_EINVAL, "tortuosity must be within [0, 1], got %g", theta);
+  karst_error_t err = KARST_SUCCESS;
+  subdiv_t sd = {sc, opt, rng, NULL, 0, 0};
+  const double amp = karst_amplification_max_displacement(opt, theta);
+  karst_network_t tmp;
+  karst_network_init(&tmp);
+  for (karst_int_t v = 0; v < in->n_nodes; v++)
+    if (karst_network_add_node(&tmp, in->xyz[3 * v], in->xyz[3 * v + 1], in->xyz[3 * v + 2], NULL))
+      goto nomem;
+  for (int i = 0; i < in->n_node_attrs; i++) {
+    const karst_attr_t *a = &in->node_attrs[i];
+    double *d;
+    if (karst_network_attr_add(&tmp, KARST_ATTR_NODE, a->name, a->ncomp, a->integer, &d))
+      goto nomem;
+    memcpy(d, a->data, (size_t)in->n_nodes * a->ncomp * sizeof *d);
+  }
+  if (in->node_labels)
+    for (karst_int_t v = 0; v < in->n_nodes; v++)
+      if (in->node_labels[v] && karst_network_set_label(&tmp, v, in->node_labels[v])) goto nomem;
+  for (int i = 0; i < in->n_edge_attrs; i++) {
+    const karst_attr_t *a = &in->edge_attrs[i];
+    double *d;
+    if (karst_network_attr_add(&tmp, KARST_ATTR_EDGE, a->name, a->ncomp, a->integer, &d))
+      goto nomem;
+  }
+  for (karst_int_t e = 0; e < in->n_edges; e++) {
+    karst_int_t u = in->edges[2 * e], w = in->edges[2 * e + 1];
+    const double *a = &in->xyz[3 * u], *b = &in->xyz[3 * w];
+    sd.n = 0;
+    if (subdivide(&sd, a, b, amp, 0)) goto nomem;
+    /* Lengths of the pieces, for sharing the cost. */
+    double total = 0;
+    const double *prev = a;
+    for (karst_int_t k = 0; k <= sd.n; k++) {
+      const double *next = k < sd.n ? &sd.pts[3 * k] : b;
+      total += dist3(prev, next);
+      prev = next;
+    }
+    karst_int_t pn = u;
+    prev = a;
+    for (karst_int_t k = 0; k <= sd.n; k++) {
+      karst_int_t nn = w;
+      const double *next = k < sd.n ? &sd.pts[3 * k] : b;
+      if (k < sd.n && karst_network_add_node(&tmp, next[0], next[1], next[2], &nn)) goto nomem;
+      karst_int_t ne;
+      if (karst_network_add_edge(&tmp, pn, nn, &ne)) goto nomem;
+      double share = total > 0 ? dist3(prev, next) / total : 1.0 / (double)(sd.n + 1);
+      for (int i = 0; i < in->n_edge_attrs; i++) {
+        const karst_attr_t *src = &in->edge_attrs[i];
+        karst_attr_t *dst = &tmp.edge_attrs[i];
+        for (int c = 0; c < src->ncomp; c++) {
+          double val = src->data[e * src->ncomp + c];
+          dst->data[ne * dst->ncomp + c] = strcmp(src->name, "cost") == 0 ? val * share : val;
+        }
+      }
+      pn = nn;
+      prev = next;
+    }
+  }
+  if (in->crs && karst_network_set_crs(&tmp, in->crs)) goto nomem;
+  karst_network_destroy(out);
+  *out = tmp;
+  karst_network_init(&tmp);
+  goto cleanup;
+nomem:
+  err = karst_set_error(ctx, KARST_ENOMEM, "midpoint displacement: out of memory");
+cleanup:
+  karst_network_destroy(&tmp);
+  free(sd.pts);
+  return err;
+}

@@ -1,0 +1,105 @@
+/* Tunnel types and radii (Paris et al. 2021, §5.3, Fig. 11). */
+#include "karst/classification.h"
+
+#include <math.h>
+
+/**
+ * Zone of elevation @p z: within classification.water_table_band of the
+ * water table (|z − W| ≤ band) → water table; above → vadose; below →
+ * phreatic (Paris et al. 2021, §3 and Fig. 11). O(1).
+ */
+karst_zone_t karst_classification_zone(const karst_scenario_t *sc, double z) {
+  double dz = z - sc->water_table;
+  if (fabs(dz) <= sc->classification.water_table_band) return KARST_ZONE_WATER_TABLE;
+  return dz > 0 ? KARST_ZONE_VADOSE : KARST_ZONE_PHREATIC;
+}
+
+/**
+ * Tunnel type of segment a–b, our reading of Paris et al. 2021, Fig. 11 (the
+ * paper fixes the inputs — verticality, distance to the water table, the
+ * epikarst and the ghost-rock chambers — but gives no thresholds; ours are
+ * the classification.* scenario keys). Evaluated at the segment midpoint m,
+ * first rule that applies:
+ *
+ *   1. resistance π(m) < chamber_resistance               → chamber
+ *      (breakout chambers in ghost-rock zones where c_π ≈ 0, §5.3)
+ *   2. vadose and depth below terrain < epikarst_depth     → epikarst
+ *   3. steep (angle to horizontal ≥ vertical_angle):
+ *        vadose or at the water table                      → tube (circular shafts, §5.3)
+ *        phreatic                                          → passage (phreatic lifts)
+ *   4. gentle:
+ *        vadose                                            → canyon (vadose entrenchment)
+ *        at the water table                                → keyhole (tube entrenched by a
+ *                                                             canyon as the table falls)
+ *        phreatic                                          → bed (soluble bed conduits, §5.3)
+ *
+ * A zero-length segment counts as gentle. O(size of the permeability tree).
+ */
+karst_tunnel_type_t karst_classification_type(const karst_scenario_t *sc, const double a[3],
+                                              const double b[3]) {
+  const karst_classification_t *cl = &sc->classification;
+  double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+  if (karst_permeability_eval(&sc->permeability, m) < cl->chamber_resistance)
+    return KARST_TUNNEL_CHAMBER;
+  karst_zone_t zone = karst_classification_zone(sc, m[2]);
+  double depth = karst_terrain_height(&sc->terrain, m[0], m[1]) - m[2];
+  if (zone == KARST_ZONE_VADOSE && depth < cl->epikarst_depth) return KARST_TUNNEL_EPIKARST;
+  double dx = b[0] - a[0], dy = b[1] - a[1], dz = b[2] - a[2];
+  double angle = atan2(fabs(dz), sqrt(dx * dx + dy * dy)) * (180.0 / M_PI);
+  int steep = (dx != 0 || dy != 0 || dz != 0) && angle >= cl->vertical_angle;
+  if (steep) return zone == KARST_ZONE_PHREATIC ? KARST_TUNNEL_PASSAGE : KARST_TUNNEL_TUBE;
+  switch (zone) {
+  case KARST_ZONE_VADOSE:
+    return KARST_TUNNEL_CANYON;
+  case KARST_ZONE_WATER_TABLE:
+    return KARST_TUNNEL_KEYHOLE;
+  default:
+    return KARST_TUNNEL_BED;
+  }
+}
+
+/**
+ * Label every edge of @p net (Paris et al. 2021, §5.3): edge attributes
+ * "tunnel_type" (karst_tunnel_type_t, karst_classification_type), "radius"
+ * (m, uniform in classification.radius[type] — by default 0.5 m for
+ * epikarst and [0.5, 4] m otherwise, as in §5.3 — drawn from @p rng in edge
+ * order) and "vadose" (1 when the midpoint is above the water table), and node
+ * attribute "water_table_distance" (z − W, positive above).
+ *
+ * @return KARST_SUCCESS; KARST_EINVAL when vertical_angle is outside [0, 90]
+ *         or a radius range is not 0 ≤ min ≤ max (the message names the type);
+ *         KARST_ENOMEM.
+ * Time complexity: O(nodes + edges × size of the permeability tree).
+ */
+karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                       karst_rng_t *rng, karst_network_t *net) {
+  const karst_classification_t *cl = &sc->classification;
+  if (!(cl->vertical_angle >= 0 && cl->vertical_angle <= 90))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "classification.vertical_angle must be within [0, 90] degrees, got %g",
+                           cl->vertical_angle);
+  for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++)
+    if (!(cl->radius[t].min >= 0 && cl->radius[t].min <= cl->radius[t].max) ||
+        isinf(cl->radius[t].max))
+      return karst_set_error(
+          ctx, KARST_EINVAL, "classification radius of %s: need 0 <= min <= max, got [%g, %g]",
+          karst_tunnel_type_name((karst_tunnel_type_t)t), cl->radius[t].min, cl->radius[t].max);
+  double *type, *radius, *vadose, *wtd;
+  if (karst_network_attr_add(net, KARST_ATTR_EDGE, "tunnel_type", 1, 1, &type) ||
+      karst_network_attr_add(net, KARST_ATTR_EDGE, "radius", 1, 0, &radius) ||
+      karst_network_attr_add(net, KARST_ATTR_EDGE, "vadose", 1, 1, &vadose) ||
+      karst_network_attr_add(net, KARST_ATTR_NODE, "water_table_distance", 1, 0, &wtd))
+    return karst_set_error(ctx, KARST_ENOMEM, "classification: out of memory");
+  for (karst_int_t v = 0; v < net->n_nodes; v++)
+    wtd[v] = net->xyz[3 * v + 2] - sc->water_table;
+  for (karst_int_t e = 0; e < net->n_edges; e++) {
+    const double *a = &net->xyz[3 * net->edges[2 * e]], *b = &net->xyz[3 * net->edges[2 * e + 1]];
+    karst_tunnel_type_t t = karst_classification_type(sc, a, b);
+    type[e] = t;
+    radius[e] = cl->radius[t].min == cl->radius[t].max
+                    ? cl->radius[t].min
+                    : karst_rng_uniform_range(rng, cl->radius[t].min, cl->radius[t].max);
+    vadose[e] = 0.5 * (a[2] + b[2]) > sc->water_table;
+  }
+  return KARST_SUCCESS;
+}

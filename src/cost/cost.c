@@ -1,0 +1,655 @@
+/* Geology-based cost functions and their line integral along graph edges
+ * (Paris et al. 2021, §4 and §4.2), bedrock membership of points and
+ * segments, and the lower bound of the cost per metre used by A*. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "cost/cost_internal.h"
+
+/* Candidate break points of one edge kept on the stack. Horizons: with A
+ * active horizons an exact integral needs A^2 + 2A of them, so at most
+ * MAX_EXACT_HORIZONS = 7 active horizons are integrated exactly (more fall
+ * back to composite Gauss–Legendre, see horizon_integral). Permeability:
+ * break points beyond the buffer are ignored, which only costs accuracy. */
+#define MAX_BREAKS 64
+#define MAX_EXACT_HORIZONS 7
+
+static double clampd(double x, double a, double b) {
+  return x < a ? a : (x > b ? b : x);
+}
+
+/* Smooth step g(x) = 3x^2 - 2x^3 on [0, 1], 1 beyond (Paris et al. 2021, §4.2). */
+static double smoothstep1(double x) {
+  if (x >= 1.0) return 1.0;
+  if (x <= 0.0) return 0.0;
+  return x * x * (3.0 - 2.0 * x);
+}
+
+static double dot3(const double a[3], const double b[3]) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static int finite3(const double p[3]) {
+  return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Bedrock membership                                                        */
+/* ------------------------------------------------------------------------ */
+
+static int in_box(const karst_scenario_t *sc, const double p[3]) {
+  for (int i = 0; i < 3; i++)
+    if (!(p[i] >= sc->domain_min[i] && p[i] <= sc->domain_max[i])) return 0;
+  return 1;
+}
+
+/**
+ * Whether @p p lies in the bedrock: inside the closed domain box and strictly
+ * below the terrain (Paris et al. 2021, §4: the bedrock H).
+ * @param sc the scenario; @param p the point.
+ * @return 1 inside, 0 outside (also for non-finite coordinates).
+ * Time complexity: O(1).
+ */
+int karst_cost_in_bedrock(const karst_scenario_t *sc, const double p[3]) {
+  return finite3(p) && in_box(sc, p) && p[2] < karst_terrain_height(&sc->terrain, p[0], p[1]);
+}
+
+/* Iterator over the parameters s in (0, 1) where a segment coordinate
+ * a + s d crosses the grid lines origin + i * step, i in [0, count). */
+typedef struct line_iter {
+  double s_next, a, d, origin, step;
+  karst_int_t i, end, inc;
+} line_iter_t;
+
+static void line_iter_set(line_iter_t *it) {
+  it->s_next = (it->origin + (double)it->i * it->step - it->a) / it->d;
+}
+
+static void line_iter_init(line_iter_t *it, double a, double d, double origin, double step,
+                           karst_int_t count) {
+  it->a = a, it->d = d, it->origin = origin, it->step = step;
+  it->s_next = INFINITY;
+  if (d == 0.0 || count < 1) return;
+  double lo = fmin(a, a + d), hi = fmax(a, a + d);
+  double flo = ceil((lo - origin) / step), fhi = floor((hi - origin) / step);
+  flo = fmax(flo, 0.0), fhi = fmin(fhi, (double)(count - 1));
+  if (flo > fhi) return;
+  karst_int_t ilo = (karst_int_t)flo, ihi = (karst_int_t)fhi;
+  it->i = d > 0 ? ilo : ihi;
+  it->end = d > 0 ? ihi : ilo;
+  it->inc = d > 0 ? 1 : -1;
+  line_iter_set(it);
+}
+
+static void line_iter_next(line_iter_t *it) {
+  if (it->i == it->end) {
+    it->s_next = INFINITY;
+    return;
+  }
+  it->i += it->inc;
+  line_iter_set(it);
+}
+
+/* Largest value of the quadratic through (0, q0), (1/2, qm), (1, q1) on [0, 1]. */
+static double quadratic_max(double q0, double qm, double q1) {
+  double m = fmax(q0, q1);
+  double A = 2 * q0 - 4 * qm + 2 * q1, B = -3 * q0 + 4 * qm - q1;
+  if (A < 0) {
+    double t = -B / (2 * A);
+    if (t > 0 && t < 1) m = fmax(m, q0 + B * t + A * t * t);
+  }
+  return m;
+}
+
+/**
+ * Whether the whole segment [a, b] lies in the bedrock. The box is convex,
+ * so its test is on the end points. A flat terrain bounds a half-space (end
+ * points suffice); on a grid the bilinear surface restricted to the segment
+ * is a quadratic in the segment parameter between two crossings of grid
+ * lines (the clamped border included), so z(s) - h(s) is maximised exactly
+ * piece by piece: no sampling step, no tolerance.
+ * @param sc the scenario; @param a, b the end points.
+ * @return 1 when every point is in the bedrock, else 0.
+ * Time complexity: O(1 + grid lines crossed).
+ */
+int karst_cost_segment_in_bedrock(const karst_scenario_t *sc, const double a[3],
+                                  const double b[3]) {
+  if (!karst_cost_in_bedrock(sc, a) || !karst_cost_in_bedrock(sc, b)) return 0;
+  return karst_i_segment_interior_in_bedrock(sc, a, b);
+}
+
+int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double a[3],
+                                        const double b[3]) {
+  const karst_terrain_t *t = &sc->terrain;
+  if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) return 1;
+  double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  line_iter_t ix, iy;
+  line_iter_init(&ix, a[0], d[0], t->xll, t->cellsize, t->ncols);
+  line_iter_init(&iy, a[1], d[1], t->yll, t->cellsize, t->nrows);
+#define Q_AT(s) (a[2] + (s)*d[2] - karst_terrain_height(t, a[0] + (s)*d[0], a[1] + (s)*d[1]))
+  double s0 = 0.0, q0 = Q_AT(0.0);
+  while (s0 < 1.0) {
+    double s1 = fmin(1.0, fmin(ix.s_next, iy.s_next));
+    while (ix.s_next <= s1)
+      line_iter_next(&ix);
+    while (iy.s_next <= s1)
+      line_iter_next(&iy);
+    if (!(s1 > s0)) continue;
+    double qm = Q_AT(0.5 * (s0 + s1)), q1 = Q_AT(s1);
+    if (quadratic_max(q0, qm, q1) >= 0.0) return 0;
+    s0 = s1, q0 = q1;
+  }
+#undef Q_AT
+  return 1;
+}
+
+/**
+ * Largest terrain elevation over an axis-aligned rectangle. On each grid cell
+ * the bilinear surface is linear along x and along y, so its maximum over a
+ * rectangle is at a corner of the rectangle cut by the grid lines: the
+ * rectangle's corners, the grid nodes inside and the crossings of its edges
+ * with grid lines. O(1 + grid nodes inside the rectangle).
+ */
+double karst_i_terrain_max_rect(const karst_terrain_t *t, double x0, double x1, double y0,
+                                double y1) {
+  double m = fmax(fmax(karst_terrain_height(t, x0, y0), karst_terrain_height(t, x1, y0)),
+                  fmax(karst_terrain_height(t, x0, y1), karst_terrain_height(t, x1, y1)));
+  if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) return m;
+  double cs = t->cellsize;
+  double ilo = fmax(0.0, ceil((x0 - t->xll) / cs)),
+         ihi = fmin(t->ncols - 1.0, floor((x1 - t->xll) / cs));
+  double jlo = fmax(0.0, ceil((y0 - t->yll) / cs)),
+         jhi = fmin(t->nrows - 1.0, floor((y1 - t->yll) / cs));
+  for (double i = ilo; i <= ihi; i++) {
+    double x = t->xll + i * cs;
+    m = fmax(m, fmax(karst_terrain_height(t, x, y0), karst_terrain_height(t, x, y1)));
+    for (double j = jlo; j <= jhi; j++)
+      m = fmax(m, t->z[(karst_int_t)j * t->ncols + (karst_int_t)i]);
+  }
+  for (double j = jlo; j <= jhi; j++) {
+    double y = t->yll + j * cs;
+    m = fmax(m, fmax(karst_terrain_height(t, x0, y), karst_terrain_height(t, x1, y)));
+  }
+  return m;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Pointwise terms                                                           */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Horizon term cL(p) = g(d(p, L) / r) (Paris et al. 2021, §4.2) with d the
+ * vertical distance to a horizon and r its radius. With several horizons of
+ * different radii we take min_h g(d_h / r_h): the horizon whose influence is
+ * strongest at p, which is the paper's "nearest horizon" when radii are
+ * equal and, unlike the nearest one by distance, is continuous in p. Without
+ * horizons cL = 1, the value far from every horizon, so that adding a
+ * horizon only ever lowers costs near it.
+ * @return cL in [0, 1]. Time complexity: O(number of horizons).
+ */
+double karst_cost_horizon_term(const karst_scenario_t *sc, const double p[3]) {
+  double c = 1.0;
+  for (int h = 0; h < sc->n_horizons; h++) {
+    const karst_horizon_t *H = &sc->horizons[h];
+    double x = fabs(p[2] - karst_horizon_elevation(H, p[0], p[1])) / H->radius;
+    c = fmin(c, smoothstep1(x));
+  }
+  return c;
+}
+
+static double fracture_term(const karst_scenario_t *sc, const double *normals, const double d[3]) {
+  double len = sqrt(dot3(d, d)), c = 0.0;
+  for (int k = 0; k < sc->n_fractures; k++) {
+    double n[3], w = sc->fractures[k].weight;
+    if (normals) {
+      n[0] = normals[3 * k], n[1] = normals[3 * k + 1], n[2] = normals[3 * k + 2];
+    } else {
+      karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, n);
+    }
+    double nd = len > 0 ? dot3(n, d) / len : 1.0;
+    c += w * nd * nd;
+  }
+  return c;
+}
+
+/**
+ * Fracture term cF(d) = Σ_k w_k (n_k·d̂)² with n_k the unit normal of family
+ * k (karst_plane_normal) and d̂ = d/|d| (Paris et al. 2021, §4.2, as its text
+ * and Fig. 7 intend: "edges with a direction parallel to a fracture plane have
+ * a smaller cost value than orthogonal ones"). The paper prints
+ * Σ w_k (1 − (n_k·d̂)²), which with n_k the plane normal is the squared
+ * in-plane component and would make paths cross the planes; that formula is
+ * the right one for a vector lying in the fracture (its 2-D trace), and its
+ * 3-D form for a plane of normal n_k is the squared normal component used
+ * here: 0 along strike and dip, w_k across the plane.
+ * A zero direction gives Σ w_k (the most expensive value).
+ * Time complexity: O(number of fracture families).
+ */
+double karst_cost_fracture_term(const karst_scenario_t *sc, const double dir[3]) {
+  return fracture_term(sc, NULL, dir);
+}
+
+/**
+ * Cost per metre c(p, d) = w0 + wL cL(p) + wF cF(d) + wπ π(p) (Paris et al.
+ * 2021, §4.2, with the base cost w0 > 0 that keeps every path finite and
+ * the A* heuristic meaningful). The prescribed-path factor applies to edges,
+ * not to points (see karst_cost_edge).
+ * @param sc the scenario; @param p the point; @param dir the direction (any length).
+ * @return the cost per metre. Time complexity: O(horizons + fractures + tree size).
+ */
+double karst_cost_point(const karst_scenario_t *sc, const double p[3], const double dir[3]) {
+  const karst_cost_weights_t *w = &sc->cost;
+  return w->w0 + w->horizon * karst_cost_horizon_term(sc, p) +
+         w->fracture * karst_cost_fracture_term(sc, dir) +
+         w->permeability * karst_permeability_eval(&sc->permeability, p);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Line integrals                                                            */
+/* ------------------------------------------------------------------------ */
+
+static void sort_small(double *v, int n) {
+  for (int i = 1; i < n; i++) {
+    double x = v[i];
+    int j = i - 1;
+    while (j >= 0 && v[j] > x)
+      v[j + 1] = v[j], j--;
+    v[j + 1] = x;
+  }
+}
+
+static void push_break(double *v, int *n, double s) {
+  if (s > 0.0 && s < 1.0 && *n < MAX_BREAKS) v[(*n)++] = s;
+}
+
+/* Mean of g∘clamp over a linear x from x0 to x1, i.e. (H(x1) − H(x0)) /
+ * (x1 − x0) with H' = g on [0, 1], H(x) = x³ − x⁴/2, written as divided
+ * differences so that x0 = x1 needs no special case and no tolerance. */
+static double mean_g_linear(double x0, double x1) {
+  if (x0 >= 1.0 && x1 >= 1.0) return 1.0;
+  if (x0 > 1.0 || x1 > 1.0) { /* split at x = 1 */
+    double f = (1.0 - x0) / (x1 - x0);
+    double lo = x0 < 1.0 ? x0 : x1;
+    double frac_lo = x0 < 1.0 ? f : 1.0 - f;
+    return frac_lo * mean_g_linear(lo, 1.0) + (1.0 - frac_lo);
+  }
+  return (x1 * x1 + x1 * x0 + x0 * x0) - 0.5 * (x1 + x0) * (x1 * x1 + x0 * x0);
+}
+
+/* Gauss–Legendre nodes on [0, 1] and weights (sum 1). */
+static const double GL2_X[2] = {0.21132486540518711775, 0.78867513459481288225};
+static const double GL3_X[3] = {0.11270166537925831148, 0.5, 0.88729833462074168852};
+static const double GL3_W[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
+
+/* ∫_0^1 cL(a + s(b − a)) ds. */
+static double horizon_integral(const karst_scenario_t *sc, const double a[3], const double b[3],
+                               double len) {
+  double al[MAX_EXACT_HORIZONS], be[MAX_EXACT_HORIZONS], r[MAX_EXACT_HORIZONS];
+  int n_active = 0;
+  double rmin = INFINITY;
+  /* Along the segment the vertical offset to a planar horizon is linear in s:
+   * u_h(s) = α_h + β_h s. Horizons whose zone |u| < r is never reached
+   * contribute g = 1 and can be ignored inside the minimum. */
+  for (int h = 0; h < sc->n_horizons; h++) {
+    const karst_horizon_t *H = &sc->horizons[h];
+    double ua = a[2] - karst_horizon_elevation(H, a[0], a[1]);
+    double ub = b[2] - karst_horizon_elevation(H, b[0], b[1]);
+    int touches =
+        (ua <= 0 && ub >= 0) || (ua >= 0 && ub <= 0) || fmin(fabs(ua), fabs(ub)) < H->radius;
+    if (!touches) continue;
+    rmin = fmin(rmin, H->radius);
+    if (n_active < MAX_EXACT_HORIZONS)
+      al[n_active] = ua, be[n_active] = ub - ua, r[n_active] = H->radius;
+    n_active++;
+  }
+  if (n_active == 0) return 1.0;
+  if (n_active > MAX_EXACT_HORIZONS) {
+    /* Rare fallback: composite 2-point Gauss–Legendre, exact on the cubic
+     * pieces of g and O(h^2) at each kink of the minimum. */
+    double n = ceil(len / (KARST_COST_STEP_FRACTION * rmin));
+    n = clampd(n, 1.0, KARST_COST_MAX_SUBINTERVALS);
+    double sum = 0.0, h = 1.0 / n;
+    for (double i = 0; i < n; i++)
+      for (int q = 0; q < 2; q++) {
+        double s = (i + GL2_X[q]) * h, p[3];
+        for (int k = 0; k < 3; k++)
+          p[k] = a[k] + s * (b[k] - a[k]);
+        sum += 0.5 * h * karst_cost_horizon_term(sc, p);
+      }
+    return sum;
+  }
+  /* Exact: X(s) = min_h |u_h(s)| / r_h is piecewise linear with kinks where
+   * some u_h = 0 or |u_h| = r_h, or where two scaled offsets are equal; on
+   * each piece g(min(X, 1)) is a cubic of a linear function, integrated in
+   * closed form by mean_g_linear. */
+  double br[MAX_BREAKS + 1];
+  int nb = 0;
+  br[nb++] = 0.0;
+  for (int i = 0; i < n_active; i++) {
+    if (be[i] != 0.0) {
+      push_break(br, &nb, -al[i] / be[i]);
+      push_break(br, &nb, (r[i] - al[i]) / be[i]);
+      push_break(br, &nb, (-r[i] - al[i]) / be[i]);
+    }
+    for (int j = i + 1; j < n_active; j++)
+      for (int sg = -1; sg <= 1; sg += 2) {
+        double den = be[i] / r[i] - sg * be[j] / r[j];
+        if (den != 0.0) push_break(br, &nb, (sg * al[j] / r[j] - al[i] / r[i]) / den);
+      }
+  }
+  sort_small(br, nb);
+  br[nb] = 1.0; /* 1 + A^2 + 2A <= 64 = MAX_BREAKS break points: none was dropped */
+  double sum = 0.0, xprev = INFINITY;
+  for (int i = 0; i < n_active; i++)
+    xprev = fmin(xprev, fabs(al[i]) / r[i]);
+  for (int p = 0; p < nb; p++) {
+    double s1 = br[p + 1], x1 = INFINITY;
+    for (int i = 0; i < n_active; i++)
+      x1 = fmin(x1, fabs(al[i] + be[i] * s1) / r[i]);
+    sum += (s1 - br[p]) * mean_g_linear(xprev, x1);
+    xprev = x1;
+  }
+  return sum;
+}
+
+/* Whether the permeability tree is constant along [a, b] (conservative:
+ * 0 may be returned for a constant node, never 1 for a varying one). */
+static int perm_constant(const karst_perm_node_t *n, const double a[3], const double b[3]) {
+  switch (n->kind) {
+  case KARST_PERM_SPHERE: {
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double ac[3] = {a[0] - n->center[0], a[1] - n->center[1], a[2] - n->center[2]};
+    double bc[3] = {b[0] - n->center[0], b[1] - n->center[1], b[2] - n->center[2]};
+    double dd = dot3(d, d), s = dd > 0 ? clampd(-dot3(ac, d) / dd, 0.0, 1.0) : 0.0;
+    double c[3] = {ac[0] + s * d[0], ac[1] + s * d[1], ac[2] + s * d[2]};
+    double dmin = sqrt(dot3(c, c)), dmax = fmax(sqrt(dot3(ac, ac)), sqrt(dot3(bc, bc)));
+    if (dmax <= n->radius) return 1; /* entirely inside: resistance */
+    if (n->falloff > 0) return dmin >= n->radius + n->falloff;
+    return dmin > n->radius; /* entirely outside: background */
+  }
+  case KARST_PERM_STRATUM: {
+    int ina = a[2] >= n->bottom && a[2] <= n->top, inb = b[2] >= n->bottom && b[2] <= n->top;
+    if (ina && inb) return 1;
+    return (a[2] < n->bottom && b[2] < n->bottom) || (a[2] > n->top && b[2] > n->top);
+  }
+  default:
+    for (int i = 0; i < n->n_children; i++)
+      if (!perm_constant(&n->children[i], a, b)) return 0;
+    return 1;
+  }
+}
+
+/* Parameters in (0, 1) where a primitive of the tree has a kink or a jump. */
+static void perm_breaks(const karst_perm_node_t *n, const double a[3], const double b[3],
+                        double *br, int *nb) {
+  if (n->kind == KARST_PERM_SPHERE) {
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double ac[3] = {a[0] - n->center[0], a[1] - n->center[1], a[2] - n->center[2]};
+    double A = dot3(d, d), B = 2 * dot3(d, ac);
+    if (A <= 0) return;
+    for (int q = 0; q < 2; q++) {
+      double rho = n->radius + (q ? n->falloff : 0.0);
+      if (q && !(n->falloff > 0)) break;
+      double C = dot3(ac, ac) - rho * rho, disc = B * B - 4 * A * C;
+      if (disc < 0) continue;
+      double sq = sqrt(disc);
+      push_break(br, nb, (-B - sq) / (2 * A));
+      push_break(br, nb, (-B + sq) / (2 * A));
+    }
+  } else if (n->kind == KARST_PERM_STRATUM) {
+    double dz = b[2] - a[2];
+    if (dz != 0) {
+      push_break(br, nb, (n->bottom - a[2]) / dz);
+      push_break(br, nb, (n->top - a[2]) / dz);
+    }
+  } else {
+    for (int i = 0; i < n->n_children; i++)
+      perm_breaks(&n->children[i], a, b, br, nb);
+  }
+}
+
+/* ∫_0^1 π(a + s(b − a)) ds: exact where π is constant along the edge; else
+ * composite 3-point Gauss–Legendre on the pieces between the kinks and jumps
+ * of the primitives (sphere radius and radius + falloff, stratum bounds), with
+ * sub-intervals no longer than m->perm_step metres. Inside a piece the
+ * integrand is smooth, and the 3-point rule errs by h^7 f^(6)(ξ) / 2016000 per
+ * sub-interval of length h; with h = KARST_COST_STEP_FRACTION times the
+ * feature size that is below 1e-6 relative for a smooth-step falloff. The
+ * remaining non-smooth points are where union/intersection children cross
+ * (a kink: O(h^3) per crossing). */
+static double perm_integral(const karst_i_cost_model_t *m, const double a[3], const double b[3],
+                            double len) {
+  const karst_permeability_t *perm = &m->sc->permeability;
+  if (!perm->root || perm_constant(perm->root, a, b)) return karst_permeability_eval(perm, a);
+  double br[MAX_BREAKS + 1];
+  int nb = 0;
+  br[nb++] = 0.0;
+  perm_breaks(perm->root, a, b, br, &nb);
+  sort_small(br, nb);
+  br[nb] = 1.0;
+  double sum = 0.0;
+  for (int p = 0; p < nb; p++) {
+    double s0 = br[p], w = br[p + 1] - s0;
+    if (!(w > 0)) continue;
+    double n = ceil(w * len / m->perm_step);
+    n = clampd(n, 1.0, KARST_COST_MAX_SUBINTERVALS);
+    double h = w / n;
+    for (double i = 0; i < n; i++)
+      for (int q = 0; q < 3; q++) {
+        double s = s0 + (i + GL3_X[q]) * h, x[3];
+        for (int k = 0; k < 3; k++)
+          x[k] = a[k] + s * (b[k] - a[k]);
+        sum += GL3_W[q] * h * karst_permeability_eval(perm, x);
+      }
+  }
+  return sum;
+}
+
+/* Distance from p to the segment [a, b]. */
+static double point_segment_distance(const double p[3], const double a[3], const double b[3]) {
+  double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+  double dd = dot3(d, d), s = dd > 0 ? clampd(dot3(ap, d) / dd, 0.0, 1.0) : 0.0;
+  double e[3] = {ap[0] - s * d[0], ap[1] - s * d[1], ap[2] - s * d[2]};
+  return sqrt(dot3(e, e));
+}
+
+static int on_prescribed_path(const karst_i_cost_model_t *m, const double a[3], const double b[3],
+                              double len) {
+  const karst_scenario_t *sc = m->sc;
+  double tol = sc->sampling.feature_radius;
+  for (int i = 0; i < sc->n_prescribed; i++) {
+    int ka = sc->prescribed[i].a, kb = sc->prescribed[i].b;
+    if (ka < 0 || kb < 0 || ka >= sc->n_key_points || kb >= sc->n_key_points) continue;
+    const double *P = sc->key_points[ka].p, *Q = sc->key_points[kb].p;
+    double pq[3] = {Q[0] - P[0], Q[1] - P[1], Q[2] - P[2]},
+           ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double lpq = sqrt(dot3(pq, pq));
+    if (lpq == 0 || len == 0) continue;
+    if (fabs(dot3(pq, ab)) < m->prescribed_cos * lpq * len) continue;
+    if (point_segment_distance(a, P, Q) <= tol && point_segment_distance(b, P, Q) <= tol) return 1;
+  }
+  return 0;
+}
+
+karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
+                                      const karst_scenario_t *sc) {
+  m->sc = sc;
+  m->n_fractures = sc->n_fractures;
+  m->normals = NULL;
+  m->prescribed_cos = cos(KARST_COST_PRESCRIBED_MAX_ANGLE * M_PI / 180.0);
+  if (sc->n_fractures > 0) {
+    m->normals = malloc(sizeof(double) * 3 * (size_t)sc->n_fractures);
+    if (!m->normals)
+      return karst_set_error(ctx, KARST_ENOMEM, "no memory for %d fracture normals",
+                             sc->n_fractures);
+    for (int k = 0; k < sc->n_fractures; k++)
+      karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, m->normals + 3 * k);
+  }
+  /* Smallest permeability feature, for the quadrature step. */
+  double fmin_size = INFINITY;
+  const karst_perm_node_t *stack[64];
+  int top = 0;
+  if (sc->permeability.root) stack[top++] = sc->permeability.root;
+  while (top > 0) {
+    const karst_perm_node_t *n = stack[--top];
+    if (n->kind == KARST_PERM_SPHERE) {
+      if (n->radius > 0) fmin_size = fmin(fmin_size, n->radius);
+      if (n->falloff > 0) fmin_size = fmin(fmin_size, n->falloff);
+    } else if (n->kind == KARST_PERM_STRATUM) {
+      if (n->top > n->bottom) fmin_size = fmin(fmin_size, n->top - n->bottom);
+    }
+    for (int i = 0; i < n->n_children; i++) {
+      if (top < 64)
+        stack[top++] = &n->children[i];
+      else
+        fmin_size = fmin(
+            fmin_size, sc->sampling.feature_radius); /* tree too large to walk here: be cautious */
+    }
+  }
+  m->perm_step = KARST_COST_STEP_FRACTION * fmin_size;
+  if (!(m->perm_step > 0)) m->perm_step = INFINITY;
+  return KARST_SUCCESS;
+}
+
+void karst_i_cost_model_destroy(karst_i_cost_model_t *m) {
+  free(m->normals);
+  m->normals = NULL;
+}
+
+double karst_i_cost_edge(const karst_i_cost_model_t *m, const double a[3], const double b[3]) {
+  if (!karst_cost_in_bedrock(m->sc, a) || !karst_cost_in_bedrock(m->sc, b)) return INFINITY;
+  return karst_i_cost_edge_inside(m, a, b);
+}
+
+double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3],
+                                const double b[3]) {
+  const karst_scenario_t *sc = m->sc;
+  if (!karst_i_segment_interior_in_bedrock(sc, a, b)) return INFINITY;
+  double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  double len = sqrt(dot3(d, d));
+  if (len == 0.0) return 0.0;
+  const karst_cost_weights_t *w = &sc->cost;
+  double per_metre = w->w0;
+  if (w->fracture != 0) per_metre += w->fracture * fracture_term(sc, m->normals, d);
+  if (w->horizon != 0) per_metre += w->horizon * horizon_integral(sc, a, b, len);
+  if (w->permeability != 0) per_metre += w->permeability * perm_integral(m, a, b, len);
+  double c = len * per_metre;
+  if (sc->n_prescribed > 0 && on_prescribed_path(m, a, b, len)) c *= w->prescribed;
+  return c;
+}
+
+/**
+ * Cost of the straight edge [a, b]: the line integral ∫ c(p(t), d) dt of the
+ * cost per metre along the segment (Paris et al. 2021, §4, the functional χ
+ * restricted to one segment), times cost.prescribed when the edge lies on a
+ * prescribed path (both ends within sampling.feature_radius of the key-point
+ * pair's segment and at most KARST_COST_PRESCRIBED_MAX_ANGLE degrees from
+ * it). The fracture term depends on the direction only and is exact. The
+ * horizon term is integrated exactly (piecewise closed form of the smooth
+ * step, see horizon_integral). The permeability term is exact where π is
+ * constant along the edge and otherwise uses composite Gauss–Legendre with
+ * sub-intervals of at most KARST_COST_STEP_FRACTION times the smallest
+ * permeability feature, split at the primitives' kinks (see perm_integral).
+ * @param sc the scenario; @param a, b the end points.
+ * @return the cost (>= 0), INFINITY when the segment leaves the bedrock or a
+ *         coordinate is not finite.
+ * Time complexity: O(horizons^2 + fractures + tree size × quadrature points).
+ */
+double karst_cost_edge(const karst_scenario_t *sc, const double a[3], const double b[3]) {
+  karst_i_cost_model_t m;
+  if (karst_i_cost_model_init(NULL, &m, sc) != KARST_SUCCESS) m.normals = NULL; /* on the fly */
+  double c = karst_i_cost_edge(&m, a, b);
+  karst_i_cost_model_destroy(&m);
+  return c;
+}
+
+/* Smallest eigenvalue of a symmetric 3x3 matrix by cyclic Jacobi rotations
+ * (Golub & Van Loan, §8.5): unconditionally convergent, and accurate to a
+ * few ulps of the matrix norm, unlike the closed-form cubic roots whose
+ * acos loses accuracy near repeated eigenvalues. */
+static double sym3_min_eigenvalue(double A[3][3]) {
+  for (int sweep = 0; sweep < 50; sweep++) {
+    double off = A[0][1] * A[0][1] + A[0][2] * A[0][2] + A[1][2] * A[1][2];
+    if (off == 0.0) break;
+    for (int p = 0; p < 2; p++)
+      for (int q = p + 1; q < 3; q++) {
+        if (A[p][q] == 0.0) continue;
+        double theta = (A[q][q] - A[p][p]) / (2 * A[p][q]);
+        double t = (theta >= 0 ? 1.0 : -1.0) / (fabs(theta) + sqrt(theta * theta + 1));
+        double c = 1 / sqrt(t * t + 1), s = t * c;
+        for (int k = 0; k < 3; k++) { /* A <- J^T A J, rotation in the (p, q) plane */
+          double akp = A[k][p], akq = A[k][q];
+          A[k][p] = c * akp - s * akq;
+          A[k][q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; k++) {
+          double apk = A[p][k], aqk = A[q][k];
+          A[p][k] = c * apk - s * aqk;
+          A[q][k] = s * apk + c * aqk;
+        }
+        A[p][q] = A[q][p] = 0.0;
+      }
+  }
+  return fmin(A[0][0], fmin(A[1][1], A[2][2]));
+}
+
+/**
+ * A lower bound L of the cost per metre, valid for every point and direction,
+ * so that |a − b| · L never overestimates the least cost between a and b (an
+ * admissible, consistent A* heuristic, Hart, Nilsson & Raphael 1968).
+ *
+ * Proof. c(p, d) = w0 + wL cL(p) + wF cF(d) + wπ π(p) with all weights >= 0.
+ * (i) cL = g(·) >= 0 since g >= 0 on [0, 1] and g = 1 beyond; without horizons
+ * cL = 1. (ii) For unit d, cF(d) = Σ w_k (n_k·d)² = dᵀ M d with
+ * M = Σ w_k n_k n_kᵀ (because (n·d)² = dᵀ n nᵀ d), and dᵀ M d >= λmin(M) by
+ * the Rayleigh quotient, attained by the eigenvector of λmin (with the
+ * paper's printed form Σ w_k (1 − (n_k·d)²) = Σ w_k − dᵀ M d the same
+ * argument gives Σ w_k − λmax(M)).
+ * (iii) π is clamped to [0, 1]; every node returns a leaf resistance, the
+ * background, a smooth-step mix of the two, their min, max or a weighted
+ * mean, so π >= πmin = min(background, leaf resistances). Hence c(p, d) >=
+ * w0 + wL·[no horizon] + wF λmin(M) + wπ πmin. An edge's cost is a
+ * quadrature of c with positive weights summing to its length (or exact),
+ * so it is >= length × that bound; a prescribed edge multiplies by
+ * cost.prescribed, hence the factor min(1, prescribed) when prescribed paths
+ * exist. The result is reduced by the relative KARST_COST_LB_MARGIN so that
+ * rounding (Jacobi error ~1e-15 ‖M‖, summation of edge costs) cannot break it.
+ * @param sc the scenario.
+ * @return the bound (>= 0).
+ * Time complexity: O(fractures + tree size).
+ */
+double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
+  const karst_cost_weights_t *w = &sc->cost;
+  double M[3][3] = {{0}};
+  for (int k = 0; k < sc->n_fractures; k++) {
+    double n[3], wk = sc->fractures[k].weight;
+    karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, n);
+    for (int i = 0; i < 3; i++)
+      for (int j = 0; j < 3; j++)
+        M[i][j] += wk * n[i] * n[j];
+  }
+  double cf_min = sc->n_fractures > 0 ? fmax(0.0, sym3_min_eigenvalue(M)) : 0.0;
+  double pi_min = sc->permeability.background;
+  const karst_perm_node_t *stack[64];
+  int top = 0;
+  if (sc->permeability.root) stack[top++] = sc->permeability.root;
+  while (top > 0) {
+    const karst_perm_node_t *n = stack[--top];
+    if (n->kind == KARST_PERM_SPHERE || n->kind == KARST_PERM_STRATUM)
+      pi_min = fmin(pi_min, n->resistance);
+    for (int i = 0; i < n->n_children; i++) {
+      if (top < 64)
+        stack[top++] = &n->children[i];
+      else
+        pi_min = 0.0; /* tree too large to walk here: 0 is always safe */
+    }
+  }
+  pi_min = clampd(pi_min, 0.0, 1.0);
+  double lb = w->w0 + w->horizon * (sc->n_horizons == 0 ? 1.0 : 0.0) + w->fracture * cf_min +
+              w->permeability * pi_min;
+  if (sc->n_prescribed > 0 && w->prescribed < 1.0) lb *= w->prescribed;
+  lb *= 1.0 - KARST_COST_LB_MARGIN;
+  return lb > 0 ? lb : 0.0;
+}

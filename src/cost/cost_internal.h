@@ -1,0 +1,38 @@
+/* Shared by the cost and graph modules: the cost model of a scenario with its
+ * per-run constants precomputed (fracture normals, quadrature step), so that
+ * millions of edges do not redo trigonometry or walk the tree for them. */
+#ifndef KARST_COST_INTERNAL_H
+#define KARST_COST_INTERNAL_H
+
+#include "karst/cost.h"
+
+typedef struct karst_i_cost_model {
+  const karst_scenario_t *sc;
+  int n_fractures;
+  double *normals;       /**< 3 * n_fractures unit normals, or NULL (computed on the fly) */
+  double perm_step;      /**< max quadrature sub-interval for cπ (m), INFINITY if π is constant */
+  double prescribed_cos; /**< cos(KARST_COST_PRESCRIBED_MAX_ANGLE) */
+} karst_i_cost_model_t;
+
+/** Precompute what the scenario's edges share. Allocates the normals; ENOMEM on failure. */
+karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
+                                      const karst_scenario_t *sc);
+void karst_i_cost_model_destroy(karst_i_cost_model_t *m);
+
+/** karst_cost_edge with a precomputed model; thread-safe (reads only). */
+double karst_i_cost_edge(const karst_i_cost_model_t *m, const double a[3], const double b[3]);
+
+/** karst_i_cost_edge for end points already known to be in the bedrock. */
+double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3],
+                                const double b[3]);
+
+/** Whether [a, b] stays in the bedrock, given that both end points are in it. */
+int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double a[3],
+                                        const double b[3]);
+
+/** Largest terrain elevation over the rectangle [x0, x1] x [y0, y1] (exact for the bilinear grid).
+ */
+double karst_i_terrain_max_rect(const karst_terrain_t *t, double x0, double x1, double y0,
+                                double y1);
+
+#endif

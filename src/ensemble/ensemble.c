@@ -1,0 +1,772 @@
+/*
+ * The ensemble runner (include/karst/ensemble.h, docs/ensembles.md).
+ *
+ * Why it is built this way:
+ *  - Member i depends only on (base seed, i): its seed is the first output of
+ *    the stream (seed, i) and every draw of the pipeline comes from that seed,
+ *    so the files are the same whatever the thread or rank count.
+ *  - A member is written into a hidden temporary directory and renamed onto
+ *    DIR/realisations/NNNN when complete; rename(2) of a directory is atomic,
+ *    so "the final directory exists" is the one definition of "done". An
+ *    interrupted or killed run leaves only hidden temporaries, removed by the
+ *    next run, which then computes the missing members only.
+ *  - The collection files (metrics.csv, ensemble.pvd, ensemble.json) are
+ *    rebuilt from the member files at the end, never appended to, so a resumed
+ *    run ends with exactly the bytes of an uninterrupted one.
+ */
+#include "karst/ensemble.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "ensemble/ensemble_internal.h"
+#include "karst/io.h"
+
+#if KARST_HAVE_MPI
+#include <mpi.h>
+#endif
+
+void karst_ensemble_options_init(karst_ensemble_options_t *opt) {
+  memset(opt, 0, sizeof *opt);
+  opt->n = 1;
+  opt->seed = 1;
+  opt->nthreads = 1;
+  opt->use_mpi = 1;
+}
+
+/**
+ * Seed of member @p index of an ensemble with base seed @p seed.
+ * @return the first 64-bit output of the karst_rng stream (seed, index); the
+ *         member is then generated from this seed alone (realisation 0), so
+ *         `karst generate --seed <member seed>` reproduces it.
+ * Time complexity: O(1).
+ */
+uint64_t karst_ensemble_member_seed(uint64_t seed, karst_int_t index) {
+  karst_rng_t r;
+  karst_rng_init(&r, seed, (uint64_t)index);
+  return karst_rng_u64(&r);
+}
+
+static double now_seconds(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+char *karst_i_path_join(const char *a, const char *b) {
+  size_t n = strlen(a) + strlen(b) + 2;
+  char *p = malloc(n);
+  if (p) snprintf(p, n, "%s/%s", a, b);
+  return p;
+}
+
+void karst_i_member_name(char out[32], karst_int_t index) {
+  snprintf(out, 32, "%04" PRId64, index);
+}
+
+static int is_dir(const char *path) {
+  struct stat st;
+  return stat(path, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+/* Remove a file or a directory tree (members hold files only; depth is small). */
+static int remove_tree(const char *path) {
+  struct stat st;
+  if (lstat(path, &st) != 0) return errno == ENOENT ? 0 : -1;
+  if (!S_ISDIR(st.st_mode)) return remove(path);
+  DIR *d = opendir(path);
+  if (!d) return -1;
+  int rc = 0;
+  struct dirent *e;
+  while ((e = readdir(d)) != NULL) {
+    if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0) continue;
+    char *sub = karst_i_path_join(path, e->d_name);
+    if (!sub || remove_tree(sub) != 0) rc = -1;
+    free(sub);
+  }
+  closedir(d);
+  if (rmdir(path) != 0) rc = -1;
+  return rc;
+}
+
+/* Leftovers of an interrupted or killed run: hidden names containing ".tmp." (the
+ * pattern of karst_temp_name and of member temporaries). */
+static karst_error_t remove_stale_temporaries(karst_ctx_t *ctx, const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return KARST_SUCCESS;
+  karst_error_t err = KARST_SUCCESS;
+  struct dirent *e;
+  while ((e = readdir(d)) != NULL) {
+    if (e->d_name[0] != '.' || !strstr(e->d_name, ".tmp.")) continue;
+    char *p = karst_i_path_join(dir, e->d_name);
+    if (!p) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", dir);
+      break;
+    }
+    if (remove_tree(p) != 0) {
+      err = karst_set_error(ctx, KARST_EIO, "%s: cannot remove the leftover of an earlier run: %s",
+                            p, strerror(errno));
+      free(p);
+      break;
+    }
+    karst_log(ctx, KARST_LOG_INFO, "removed %s, left by an interrupted run", p);
+    free(p);
+  }
+  closedir(d);
+  return err;
+}
+
+/* ------------------------------------------------------------------------ */
+/* The key file: a re-run into DIR must be the same scenario and seed.      */
+/* ------------------------------------------------------------------------ */
+static karst_error_t check_or_write_key(karst_ctx_t *ctx, const char *real_dir,
+                                        const karst_ensemble_options_t *opt) {
+  karst_error_t err = KARST_SUCCESS;
+  char *path = karst_i_path_join(real_dir, "ensemble.key");
+  char want[256], have[256];
+  FILE *fp = NULL;
+  if (!path) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  snprintf(want, sizeof want, "karst ensemble key 1\nscenario_hash %s\nseed %" PRIu64 "\n",
+           opt->scenario_hash ? opt->scenario_hash : "none", opt->seed);
+  fp = fopen(path, "rb");
+  if (fp) {
+    size_t got = fread(have, 1, sizeof have - 1, fp);
+    have[got] = '\0';
+    if (strcmp(have, want) != 0) {
+      for (char *c = have; *c; c++)
+        if (*c == '\n' || *c == '\r') *c = ' ';
+      err = karst_set_error(ctx, KARST_EINVAL,
+                            "%s: this directory holds an ensemble of another scenario or seed "
+                            "(key: %s); use another output directory or the same scenario and seed",
+                            path, have);
+    }
+    goto cleanup;
+  }
+  karst_atomic_file_t f;
+  err = karst_atomic_open(ctx, &f, path, "wb");
+  if (err) goto cleanup;
+  fputs(want, f.fp);
+  err = karst_atomic_commit(ctx, &f);
+cleanup:
+  if (fp) fclose(fp);
+  free(path);
+  return err;
+}
+
+/* ------------------------------------------------------------------------ */
+/* One member                                                               */
+/* ------------------------------------------------------------------------ */
+karst_error_t karst_i_metrics_header(karst_ctx_t *ctx, const karst_ensemble_hooks_t *h,
+                                     char **out) {
+  size_t n = 32;
+  for (int k = 0; k < h->n_metrics; k++)
+    n += strlen(h->metric_names[k]) + 1;
+  char *s = malloc(n);
+  if (!s) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  strcpy(s, "index,seed");
+  for (int k = 0; k < h->n_metrics; k++) {
+    strcat(s, ",");
+    strcat(s, h->metric_names[k]);
+  }
+  *out = s;
+  return KARST_SUCCESS;
+}
+
+/* One CSV row with a fixed float format (%.17g round-trips every double; an
+ * undefined value is an empty cell). */
+static void write_row(FILE *fp, karst_int_t index, uint64_t seed, int n, const double *v) {
+  fprintf(fp, "%" PRId64 ",%" PRIu64, index, seed);
+  for (int k = 0; k < n; k++) {
+    if (isnan(v[k]))
+      fputc(',', fp);
+    else
+      fprintf(fp, ",%.17g", v[k]);
+  }
+  fputc('\n', fp);
+}
+
+typedef struct run_state {
+  const char *real_dir;
+  const karst_ensemble_options_t *opt;
+  const karst_ensemble_hooks_t *hooks;
+  const char *header;
+  const karst_ctx_t *parent;
+  /* the work queue */
+  const karst_int_t *pending;
+  karst_int_t n_pending, next, done;
+  int stop, active;
+  karst_error_t err; /* error of the lowest failing member */
+  karst_int_t err_index;
+  char errmsg[KARST_ERRMSG_MAX];
+  pthread_mutex_t lock;
+  pthread_cond_t changed;
+} run_state_t;
+
+static karst_error_t run_member(karst_ctx_t *ctx, run_state_t *rs, karst_int_t index) {
+  const karst_ensemble_hooks_t *h = rs->hooks;
+  karst_error_t err = KARST_SUCCESS;
+  karst_network_t net;
+  char name[32], tmpname[96];
+  char *final_dir = NULL, *tmp_dir = NULL, *mpath = NULL;
+  double *values = NULL;
+  int made_tmp = 0;
+  karst_network_init(&net);
+  karst_i_member_name(name, index);
+  snprintf(tmpname, sizeof tmpname, ".%s.tmp.%ld", name, (long)getpid());
+  final_dir = karst_i_path_join(rs->real_dir, name);
+  tmp_dir = karst_i_path_join(rs->real_dir, tmpname);
+  values = calloc((size_t)(h->n_metrics > 0 ? h->n_metrics : 1), sizeof *values);
+  if (!final_dir || !tmp_dir || !values) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
+  mpath = karst_i_path_join(tmp_dir, "metrics.csv");
+  if (!mpath) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
+  remove_tree(tmp_dir);
+  if (mkdir(tmp_dir, 0777) != 0) {
+    err = karst_set_error(ctx, KARST_EIO, "%s: cannot create directory: %s", tmp_dir,
+                          strerror(errno));
+    goto cleanup;
+  }
+  made_tmp = 1;
+  uint64_t mseed = karst_ensemble_member_seed(rs->opt->seed, index);
+  err = h->realise(ctx, h->user, mseed, index, &net);
+  if (err) goto cleanup;
+  err = h->write(ctx, h->user, tmp_dir, &net);
+  if (err) goto cleanup;
+  for (int k = 0; k < h->n_metrics; k++)
+    values[k] = NAN;
+  if (h->measure) {
+    err = h->measure(ctx, h->user, &net, values);
+    if (err) goto cleanup;
+  }
+  {
+    karst_atomic_file_t f;
+    err = karst_atomic_open(ctx, &f, mpath, "wb");
+    if (err) goto cleanup;
+    fprintf(f.fp, "%s\n", rs->header);
+    write_row(f.fp, index, mseed, h->n_metrics, values);
+    err = karst_atomic_commit(ctx, &f);
+    if (err) goto cleanup;
+  }
+  if (rename(tmp_dir, final_dir) != 0) {
+    err = karst_set_error(ctx, KARST_EIO, "%s: cannot rename the finished member into place: %s",
+                          final_dir, strerror(errno));
+    goto cleanup;
+  }
+  made_tmp = 0;
+cleanup:
+  if (made_tmp) remove_tree(tmp_dir);
+  karst_network_destroy(&net);
+  free(values);
+  free(mpath);
+  free(tmp_dir);
+  free(final_dir);
+  return err;
+}
+
+static void *worker(void *arg) {
+  run_state_t *rs = arg;
+  karst_ctx_t ctx = *rs->parent; /* each worker has its own context (error message) */
+  ctx.nthreads = 1;
+  ctx.progress = NULL;
+  ctx.errcode = KARST_SUCCESS;
+  ctx.errmsg[0] = '\0';
+  for (;;) {
+    pthread_mutex_lock(&rs->lock);
+    if (!rs->stop && karst_interrupted(&ctx)) {
+      rs->stop = 1;
+      if (!rs->err) {
+        rs->err = KARST_EINTERRUPTED;
+        rs->err_index = -1;
+        snprintf(rs->errmsg, sizeof rs->errmsg, "interrupted");
+      }
+    }
+    if (rs->stop || rs->next >= rs->n_pending) {
+      rs->active--;
+      pthread_cond_broadcast(&rs->changed);
+      pthread_mutex_unlock(&rs->lock);
+      break;
+    }
+    karst_int_t index = rs->pending[rs->next++];
+    pthread_mutex_unlock(&rs->lock);
+
+    ctx.errcode = KARST_SUCCESS;
+    ctx.errmsg[0] = '\0';
+    karst_error_t err = run_member(&ctx, rs, index);
+
+    pthread_mutex_lock(&rs->lock);
+    if (err) {
+      rs->stop = 1;
+      /* Deterministic report: a real failure beats an interruption, then the lowest index. */
+      int better =
+          !rs->err || (rs->err == KARST_EINTERRUPTED && err != KARST_EINTERRUPTED) ||
+          ((rs->err == KARST_EINTERRUPTED) == (err == KARST_EINTERRUPTED) && index < rs->err_index);
+      if (better) {
+        rs->err = err;
+        rs->err_index = index;
+        snprintf(rs->errmsg, sizeof rs->errmsg, "realisation %" PRId64 ": %.1990s", index,
+                 ctx.errmsg[0] ? ctx.errmsg : karst_strerror(err));
+      }
+    } else {
+      rs->done++;
+    }
+    pthread_cond_broadcast(&rs->changed);
+    pthread_mutex_unlock(&rs->lock);
+  }
+  return NULL;
+}
+
+/* Run the pending members on a pthread work queue; the calling thread reports progress. */
+static karst_error_t run_queue(karst_ctx_t *ctx, run_state_t *rs, int nthreads) {
+  karst_error_t err = KARST_SUCCESS;
+  pthread_t *th = NULL;
+  int started = 0;
+  if (rs->n_pending == 0) return KARST_SUCCESS;
+  if (nthreads > rs->n_pending) nthreads = (int)rs->n_pending;
+  th = calloc((size_t)nthreads, sizeof *th);
+  if (!th) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  /* A first report before any work, so a display can start its clock and rate. */
+  karst_progress(ctx, "ensemble", 0.0, (double)rs->n_pending);
+  pthread_mutex_init(&rs->lock, NULL);
+  pthread_cond_init(&rs->changed, NULL);
+  rs->active = nthreads;
+  for (; started < nthreads; started++) {
+    if (pthread_create(&th[started], NULL, worker, rs) != 0) break;
+  }
+  pthread_mutex_lock(&rs->lock);
+  rs->active -= nthreads - started; /* threads that could not be started */
+  if (started == 0) {
+    pthread_mutex_unlock(&rs->lock);
+    err = karst_set_error(ctx, KARST_EINVAL, "cannot start a worker thread");
+    goto cleanup;
+  }
+  karst_int_t reported = 0;
+  for (;;) {
+    karst_int_t done = rs->done;
+    int active = rs->active;
+    if (done != reported) {
+      reported = done;
+      pthread_mutex_unlock(&rs->lock);
+      karst_progress(ctx, "ensemble", (double)done, (double)rs->n_pending);
+      pthread_mutex_lock(&rs->lock);
+      continue;
+    }
+    if (active == 0) break;
+    /* Wake up now and then even without news so an interrupt is noticed quickly. */
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    ts.tv_nsec += 200000000L;
+    if (ts.tv_nsec >= 1000000000L) {
+      ts.tv_sec++;
+      ts.tv_nsec -= 1000000000L;
+    }
+    pthread_cond_timedwait(&rs->changed, &rs->lock, &ts);
+  }
+  pthread_mutex_unlock(&rs->lock);
+  for (int t = 0; t < started; t++)
+    pthread_join(th[t], NULL);
+  if (rs->err) {
+    err = karst_set_error(ctx, rs->err, "%s", rs->errmsg);
+  }
+cleanup:
+  pthread_cond_destroy(&rs->changed);
+  pthread_mutex_destroy(&rs->lock);
+  free(th);
+  return err;
+}
+
+/* ------------------------------------------------------------------------ */
+/* MPI                                                                      */
+/* ------------------------------------------------------------------------ */
+static int mpi_world(int use_mpi, int *rank) {
+  *rank = 0;
+#if KARST_HAVE_MPI
+  int init = 0, fin = 0;
+  MPI_Initialized(&init);
+  MPI_Finalized(&fin);
+  if (use_mpi && init && !fin) {
+    int size = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    MPI_Comm_rank(MPI_COMM_WORLD, rank);
+    return size;
+  }
+#else
+  (void)use_mpi;
+#endif
+  return 1;
+}
+
+/* All ranks agree on the worst error code (max); without MPI the local one. */
+static karst_error_t mpi_agree(int ranks, karst_error_t local) {
+#if KARST_HAVE_MPI
+  if (ranks > 1) {
+    int in = (int)local, out = 0;
+    MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return (karst_error_t)out;
+  }
+#else
+  (void)ranks;
+#endif
+  return local;
+}
+
+static karst_int_t mpi_sum(int ranks, karst_int_t local) {
+#if KARST_HAVE_MPI
+  if (ranks > 1) {
+    long long in = (long long)local, out = 0;
+    MPI_Allreduce(&in, &out, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+    return (karst_int_t)out;
+  }
+#else
+  (void)ranks;
+#endif
+  return local;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Collection files                                                         */
+/* ------------------------------------------------------------------------ */
+static void json_string(FILE *fp, const char *s) {
+  fputc('"', fp);
+  for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+    if (*p == '"' || *p == '\\')
+      fprintf(fp, "\\%c", *p);
+    else if (*p == '\n')
+      fputs("\\n", fp);
+    else if (*p < 0x20)
+      fprintf(fp, "\\u%04x", *p);
+    else
+      fputc(*p, fp);
+  }
+  fputc('"', fp);
+}
+
+/* Read the data row of a member's metrics.csv (after checking its header). */
+static karst_error_t read_member_row(karst_ctx_t *ctx, const char *path, const char *header,
+                                     char **row) {
+  karst_error_t err = KARST_SUCCESS;
+  char *buf = NULL;
+  size_t cap = 0;
+  FILE *fp = fopen(path, "rb");
+  *row = NULL;
+  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot read: %s", path, strerror(errno));
+  ssize_t len = getline(&buf, &cap, fp);
+  if (len <= 0 || buf[len - 1] != '\n' || (buf[len - 1] = '\0', strcmp(buf, header) != 0)) {
+    err = karst_set_error(ctx, KARST_EPARSE,
+                          "%s:1: the header does not match this ensemble's metrics (\"%s\"); "
+                          "remove the member to recompute it",
+                          path, header);
+    goto cleanup;
+  }
+  len = getline(&buf, &cap, fp);
+  if (len <= 1 || buf[len - 1] != '\n') {
+    err = karst_set_error(ctx, KARST_EPARSE, "%s:2: missing or unterminated data row", path);
+    goto cleanup;
+  }
+  *row = buf;
+  buf = NULL;
+cleanup:
+  free(buf);
+  fclose(fp);
+  return err;
+}
+
+static karst_error_t write_collection_files(karst_ctx_t *ctx, const char *dir,
+                                            const karst_ensemble_options_t *opt,
+                                            const karst_ensemble_hooks_t *h, const char *header,
+                                            const karst_ensemble_summary_t *sum, int nthreads) {
+  karst_error_t err = KARST_SUCCESS;
+  karst_atomic_file_t f = {0};
+  char *path = NULL, *mpath = NULL, *row = NULL;
+  char **files = NULL;
+  karst_int_t n = opt->n;
+
+  /* metrics.csv: member rows copied verbatim in index order. */
+  path = karst_i_path_join(dir, "metrics.csv");
+  files = calloc((size_t)n, sizeof *files);
+  if (!path || !files) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
+  err = karst_atomic_open(ctx, &f, path, "wb");
+  if (err) goto cleanup;
+  fprintf(f.fp, "%s\n", header);
+  for (karst_int_t i = 0; i < n; i++) {
+    char name[32], rel[96];
+    karst_i_member_name(name, i);
+    snprintf(rel, sizeof rel, "realisations/%s/metrics.csv", name);
+    free(mpath);
+    mpath = karst_i_path_join(dir, rel);
+    snprintf(rel, sizeof rel, "realisations/%s/network.vtp", name);
+    files[i] = strdup(rel);
+    if (!mpath || !files[i]) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+      goto cleanup;
+    }
+    free(row);
+    err = read_member_row(ctx, mpath, header, &row);
+    if (err) goto cleanup;
+    fputs(row, f.fp);
+  }
+  err = karst_atomic_commit(ctx, &f);
+  if (err) goto cleanup;
+
+  /* ensemble.pvd */
+  if (h->write_collection) {
+    free(path);
+    path = karst_i_path_join(dir, "ensemble.pvd");
+    if (!path) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+      goto cleanup;
+    }
+    err = h->write_collection(ctx, h->user, path, (int)n, (const char *const *)files);
+    if (err) goto cleanup;
+  }
+
+  /* ensemble.json: one key per line (karst report reads it back line by line). */
+  free(path);
+  path = karst_i_path_join(dir, "ensemble.json");
+  if (!path) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
+  err = karst_atomic_open(ctx, &f, path, "wb");
+  if (err) goto cleanup;
+  fprintf(f.fp, "{\n  \"karst_version\": ");
+  json_string(f.fp, karst_version());
+  fprintf(f.fp, ",\n  \"scenario\": ");
+  if (opt->scenario_path)
+    json_string(f.fp, opt->scenario_path);
+  else
+    fputs("null", f.fp);
+  fprintf(f.fp, ",\n  \"scenario_hash\": ");
+  if (opt->scenario_hash)
+    json_string(f.fp, opt->scenario_hash);
+  else
+    fputs("null", f.fp);
+  fprintf(f.fp, ",\n  \"seed\": %" PRIu64 ",\n  \"realisations\": %" PRId64 ",\n", opt->seed, n);
+  fprintf(f.fp, "  \"member_seed\": \"first output of the karst_rng stream (seed, index)\",\n");
+  fprintf(f.fp, "  \"metrics\": [");
+  for (int k = 0; k < h->n_metrics; k++) {
+    if (k) fputs(", ", f.fp);
+    json_string(f.fp, h->metric_names[k]);
+  }
+  fprintf(f.fp, "],\n  \"parameters\": {\n");
+  if (opt->parameters_json) fputs(opt->parameters_json, f.fp);
+  fprintf(f.fp, "  },\n");
+  fprintf(f.fp,
+          "  \"timings\": {\"wall_seconds\": %.3f, \"computed\": %" PRId64 ", \"reused\": %" PRId64
+          ", \"threads\": %d, \"ranks\": %d}\n}\n",
+          sum->wall_seconds, sum->complete - sum->reused, sum->reused, nthreads, sum->ranks);
+  err = karst_atomic_commit(ctx, &f);
+  if (err) goto cleanup;
+
+cleanup:
+  if (f.fp) karst_atomic_abort(&f);
+  if (files)
+    for (karst_int_t i = 0; i < n; i++)
+      free(files[i]);
+  free(files);
+  free(row);
+  free(mpath);
+  free(path);
+  return err;
+}
+
+static karst_error_t check_arguments(karst_ctx_t *ctx, const char *dir,
+                                     const karst_ensemble_options_t *opt,
+                                     const karst_ensemble_hooks_t *h) {
+  if (!dir || !*dir) return karst_set_error(ctx, KARST_EINVAL, "no output directory given");
+  if (opt->n < 1 || opt->n > 100000000)
+    return karst_set_error(ctx, KARST_ERANGE,
+                           "the number of realisations must be within [1, 1e8], got %" PRId64,
+                           opt->n);
+  if (opt->nthreads < 1)
+    return karst_set_error(ctx, KARST_ERANGE, "the number of threads must be >= 1, got %d",
+                           opt->nthreads);
+  if (!h || !h->realise || !h->write)
+    return karst_set_error(ctx, KARST_EINVAL, "the ensemble needs realise and write hooks");
+  if (h->n_metrics < 0 || (h->n_metrics > 0 && !h->metric_names))
+    return karst_set_error(ctx, KARST_EINVAL, "invalid metric list (%d names)", h->n_metrics);
+  for (int k = 0; k < h->n_metrics; k++) {
+    const char *s = h->metric_names[k];
+    if (!s || !*s || strpbrk(s, ",\"\n\r"))
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "metric name %d (\"%s\") must be non-empty without commas, quotes "
+                             "or line breaks",
+                             k, s ? s : "");
+  }
+  return KARST_SUCCESS;
+}
+
+/**
+ * Run, or complete, an ensemble in @p dir.
+ *
+ * @param ctx      context; ctx->interrupt stops the run cleanly, ctx->progress
+ *                 receives ("ensemble", members done, members to compute).
+ * @param dir      output directory (created).
+ * @param opt      number of members, base seed, threads, what ensemble.json records.
+ * @param hooks    what a member is (karst_ensemble_hooks_pipeline for the real pipeline).
+ * @param summary  what happened (may be NULL).
+ * @return KARST_SUCCESS when every member is complete and the collection files
+ *         are written; KARST_EINTERRUPTED after an interrupt (finished members
+ *         are kept, unfinished ones leave nothing behind); the error of the
+ *         lowest failing member otherwise ("realisation I: ...").
+ * Members whose directory DIR/realisations/NNNN exists are not recomputed.
+ * Under MPI (karst_ensemble_mpi_start) rank r computes the members i with
+ * i mod P = r and rank 0 writes the collection files after all ranks agree.
+ * Time complexity: N member costs / (threads x ranks), plus O(N) for the files.
+ */
+karst_error_t karst_ensemble_run(karst_ctx_t *ctx, const char *dir,
+                                 const karst_ensemble_options_t *opt,
+                                 const karst_ensemble_hooks_t *hooks,
+                                 karst_ensemble_summary_t *summary) {
+  karst_error_t err = KARST_SUCCESS;
+  char *real_dir = NULL, *header = NULL;
+  karst_int_t *pending = NULL;
+  karst_ensemble_summary_t sum;
+  double t0 = now_seconds();
+  memset(&sum, 0, sizeof sum);
+  err = check_arguments(ctx, dir, opt, hooks);
+  if (err) return err;
+  sum.n = opt->n;
+  sum.ranks = mpi_world(opt->use_mpi, &sum.rank);
+
+  real_dir = karst_i_path_join(dir, "realisations");
+  pending = malloc((size_t)opt->n * sizeof *pending);
+  if (!real_dir || !pending) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
+  err = karst_i_metrics_header(ctx, hooks, &header);
+  if (err) goto cleanup;
+
+  /* Rank 0 prepares the directory; the others wait for its verdict. */
+  if (sum.rank == 0) {
+    err = karst_mkdir_p(ctx, real_dir);
+    if (!err) err = remove_stale_temporaries(ctx, dir);
+    if (!err) err = remove_stale_temporaries(ctx, real_dir);
+    if (!err) err = check_or_write_key(ctx, real_dir, opt);
+  }
+  {
+    karst_error_t all = mpi_agree(sum.ranks, err);
+    if (all && !err)
+      err = karst_set_error(ctx, all, "rank 0 could not prepare %s: %s", dir, karst_strerror(all));
+    if (err) goto cleanup;
+  }
+
+  karst_int_t n_pending = 0, reused = 0;
+  for (karst_int_t i = 0; i < opt->n; i++) {
+    char name[32];
+    karst_i_member_name(name, i);
+    char *p = karst_i_path_join(real_dir, name);
+    if (!p) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+      goto cleanup;
+    }
+    int done = is_dir(p);
+    free(p);
+    if (done) {
+      reused++;
+    } else if (i % sum.ranks == sum.rank) {
+      pending[n_pending++] = i;
+    }
+  }
+  sum.reused = reused;
+  if (sum.rank == 0 && reused > 0)
+    karst_log(ctx, KARST_LOG_INFO,
+              "%s: %" PRId64 " of %" PRId64 " realisations are already complete", dir, reused,
+              opt->n);
+
+  run_state_t rs;
+  memset(&rs, 0, sizeof rs);
+  rs.real_dir = real_dir;
+  rs.opt = opt;
+  rs.hooks = hooks;
+  rs.header = header;
+  rs.parent = ctx;
+  rs.pending = pending;
+  rs.n_pending = n_pending;
+  err = run_queue(ctx, &rs, opt->nthreads);
+  sum.computed = rs.done;
+
+  {
+    karst_error_t all = mpi_agree(sum.ranks, err);
+    sum.complete = reused + mpi_sum(sum.ranks, rs.done);
+    if (all && !err)
+      err = karst_set_error(ctx, all, "another rank failed (%s); see its message",
+                            karst_strerror(all));
+    if (err) goto cleanup;
+  }
+  sum.wall_seconds = now_seconds() - t0;
+  if (sum.rank == 0) {
+    err = write_collection_files(ctx, dir, opt, hooks, header, &sum, opt->nthreads);
+  }
+  {
+    karst_error_t all = mpi_agree(sum.ranks, err);
+    if (all && !err) err = karst_set_error(ctx, all, "rank 0 could not write the collection files");
+  }
+cleanup:
+  sum.wall_seconds = now_seconds() - t0;
+  if (summary) *summary = sum;
+  free(pending);
+  free(header);
+  free(real_dir);
+  return err;
+}
+
+/* ------------------------------------------------------------------------ */
+/* MPI start / finish                                                       */
+/* ------------------------------------------------------------------------ */
+/**
+ * Join the MPI world when started by mpirun. Detection: Open MPI sets
+ * OMPI_COMM_WORLD_SIZE in every rank (PMI_SIZE for other launchers); a plain
+ * start never initialises MPI, so a single process does not need mpirun.
+ * @p initialised is set to 1 when this call initialised MPI (pass it to
+ * karst_ensemble_mpi_finish).
+ * @return KARST_EEXTERNAL when MPI_Init_thread fails.
+ */
+karst_error_t karst_ensemble_mpi_start(karst_ctx_t *ctx, int *ranks, int *rank, int *initialised) {
+  *ranks = 1;
+  *rank = 0;
+  *initialised = 0;
+#if KARST_HAVE_MPI
+  if (!getenv("OMPI_COMM_WORLD_SIZE") && !getenv("PMI_SIZE")) return KARST_SUCCESS;
+  int init = 0;
+  MPI_Initialized(&init);
+  if (!init) {
+    int provided = 0;
+    if (MPI_Init_thread(NULL, NULL, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
+      return karst_set_error(ctx, KARST_EEXTERNAL, "MPI_Init_thread failed");
+    *initialised = 1;
+  }
+  MPI_Comm_size(MPI_COMM_WORLD, ranks);
+  MPI_Comm_rank(MPI_COMM_WORLD, rank);
+#else
+  (void)ctx;
+#endif
+  return KARST_SUCCESS;
+}
+
+/** Finalise MPI when @p initialised (from karst_ensemble_mpi_start) says it was started there. */
+void karst_ensemble_mpi_finish(int initialised) {
+#if KARST_HAVE_MPI
+  int fin = 0;
+  MPI_Finalized(&fin);
+  if (initialised && !fin) MPI_Finalize();
+#else
+  (void)initialised;
+#endif
+}

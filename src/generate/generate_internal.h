@@ -1,0 +1,27 @@
+/* Shared-private entry of the generation pipeline: everything after the
+ * graph, so tests and benchmarks can run the path stages on a graph they
+ * built themselves. */
+#ifndef KARST_GENERATE_INTERNAL_H
+#define KARST_GENERATE_INTERNAL_H
+
+#include "karst/generate.h"
+#include "karst/paths.h"
+
+/* Key-point distance matrix method used by the pipeline (see paths.c for the measurement). */
+#define KARST_I_KEYPOINT_METHOD KARST_PATHS_DIJKSTRA_MULTI
+/* Memory (bytes) the pipeline may spend on the key points' shortest-path trees (4 bytes per
+ * vertex per key point); above it, distances are computed without trees and each kept pair's
+ * path is found again with A*. 1 GiB. */
+#define KARST_I_TREE_BUDGET ((size_t)1 << 30)
+
+karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                          uint64_t seed, uint64_t realisation,
+                                          const karst_graph_t *g, double lb_per_metre,
+                                          karst_network_t *net, karst_generate_stats_t *stats);
+
+/* Seconds on a monotonic clock. */
+double karst_i_now(void);
+/* Peak resident memory of the process in bytes (getrusage). */
+size_t karst_i_peak_bytes(void);
+
+#endif

@@ -1,0 +1,236 @@
+/* run.json: what a realisation was made from (scenario path and hash, seed,
+ * every effective parameter) and what it produced (counts, stage times). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "karst/amplification.h"
+#include "karst/generate.h"
+#include "karst/io.h"
+
+static void json_string(FILE *fp, const char *s) {
+  fputc('"', fp);
+  for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p; p++) {
+    if (*p == '"' || *p == '\\')
+      fprintf(fp, "\\%c", *p);
+    else if (*p < 0x20)
+      fprintf(fp, "\\u%04x", *p);
+    else
+      fputc(*p, fp);
+  }
+  fputc('"', fp);
+}
+
+/* A JSON number (shortest round-trip form), or null for NaN / infinities. */
+static void json_num(FILE *fp, double v) {
+  if (!isfinite(v)) {
+    fputs("null", fp);
+    return;
+  }
+  char buf[32];
+  for (int prec = 15; prec <= 17; prec++) {
+    snprintf(buf, sizeof buf, "%.*g", prec, v);
+    double back;
+    if (sscanf(buf, "%lf", &back) == 1 && back == v) break;
+  }
+  fputs(buf, fp);
+}
+
+static void kv_num(FILE *fp, const char *ind, const char *key, double v, int last) {
+  fprintf(fp, "%s\"%s\": ", ind, key);
+  json_num(fp, v);
+  fputs(last ? "\n" : ",\n", fp);
+}
+
+static void vec3(FILE *fp, const double *v) {
+  fputc('[', fp);
+  for (int k = 0; k < 3; k++) {
+    json_num(fp, v[k]);
+    if (k < 2) fputs(", ", fp);
+  }
+  fputc(']', fp);
+}
+
+static const char *perm_kind(karst_perm_kind_t k) {
+  static const char *const names[] = {"sphere", "stratum", "union", "intersection", "blend"};
+  return (int)k >= 0 && k <= KARST_PERM_BLEND ? names[k] : "unknown";
+}
+
+static void perm_json(FILE *fp, const karst_perm_node_t *n) {
+  fprintf(fp, "{\"kind\": \"%s\"", perm_kind(n->kind));
+  if (n->kind == KARST_PERM_SPHERE) {
+    fputs(", \"resistance\": ", fp), json_num(fp, n->resistance);
+    fputs(", \"center\": ", fp), vec3(fp, n->center);
+    fputs(", \"radius\": ", fp), json_num(fp, n->radius);
+    fputs(", \"falloff\": ", fp), json_num(fp, n->falloff);
+  } else if (n->kind == KARST_PERM_STRATUM) {
+    fputs(", \"resistance\": ", fp), json_num(fp, n->resistance);
+    fputs(", \"bottom\": ", fp), json_num(fp, n->bottom);
+    fputs(", \"top\": ", fp), json_num(fp, n->top);
+  }
+  fputs(", \"weight\": ", fp), json_num(fp, n->weight);
+  if (n->n_children > 0) {
+    fputs(", \"children\": [", fp);
+    for (int i = 0; i < n->n_children; i++) {
+      if (i) fputs(", ", fp);
+      perm_json(fp, &n->children[i]);
+    }
+    fputc(']', fp);
+  }
+  fputc('}', fp);
+}
+
+static const char *keypoint_type(karst_keypoint_type_t t) {
+  return t == KARST_KEYPOINT_SINK ? "sink" : (t == KARST_KEYPOINT_SPRING ? "spring" : "waypoint");
+}
+
+/**
+ * Write run.json for one realisation, atomically: karst version, scenario
+ * path and FNV-1a hash (karst_file_hash; null when built in code), seed and
+ * realisation, every effective parameter of @p sc and of the amplification
+ * constants, the counts and the wall time of each stage of @p stats.
+ * Timings appear only here, so the other outputs of a seed are byte-identical.
+ *
+ * @return KARST_SUCCESS, KARST_EIO (message names the file), KARST_ENOMEM.
+ * Time complexity: O(size of the scenario).
+ */
+karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
+                                       const karst_scenario_t *sc, uint64_t seed,
+                                       uint64_t realisation, const karst_generate_stats_t *st) {
+  char hash[17] = "";
+  karst_error_t err;
+  if (sc->path && (err = karst_file_hash(ctx, sc->path, hash))) return err;
+  karst_atomic_file_t f;
+  if ((err = karst_atomic_open(ctx, &f, path, "w"))) return err;
+  FILE *fp = f.fp;
+  const char *I = "    ";
+  fputs("{\n  \"karst_version\": ", fp);
+  json_string(fp, karst_version());
+  fputs(",\n  \"scenario\": ", fp);
+  if (sc->path)
+    json_string(fp, sc->path);
+  else
+    fputs("null", fp);
+  fputs(",\n  \"scenario_hash\": ", fp);
+  if (sc->path)
+    json_string(fp, hash);
+  else
+    fputs("null", fp);
+  fprintf(fp, ",\n  \"seed\": %llu,\n  \"realisation\": %llu,\n", (unsigned long long)seed,
+          (unsigned long long)realisation);
+  fputs("  \"parameters\": {\n    \"name\": ", fp);
+  json_string(fp, sc->name);
+  fputs(",\n    \"domain_min\": ", fp), vec3(fp, sc->domain_min);
+  fputs(",\n    \"domain_max\": ", fp), vec3(fp, sc->domain_max);
+  fputs(",\n    \"terrain\": {", fp);
+  if (sc->terrain.is_grid) {
+    fputs("\"grid\": ", fp), json_string(fp, sc->terrain.path);
+    fprintf(fp, ", \"ncols\": %lld, \"nrows\": %lld, \"cellsize\": ", (long long)sc->terrain.ncols,
+            (long long)sc->terrain.nrows);
+    json_num(fp, sc->terrain.cellsize);
+  } else {
+    fputs("\"elevation\": ", fp), json_num(fp, sc->terrain.elevation);
+  }
+  fputs("},\n", fp);
+  kv_num(fp, I, "water_table", sc->water_table, 0);
+  fputs("    \"horizons\": [", fp);
+  for (int i = 0; i < sc->n_horizons; i++) {
+    const karst_horizon_t *h = &sc->horizons[i];
+    fputs(i ? ", {" : "{", fp);
+    fputs("\"elevation\": ", fp), json_num(fp, h->elevation);
+    fputs(", \"dip\": ", fp), json_num(fp, h->dip);
+    fputs(", \"dip_direction\": ", fp), json_num(fp, h->dip_direction);
+    fputs(", \"origin\": [", fp), json_num(fp, h->origin[0]), fputs(", ", fp),
+        json_num(fp, h->origin[1]);
+    fputs("], \"radius\": ", fp), json_num(fp, h->radius);
+    fputc('}', fp);
+  }
+  fputs("],\n    \"fractures\": [", fp);
+  for (int i = 0; i < sc->n_fractures; i++) {
+    const karst_fracture_t *fr = &sc->fractures[i];
+    fputs(i ? ", {" : "{", fp);
+    fputs("\"dip_direction\": ", fp), json_num(fp, fr->dip_direction);
+    fputs(", \"dip\": ", fp), json_num(fp, fr->dip);
+    fputs(", \"weight\": ", fp), json_num(fp, fr->weight);
+    fputc('}', fp);
+  }
+  fputs("],\n    \"permeability\": {\"background\": ", fp);
+  json_num(fp, sc->permeability.background);
+  fputs(", \"tree\": ", fp);
+  if (sc->permeability.root)
+    perm_json(fp, sc->permeability.root);
+  else
+    fputs("null", fp);
+  fputs("},\n    \"key_points\": [", fp);
+  for (int i = 0; i < sc->n_key_points; i++) {
+    const karst_keypoint_t *k = &sc->key_points[i];
+    fputs(i ? ",\n      {\"name\": " : "\n      {\"name\": ", fp);
+    json_string(fp, k->name);
+    fprintf(fp, ", \"type\": \"%s\", \"position\": ", keypoint_type(k->type));
+    vec3(fp, k->p);
+    fputc('}', fp);
+  }
+  fputs("],\n    \"prescribed_paths\": [", fp);
+  for (int i = 0; i < sc->n_prescribed; i++) {
+    fputs(i ? ", [" : "[", fp);
+    json_string(fp, sc->key_points[sc->prescribed[i].a].name);
+    fputs(", ", fp);
+    json_string(fp, sc->key_points[sc->prescribed[i].b].name);
+    fputc(']', fp);
+  }
+  fputs("],\n    \"cost\": {\"w0\": ", fp);
+  json_num(fp, sc->cost.w0);
+  fputs(", \"horizon\": ", fp), json_num(fp, sc->cost.horizon);
+  fputs(", \"fracture\": ", fp), json_num(fp, sc->cost.fracture);
+  fputs(", \"permeability\": ", fp), json_num(fp, sc->cost.permeability);
+  fputs(", \"prescribed\": ", fp), json_num(fp, sc->cost.prescribed);
+  fputs("},\n    \"sampling\": {\"fill_radius\": ", fp);
+  json_num(fp, sc->sampling.fill_radius);
+  fputs(", \"feature_radius\": ", fp), json_num(fp, sc->sampling.feature_radius);
+  fputs(", \"permeable_threshold\": ", fp), json_num(fp, sc->sampling.permeable_threshold);
+  fputs(", \"feature_band\": ", fp), json_num(fp, sc->sampling.feature_band);
+  fprintf(fp, ", \"k\": %d, \"max_samples\": %lld},\n", sc->sampling.k,
+          (long long)sc->sampling.max_samples);
+  kv_num(fp, I, "gamma", sc->gamma, 0);
+  kv_num(fp, I, "tortuosity", sc->tortuosity, 0);
+  karst_amplification_options_t ao;
+  karst_amplification_options_init(&ao);
+  fprintf(fp, "    \"amplification\": {\"steps\": %d, \"points\": %d, \"dead_end_fraction\": ",
+          sc->amplification.steps, sc->amplification.points);
+  json_num(fp, sc->amplification.dead_end_fraction);
+  fputs(", \"max_displacement\": ", fp),
+      json_num(fp, karst_amplification_max_displacement(&ao, sc->tortuosity));
+  fputs(", \"displacement_at_theta0\": ", fp), json_num(fp, ao.displacement_at_theta0);
+  fputs(", \"displacement_at_theta1\": ", fp), json_num(fp, ao.displacement_at_theta1);
+  fputs(", \"max_displacement_ratio\": ", fp), json_num(fp, ao.max_displacement_ratio);
+  fputs(", \"min_segment\": ", fp), json_num(fp, ao.min_segment);
+  fprintf(fp, ", \"max_levels\": %d, \"max_tries\": %d, \"loop_separation\": ", ao.max_levels,
+          ao.max_tries);
+  json_num(fp, ao.loop_separation);
+  fputs("},\n    \"classification\": {\"vertical_angle\": ", fp);
+  json_num(fp, sc->classification.vertical_angle);
+  fputs(", \"water_table_band\": ", fp), json_num(fp, sc->classification.water_table_band);
+  fputs(", \"epikarst_depth\": ", fp), json_num(fp, sc->classification.epikarst_depth);
+  fputs(", \"chamber_resistance\": ", fp), json_num(fp, sc->classification.chamber_resistance);
+  fputs(", \"radius\": {", fp);
+  for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++) {
+    fprintf(fp, "%s\"%s\": [", t ? ", " : "", karst_tunnel_type_name((karst_tunnel_type_t)t));
+    json_num(fp, sc->classification.radius[t].min);
+    fputs(", ", fp);
+    json_num(fp, sc->classification.radius[t].max);
+    fputc(']', fp);
+  }
+  fputs("}}\n  },\n  \"counts\": {\n", fp);
+  fprintf(fp, "    \"samples\": %lld,\n    \"graph_edges\": %lld,\n    \"key_points\": %lld,\n",
+          (long long)st->n_samples, (long long)st->n_graph_edges, (long long)st->n_key_points);
+  fprintf(
+      fp,
+      "    \"skeleton_paths\": %lld,\n    \"network_nodes\": %lld,\n    \"network_edges\": %lld,\n",
+      (long long)st->n_skeleton_paths, (long long)st->n_nodes, (long long)st->n_edges);
+  kv_num(fp, I, "total_length", st->total_length, 1);
+  fputs("  },\n  \"stage_seconds\": {\n", fp);
+  for (int s = 0; s < KARST_STAGE_COUNT; s++)
+    kv_num(fp, I, karst_stage_name(s), st->stage_seconds[s], s == KARST_STAGE_COUNT - 1);
+  fprintf(fp, "  },\n  \"peak_bytes\": %zu\n}\n", st->peak_bytes);
+  return karst_atomic_commit(ctx, &f);
+}

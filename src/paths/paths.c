@@ -1,0 +1,559 @@
+/* Least-cost paths on the CSR sample graph (Paris et al. 2021, §4): A*,
+ * Dijkstra with several sources and early stop, and the key-point distance
+ * matrix of §5.1. */
+#include "karst/paths.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A heap entry: priority, then vertex index to break ties deterministically. */
+typedef struct {
+  double key;
+  karst_int_t v;
+} heap_entry_t;
+
+struct karst_search {
+  const karst_graph_t *g;
+  double *dist;      /* tentative or final distance, valid when stamp[v] == cur */
+  karst_int_t *pred; /* predecessor on the search tree, -1 at a source */
+  uint32_t *stamp;   /* generation in which dist/pred were written */
+  uint32_t *settled; /* generation in which v was settled (popped with its final key) */
+  uint32_t cur;
+  heap_entry_t *heap;
+  karst_int_t hn, hcap;
+  karst_int_t n_settled;
+};
+
+/* ------------------------------------------------------------------------ */
+/* Binary heap with lazy deletion: a vertex is pushed again when its        */
+/* distance drops and stale entries are skipped when popped. No decrease-key */
+/* index to maintain; the heap holds at most one entry per relaxation.      */
+/* ------------------------------------------------------------------------ */
+static int heap_less(const heap_entry_t *a, const heap_entry_t *b) {
+  return a->key < b->key || (a->key == b->key && a->v < b->v);
+}
+
+static karst_error_t heap_push(karst_search_t *s, double key, karst_int_t v) {
+  if (s->hn == s->hcap) {
+    karst_int_t cap = s->hcap ? 2 * s->hcap : 1024;
+    heap_entry_t *h = realloc(s->heap, (size_t)cap * sizeof *h);
+    if (!h) return KARST_ENOMEM;
+    s->heap = h;
+    s->hcap = cap;
+  }
+  karst_int_t i = s->hn++;
+  heap_entry_t e = {key, v};
+  while (i > 0) {
+    karst_int_t p = (i - 1) / 2;
+    if (!heap_less(&e, &s->heap[p])) break;
+    s->heap[i] = s->heap[p];
+    i = p;
+  }
+  s->heap[i] = e;
+  return KARST_SUCCESS;
+}
+
+static heap_entry_t heap_pop(karst_search_t *s) {
+  heap_entry_t top = s->heap[0];
+  heap_entry_t last = s->heap[--s->hn];
+  karst_int_t i = 0, n = s->hn;
+  for (;;) {
+    karst_int_t c = 2 * i + 1;
+    if (c >= n) break;
+    if (c + 1 < n && heap_less(&s->heap[c + 1], &s->heap[c])) c++;
+    if (!heap_less(&s->heap[c], &last)) break;
+    s->heap[i] = s->heap[c];
+    i = c;
+  }
+  if (n > 0) s->heap[i] = last;
+  return top;
+}
+
+/**
+ * Create a search workspace for graph @p g (borrowed: it must outlive the
+ * workspace). O(n) memory and time, once; each later search costs what it
+ * visits.
+ */
+karst_error_t karst_search_create(karst_ctx_t *ctx, const karst_graph_t *g, karst_search_t **out) {
+  *out = NULL;
+  if (!g || g->n < 0)
+    return karst_set_error(ctx, KARST_EINVAL, "search: graph missing or with %lld vertices",
+                           g ? (long long)g->n : -1LL);
+  karst_search_t *s = calloc(1, sizeof *s);
+  if (!s) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+  size_t n = (size_t)(g->n > 0 ? g->n : 1);
+  s->g = g;
+  s->dist = malloc(n * sizeof *s->dist);
+  s->pred = malloc(n * sizeof *s->pred);
+  s->stamp = calloc(n, sizeof *s->stamp);
+  s->settled = calloc(n, sizeof *s->settled);
+  if (!s->dist || !s->pred || !s->stamp || !s->settled) {
+    karst_search_free(s);
+    return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory for %lld vertices",
+                           (long long)g->n);
+  }
+  *out = s;
+  return KARST_SUCCESS;
+}
+
+void karst_search_free(karst_search_t *s) {
+  if (!s) return;
+  free(s->dist);
+  free(s->pred);
+  free(s->stamp);
+  free(s->settled);
+  free(s->heap);
+  free(s);
+}
+
+/* Start a new search generation: all distances become "unset" in O(1). */
+static void search_begin(karst_search_t *s) {
+  s->hn = 0;
+  s->n_settled = 0;
+  if (++s->cur == 0) { /* wrapped after 2^32 searches: clear the stamps once */
+    memset(s->stamp, 0, (size_t)s->g->n * sizeof *s->stamp);
+    memset(s->settled, 0, (size_t)s->g->n * sizeof *s->settled);
+    s->cur = 1;
+  }
+}
+
+static double get_dist(const karst_search_t *s, karst_int_t v) {
+  return s->stamp[v] == s->cur ? s->dist[v] : INFINITY;
+}
+
+double karst_search_dist(const karst_search_t *s, karst_int_t v) {
+  if (!s || v < 0 || v >= s->g->n || s->settled[v] != s->cur) return INFINITY;
+  return s->dist[v];
+}
+
+karst_int_t karst_search_settled(const karst_search_t *s) {
+  return s ? s->n_settled : 0;
+}
+
+void karst_path_init(karst_path_t *p) {
+  memset(p, 0, sizeof *p);
+}
+void karst_path_destroy(karst_path_t *p) {
+  free(p->v);
+  memset(p, 0, sizeof *p);
+}
+
+/**
+ * The path from the source of the last search to @p v, following the
+ * predecessors. @p v must have been settled by that search.
+ * @return KARST_EUNREACHABLE when it was not; KARST_ENOMEM.
+ * Time complexity: O(length of the path).
+ */
+karst_error_t karst_search_path_to(karst_ctx_t *ctx, const karst_search_t *s, karst_int_t v,
+                                   karst_path_t *path) {
+  if (v < 0 || v >= s->g->n || s->settled[v] != s->cur)
+    return karst_set_error(ctx, KARST_EUNREACHABLE, "vertex %lld was not reached by the search",
+                           (long long)v);
+  karst_int_t len = 0;
+  for (karst_int_t u = v; u >= 0; u = s->pred[u])
+    len++;
+  if (len > path->cap) {
+    karst_int_t *nv = realloc(path->v, (size_t)len * sizeof *nv);
+    if (!nv) return karst_set_error(ctx, KARST_ENOMEM, "path: out of memory");
+    path->v = nv;
+    path->cap = len;
+  }
+  path->n = len;
+  karst_int_t i = len;
+  for (karst_int_t u = v; u >= 0; u = s->pred[u])
+    path->v[--i] = u;
+  path->cost = s->dist[v];
+  return KARST_SUCCESS;
+}
+
+static double euclid(const double *xyz, karst_int_t a, karst_int_t b) {
+  double dx = xyz[3 * a] - xyz[3 * b], dy = xyz[3 * a + 1] - xyz[3 * b + 1],
+         dz = xyz[3 * a + 2] - xyz[3 * b + 2];
+  return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/*
+ * The one search loop behind A* and Dijkstra. Priority = g(v) + h(v) with
+ * h(v) = lb · |v − target| (A*; h = 0 when target < 0 or lb = 0). A popped
+ * entry whose key no longer equals g(v) + h(v) is stale and skipped. Vertices
+ * are never closed for good: a shorter g found later re-opens them, so the
+ * result stays exact even if rounding made h inconsistent by an ulp (with a
+ * consistent h, as ours is in exact arithmetic, nothing is ever re-opened).
+ * Stops when @p target is settled, or when @p stop_after vertices marked in
+ * @p is_target are settled.
+ */
+static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
+                                const karst_int_t *sources, karst_int_t target, double lb,
+                                const unsigned char *blocked, const unsigned char *is_target,
+                                karst_int_t stop_after, karst_int_t *last_target) {
+  const karst_graph_t *g = s->g;
+  const int astar = target >= 0 && lb > 0 && g->xyz;
+  karst_int_t found = 0;
+  if (last_target) *last_target = -1;
+  search_begin(s);
+  for (karst_int_t i = 0; i < n_sources; i++) {
+    karst_int_t v = sources[i];
+    if (v < 0 || v >= g->n)
+      return karst_set_error(ctx, KARST_EINVAL, "search: source %lld is not a vertex (n = %lld)",
+                             (long long)v, (long long)g->n);
+    if (s->stamp[v] == s->cur) continue;
+    s->stamp[v] = s->cur;
+    s->dist[v] = 0.0;
+    s->pred[v] = -1;
+    double h = astar ? lb * euclid(g->xyz, v, target) : 0.0;
+    if (heap_push(s, h, v)) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+  }
+  while (s->hn > 0) {
+    heap_entry_t e = heap_pop(s);
+    karst_int_t v = e.v;
+    double gv = s->dist[v];
+    double hv = astar ? lb * euclid(g->xyz, v, target) : 0.0;
+    if (e.key != gv + hv) continue; /* stale */
+    if (s->settled[v] != s->cur) {
+      s->settled[v] = s->cur;
+      s->n_settled++;
+    }
+    if (v == target) {
+      if (last_target) *last_target = v;
+      break;
+    }
+    if (is_target && is_target[v]) {
+      if (last_target) *last_target = v;
+      if (stop_after > 0 && ++found >= stop_after) break;
+    }
+    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
+      karst_int_t w = g->adj[a];
+      double c = g->cost[a];
+      if (!(c < INFINITY) || (blocked && blocked[w])) continue;
+      double nd = gv + c;
+      if (nd < get_dist(s, w)) {
+        s->stamp[w] = s->cur;
+        s->dist[w] = nd;
+        s->pred[w] = v;
+        double hw = astar ? lb * euclid(g->xyz, w, target) : 0.0;
+        if (heap_push(s, nd + hw, w))
+          return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+      }
+    }
+  }
+  return KARST_SUCCESS;
+}
+
+/**
+ * Least-cost path from @p source to @p target with A* (Hart, Nilsson &
+ * Raphael 1968) on the sample graph of Paris et al. 2021, §4.
+ *
+ * Heuristic h(v) = lb_per_metre · |v − target|. It never overestimates: every
+ * arc cost is the line integral of c(p, d) along the straight segment u→w, and
+ * c ≥ lb everywhere, so cost(u, w) ≥ lb·|u − w|; summing over any path from v
+ * to the target and using the triangle inequality, its cost is ≥ lb·|v − t|.
+ * The same inequality with |u − t| ≤ |u − w| + |w − t| shows h is consistent
+ * (h(u) ≤ cost(u, w) + h(w)), so each vertex is expanded once.
+ * Pass lb_per_metre = 0 to get plain Dijkstra.
+ *
+ * @param ctx          error messages.
+ * @param s            workspace created on the graph.
+ * @param source       start vertex.
+ * @param target       end vertex.
+ * @param lb_per_metre a lower bound of the cost per metre (karst_cost_lower_bound_per_metre), >= 0.
+ * @param path         receives the vertices source..target and the cost.
+ * @return KARST_SUCCESS; KARST_EUNREACHABLE when no finite-cost path exists
+ *         (message names both vertices); KARST_EINVAL for bad indices or bound.
+ * Time complexity: O((m + n) log n) in the worst case, usually far less.
+ */
+karst_error_t karst_paths_astar(karst_ctx_t *ctx, karst_search_t *s, karst_int_t source,
+                                karst_int_t target, double lb_per_metre, karst_path_t *path) {
+  const karst_graph_t *g = s->g;
+  if (source < 0 || source >= g->n || target < 0 || target >= g->n)
+    return karst_set_error(ctx, KARST_EINVAL, "A*: vertices %lld -> %lld outside [0, %lld)",
+                           (long long)source, (long long)target, (long long)g->n);
+  if (!(lb_per_metre >= 0) || isinf(lb_per_metre))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "A*: the cost lower bound per metre must be finite and >= 0, got %g",
+                           lb_per_metre);
+  karst_error_t err = run_search(ctx, s, 1, &source, target, lb_per_metre, NULL, NULL, 0, NULL);
+  if (err) return err;
+  if (s->settled[target] != s->cur)
+    return karst_set_error(ctx, KARST_EUNREACHABLE,
+                           "no finite-cost path from vertex %lld to vertex %lld", (long long)source,
+                           (long long)target);
+  return karst_search_path_to(ctx, s, target, path);
+}
+
+/**
+ * Dijkstra (1959) from several sources at distance 0 (a "super-source"), so
+ * that each settled vertex gets its least cost to the nearest source.
+ *
+ * @param n_sources, sources  start vertices (at least one).
+ * @param blocked     vertices the search may not enter (NULL: none); sources are never blocked.
+ * @param is_target   vertices counted as targets (NULL: none).
+ * @param stop_after  stop once this many targets are settled (<= 0: run to exhaustion).
+ * @param last_target receives the last target settled, -1 if none (may be NULL).
+ * Distances and paths are then read with karst_search_dist / karst_search_path_to.
+ * @return KARST_SUCCESS (even when targets were not reached: check last_target), KARST_EINVAL,
+ *         KARST_ENOMEM.
+ * Time complexity: O((m + n) log n) for what is visited.
+ */
+karst_error_t karst_paths_dijkstra(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
+                                   const karst_int_t *sources, const unsigned char *blocked,
+                                   const unsigned char *is_target, karst_int_t stop_after,
+                                   karst_int_t *last_target) {
+  if (n_sources < 1 || !sources)
+    return karst_set_error(ctx, KARST_EINVAL, "Dijkstra: no source given");
+  return run_search(ctx, s, n_sources, sources, -1, 0.0, blocked, is_target, stop_after,
+                    last_target);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Key-point distance matrix, one row per task, rows spread over threads.   */
+/* ------------------------------------------------------------------------ */
+typedef struct {
+  karst_ctx_t ctx; /* private context: errors are copied back by the caller */
+  const karst_graph_t *g;
+  karst_int_t n_keys;
+  const karst_int_t *keys;
+  double lb;
+  karst_paths_method_t method;
+  double *dist;
+  int32_t *pred; /* (n_keys − 1) × n trees, or NULL */
+  int thread, nthreads;
+  volatile int *interrupt;
+  karst_error_t err;
+} rows_task_t;
+
+static void *rows_worker(void *arg) {
+  rows_task_t *t = arg;
+  karst_search_t *s = NULL;
+  unsigned char *mask = NULL;
+  karst_path_t path;
+  karst_path_init(&path);
+  t->err = karst_search_create(&t->ctx, t->g, &s);
+  if (t->err) goto cleanup;
+  if (t->method == KARST_PATHS_DIJKSTRA_MULTI) {
+    mask = calloc((size_t)(t->g->n > 0 ? t->g->n : 1), 1);
+    if (!mask) {
+      t->err = karst_set_error(&t->ctx, KARST_ENOMEM, "key-point distances: out of memory");
+      goto cleanup;
+    }
+  }
+  /* Row i holds the distances to keys j > i; the last row has nothing to do. */
+  for (karst_int_t i = t->thread; i < t->n_keys - 1; i += t->nthreads) {
+    if (t->interrupt && *t->interrupt) {
+      t->err = karst_set_error(&t->ctx, KARST_EINTERRUPTED, "key-point distances interrupted");
+      goto cleanup;
+    }
+    karst_int_t ki = t->keys[i];
+    if (t->method == KARST_PATHS_DIJKSTRA_MULTI) {
+      karst_int_t want = 0;
+      for (karst_int_t j = i + 1; j < t->n_keys; j++)
+        if (!mask[t->keys[j]]) mask[t->keys[j]] = 1, want++;
+      t->err = karst_paths_dijkstra(&t->ctx, s, 1, &ki, NULL, mask, want, NULL);
+      for (karst_int_t j = i + 1; j < t->n_keys; j++)
+        mask[t->keys[j]] = 0;
+      if (t->err) goto cleanup;
+      for (karst_int_t j = i + 1; j < t->n_keys; j++)
+        t->dist[i * t->n_keys + j] = karst_search_dist(s, t->keys[j]);
+      if (t->pred) {
+        int32_t *row = t->pred + (size_t)i * (size_t)t->g->n;
+        for (karst_int_t v = 0; v < t->g->n; v++)
+          row[v] = s->settled[v] == s->cur ? (int32_t)s->pred[v] : -2;
+      }
+    } else {
+      for (karst_int_t j = i + 1; j < t->n_keys; j++) {
+        karst_error_t e = karst_paths_astar(&t->ctx, s, ki, t->keys[j], t->lb, &path);
+        if (e == KARST_EUNREACHABLE) {
+          t->dist[i * t->n_keys + j] = INFINITY;
+          continue;
+        }
+        if (e) {
+          t->err = e;
+          goto cleanup;
+        }
+        t->dist[i * t->n_keys + j] = path.cost;
+      }
+    }
+  }
+cleanup:
+  karst_path_destroy(&path);
+  free(mask);
+  karst_search_free(s);
+  return NULL;
+}
+
+static karst_error_t keypoint_rows(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
+                                   const karst_int_t *keys, double lb_per_metre,
+                                   karst_paths_method_t method, double *dist, int32_t *pred);
+
+/**
+ * Least-cost distances between all pairs of key points (the complete graph
+ * of Paris et al. 2021, §5.1, before γ pruning).
+ *
+ * Which method is faster: one multi-target Dijkstra per key point. Measured by
+ * bench/bench_generate (47 key points on a 72 000-vertex, 1.77 M-arc graph,
+ * costs 1–2 × length, 1 thread, shared 2-core machine): Dijkstra rows 2.7 s,
+ * A* pairs 7.8 s (2.8 × slower); on 300 000 vertices 9.6 s against 52 s. Why:
+ * with k key points, A* runs k(k−1)/2 searches, and each one to a distant key
+ * point still settles an ellipsoid-shaped region that the cost heuristic
+ * (which only knows the minimum cost per metre, often far below the typical
+ * cost per metre) barely narrows; a Dijkstra from key point i settles one
+ * ball reaching the farthest key point j > i once and serves all k−1−i
+ * targets. Rows are independent, so they are spread over ctx->nthreads
+ * threads (row i to thread i mod T); the matrix does not depend on T.
+ *
+ * @param g            the sample graph.
+ * @param n_keys, keys key points as vertex indices (need not be distinct).
+ * @param lb_per_metre lower bound of the cost per metre (A* heuristic; ignored by Dijkstra).
+ * @param method       KARST_PATHS_DIJKSTRA_MULTI (default) or KARST_PATHS_ASTAR_PAIRS.
+ * @param dist         n_keys × n_keys row-major output, symmetric, 0 on the
+ *                     diagonal, INFINITY where no finite-cost path exists.
+ * @return KARST_SUCCESS, KARST_EINVAL, KARST_ENOMEM, KARST_EINTERRUPTED.
+ * Time complexity: O(k (m + n) log n) with Dijkstra rows.
+ */
+karst_error_t karst_paths_keypoint_distances(karst_ctx_t *ctx, const karst_graph_t *g,
+                                             karst_int_t n_keys, const karst_int_t *keys,
+                                             double lb_per_metre, karst_paths_method_t method,
+                                             double *dist) {
+  return keypoint_rows(ctx, g, n_keys, keys, lb_per_metre, method, dist, NULL);
+}
+
+/**
+ * The key-point distance matrix (as karst_paths_keypoint_distances with
+ * Dijkstra rows) together with the shortest-path tree of each row, so the
+ * skeleton can read the path of every kept pair without searching again
+ * (one search per key point in all, instead of one more A* per kept pair —
+ * with γ ≤ 1 every pair is kept: 1081 searches for 47 key points).
+ *
+ * @param dist  n_keys × n_keys output as in karst_paths_keypoint_distances.
+ * @param pred  (n_keys − 1) × n output: row i holds, for each vertex settled by
+ *              the search from key i, its predecessor (−1 at key i), and −2 for
+ *              vertices that search did not settle. Read paths with
+ *              karst_paths_tree_path. The graph must have fewer than 2^31 vertices.
+ * @return as karst_paths_keypoint_distances; KARST_ERANGE for too large a graph.
+ * Time complexity: O(k (m + n) log n); memory 4 (k − 1) n bytes.
+ */
+karst_error_t karst_paths_keypoint_trees(karst_ctx_t *ctx, const karst_graph_t *g,
+                                         karst_int_t n_keys, const karst_int_t *keys, double *dist,
+                                         int32_t *pred) {
+  if (g->n >= INT32_MAX)
+    return karst_set_error(ctx, KARST_ERANGE, "key-point trees: %lld vertices exceed 2^31 - 1",
+                           (long long)g->n);
+  return keypoint_rows(ctx, g, n_keys, keys, 0.0, KARST_PATHS_DIJKSTRA_MULTI, dist, pred);
+}
+
+/**
+ * The path from @p source to @p target in a shortest-path tree written by
+ * karst_paths_keypoint_trees (the row of @p source).
+ * @return KARST_EUNREACHABLE when @p target was not settled in that tree.
+ * Time complexity: O(path length).
+ */
+karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
+                                    const int32_t *pred_row, karst_int_t source, karst_int_t target,
+                                    karst_path_t *path) {
+  if (target < 0 || target >= g->n || pred_row[target] == -2)
+    return karst_set_error(ctx, KARST_EUNREACHABLE,
+                           "no finite-cost path from vertex %lld to vertex %lld", (long long)source,
+                           (long long)target);
+  karst_int_t len = 0;
+  for (karst_int_t u = target; u >= 0; u = pred_row[u]) {
+    if (++len > g->n)
+      return karst_set_error(ctx, KARST_EINVAL, "key-point tree of vertex %lld has a cycle",
+                             (long long)source);
+  }
+  if (len > path->cap) {
+    karst_int_t *nv = realloc(path->v, (size_t)len * sizeof *nv);
+    if (!nv) return karst_set_error(ctx, KARST_ENOMEM, "path: out of memory");
+    path->v = nv;
+    path->cap = len;
+  }
+  path->n = len;
+  karst_int_t i = len;
+  double cost = 0;
+  for (karst_int_t u = target; u >= 0; u = pred_row[u]) {
+    path->v[--i] = u;
+    karst_int_t p = pred_row[u];
+    if (p >= 0) {
+      double best = INFINITY;
+      for (karst_int_t a = g->offsets[p]; a < g->offsets[p + 1]; a++)
+        if (g->adj[a] == u && g->cost[a] < best) best = g->cost[a];
+      cost += best;
+    }
+  }
+  if (path->v[0] != source)
+    return karst_set_error(ctx, KARST_EINVAL, "tree row does not start at vertex %lld",
+                           (long long)source);
+  path->cost = cost;
+  return KARST_SUCCESS;
+}
+
+static karst_error_t keypoint_rows(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
+                                   const karst_int_t *keys, double lb_per_metre,
+                                   karst_paths_method_t method, double *dist, int32_t *pred) {
+  karst_error_t err = KARST_SUCCESS;
+  rows_task_t *tasks = NULL;
+  pthread_t *threads = NULL;
+  int started = 0;
+  if (n_keys < 0 || (n_keys > 0 && (!keys || !dist)))
+    return karst_set_error(ctx, KARST_EINVAL, "key-point distances: %lld key points",
+                           (long long)n_keys);
+  for (karst_int_t i = 0; i < n_keys; i++)
+    if (keys[i] < 0 || keys[i] >= g->n)
+      return karst_set_error(
+          ctx, KARST_EINVAL,
+          "key-point distances: key point %lld is vertex %lld, outside [0, %lld)", (long long)i,
+          (long long)keys[i], (long long)g->n);
+  for (karst_int_t i = 0; i < n_keys * n_keys; i++)
+    dist[i] = INFINITY;
+  for (karst_int_t i = 0; i < n_keys; i++)
+    dist[i * n_keys + i] = 0.0;
+  if (n_keys < 2) return KARST_SUCCESS;
+  int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
+  if (T > n_keys - 1) T = (int)(n_keys - 1);
+  tasks = calloc((size_t)T, sizeof *tasks);
+  threads = calloc((size_t)T, sizeof *threads);
+  if (!tasks || !threads) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "key-point distances: out of memory");
+    goto cleanup;
+  }
+  for (int t = 0; t < T; t++) {
+    karst_ctx_init(&tasks[t].ctx);
+    tasks[t].g = g;
+    tasks[t].n_keys = n_keys;
+    tasks[t].keys = keys;
+    tasks[t].lb = lb_per_metre;
+    tasks[t].method = method;
+    tasks[t].dist = dist;
+    tasks[t].pred = pred;
+    tasks[t].thread = t;
+    tasks[t].nthreads = T;
+    tasks[t].interrupt = ctx ? ctx->interrupt : NULL;
+  }
+  if (T == 1) {
+    rows_worker(&tasks[0]);
+    started = 0;
+  } else {
+    for (; started < T; started++)
+      if (pthread_create(&threads[started], NULL, rows_worker, &tasks[started])) break;
+    if (started == 0) rows_worker(&tasks[0]), started = -1;
+    /* Threads that could not start: their rows are done here, in order. */
+    for (int t = started < 0 ? 1 : started; t < T; t++)
+      rows_worker(&tasks[t]);
+    for (int t = 0; t < (started < 0 ? 0 : started); t++)
+      pthread_join(threads[t], NULL);
+  }
+  for (int t = 0; t < T; t++)
+    if (tasks[t].err) {
+      err = karst_set_error(ctx, tasks[t].err, "%s", tasks[t].ctx.errmsg);
+      goto cleanup;
+    }
+  for (karst_int_t i = 0; i < n_keys; i++)
+    for (karst_int_t j = i + 1; j < n_keys; j++) {
+      if (keys[i] == keys[j]) dist[i * n_keys + j] = 0.0;
+      dist[j * n_keys + i] = dist[i * n_keys + j];
+    }
+cleanup:
+  free(tasks);
+  free(threads);
+  return err;
+}

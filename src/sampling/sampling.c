@@ -1,0 +1,808 @@
+/* Adaptive Poisson-sphere sampling of the bedrock (Paris et al. 2021, §4.1).
+ *
+ * Method: grid-accelerated dart throwing with a bounded number of darts per
+ * cell (in the spirit of Dunbar & Humphreys 2006 and Gamito & Maddock 2009,
+ * "Accurate multidimensional Poisson-disk sampling"): the background grid has
+ * cells of size r/√3, whose diagonal is r, so a cell holds at most one sample
+ * of radius r and a conflict can only come from the 117 cells whose distance
+ * to the cell is below r. Cells are visited in one random order, for
+ * KARST_SAMPLING_DART_PASSES passes, one dart per empty cell per pass, which
+ * makes the whole sampling O(cells) = O(volume / r^3).
+ *
+ * Two radii: feature samples (key points, prescribed paths, horizons, water
+ * table, permeable volumes) keep sampling.feature_radius r_f from one another
+ * and live in a sparse hash grid (they occupy thin layers or small volumes);
+ * fill samples keep sampling.fill_radius r_c from one another and
+ * min(r_f, r_c) from feature samples, and live in a dense grid over the box.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cost/cost_internal.h"
+#include "karst/sampling.h"
+
+/* Largest background grid (cells) that may be allocated: 2^31 (8 GiB of
+ * indices) is far beyond what max_samples allows; it only guards overflow. */
+#define MAX_GRID_CELLS ((double)INT32_MAX)
+
+/* ------------------------------------------------------------------------ */
+/* Column grid of feature samples                                            */
+/* ------------------------------------------------------------------------ */
+/* Feature samples fill thin layers (horizons, water table) or small volumes,
+ * so they are kept per vertical column of the background grid: a dense 2-D
+ * array of chain heads (4 bytes per column) and one chain per column. A
+ * conflict query walks the 5 x 5 columns around the point, comparing z
+ * first. */
+typedef struct cgrid {
+  double cell, origin[3];
+  int64_t dims[3];
+  int32_t *head; /* per column (i + dims[0] j), -1 = empty */
+  double *xyz;   /* entries */
+  int32_t *next;
+  size_t n, ncap;
+} cgrid_t;
+
+static int cgrid_init(cgrid_t *g, double cell, const double origin[3], const int64_t dims[3]) {
+  memset(g, 0, sizeof *g);
+  g->cell = cell;
+  memcpy(g->origin, origin, sizeof g->origin);
+  memcpy(g->dims, dims, sizeof g->dims);
+  size_t cols = (size_t)(dims[0] * dims[1]);
+  g->head = malloc(sizeof(int32_t) * cols);
+  if (!g->head) return 0;
+  memset(g->head, 0xff, sizeof(int32_t) * cols);
+  return 1;
+}
+
+static void cgrid_destroy(cgrid_t *g) {
+  free(g->head), free(g->xyz), free(g->next);
+  memset(g, 0, sizeof *g);
+}
+
+static int64_t cgrid_coord(const cgrid_t *g, double x, int a) {
+  double f = floor((x - g->origin[a]) / g->cell);
+  return f < 0 ? 0 : (f >= (double)g->dims[a] ? g->dims[a] - 1 : (int64_t)f);
+}
+
+static int cgrid_insert(cgrid_t *g, const double p[3]) {
+  if (g->n == g->ncap) {
+    size_t nc = g->ncap ? 2 * g->ncap : 1024;
+    double *xyz = realloc(g->xyz, sizeof(double) * 3 * nc);
+    if (!xyz) return 0;
+    g->xyz = xyz;
+    int32_t *next = realloc(g->next, sizeof(int32_t) * nc);
+    if (!next) return 0;
+    g->next = next, g->ncap = nc;
+  }
+  int64_t col = cgrid_coord(g, p[0], 0) + g->dims[0] * cgrid_coord(g, p[1], 1);
+  int32_t e = (int32_t)g->n++;
+  memcpy(g->xyz + 3 * e, p, 3 * sizeof(double));
+  g->next[e] = g->head[col];
+  g->head[col] = e;
+  return 1;
+}
+
+/* Whether cell (i, j, k) already holds a feature sample. */
+static int cgrid_occupied(const cgrid_t *g, int64_t i, int64_t j, int64_t k) {
+  for (int32_t e = g->head[i + g->dims[0] * j]; e >= 0; e = g->next[e])
+    if (cgrid_coord(g, g->xyz[3 * e + 2], 2) == k) return 1;
+  return 0;
+}
+
+/* Whether some entry lies closer than r to p. */
+static int cgrid_conflict(const cgrid_t *g, const double p[3], double r) {
+  if (g->n == 0) return 0;
+  int64_t i0 = cgrid_coord(g, p[0] - r, 0), i1 = cgrid_coord(g, p[0] + r, 0);
+  int64_t j0 = cgrid_coord(g, p[1] - r, 1), j1 = cgrid_coord(g, p[1] + r, 1);
+  double r2 = r * r;
+  for (int64_t j = j0; j <= j1; j++)
+    for (int64_t i = i0; i <= i1; i++)
+      for (int32_t e = g->head[i + g->dims[0] * j]; e >= 0; e = g->next[e]) {
+        const double *q = g->xyz + 3 * e;
+        double dz = q[2] - p[2];
+        if (dz * dz >= r2) continue;
+        double dx = q[0] - p[0], dy = q[1] - p[1];
+        if (dx * dx + dy * dy + dz * dz < r2) return 1;
+      }
+  return 0;
+}
+
+/* ------------------------------------------------------------------------ */
+/* The sampler                                                               */
+/* ------------------------------------------------------------------------ */
+typedef struct sampler {
+  karst_ctx_t *ctx;
+  const karst_scenario_t *sc;
+  karst_rng_t *rng;
+  karst_samples_t *s;
+  double rf, rc, rm; /* feature radius, fill radius, min of both */
+  double lo[3], hi[3];
+  cgrid_t feat;
+  /* dense fill grid with a border of 2 empty cells on every side, so that
+   * neighbours are found by adding a precomputed linear offset */
+  double cc;
+  int64_t cd[3], pd[3]; /* cells per axis, without and with the border */
+  int32_t *fill;        /* sample index per cell; -1 empty, -2 empty and covered */
+  unsigned char *near;  /* 1 if a feature sample lies within rm of the cell */
+  int n_off;
+  int64_t delta[125]; /* linear offsets of the cells that can hold a conflicting fill sample */
+  const char *stage;  /* for messages */
+} sampler_t;
+
+/* Linear index of fill cell (i, j, k) in the bordered grid. */
+static int64_t pidx(const sampler_t *S, int64_t i, int64_t j, int64_t k) {
+  return (i + 2) + S->pd[0] * ((j + 2) + S->pd[1] * (k + 2));
+}
+
+static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
+  if (S->s->n >= S->sc->sampling.max_samples)
+    return karst_set_error(S->ctx, KARST_ERANGE,
+                           "sampling needs more than sampling.max_samples = %lld samples "
+                           "(reached while placing %s samples); increase fill_radius or "
+                           "feature_radius, shrink the domain, or raise max_samples",
+                           (long long)S->sc->sampling.max_samples, S->stage);
+  if (karst_samples_add(S->s, p, src) != KARST_SUCCESS)
+    return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for %lld samples",
+                           (long long)S->s->n + 1);
+  if (src == KARST_SAMPLE_FILL) return KARST_SUCCESS;
+  if (!cgrid_insert(&S->feat, p))
+    return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the feature sample grid");
+  /* Mark the fill cells a later fill dart would have to check against p. */
+  int64_t lo[3], hi[3];
+  for (int a = 0; a < 3; a++) {
+    double l = floor((p[a] - S->rm - S->lo[a]) / S->cc),
+           h = floor((p[a] + S->rm - S->lo[a]) / S->cc);
+    lo[a] = l < 0 ? 0 : (int64_t)l;
+    hi[a] = h >= (double)S->cd[a] ? S->cd[a] - 1 : (int64_t)h;
+  }
+  for (int64_t k = lo[2]; k <= hi[2]; k++)
+    for (int64_t j = lo[1]; j <= hi[1]; j++)
+      for (int64_t i = lo[0]; i <= hi[0]; i++)
+        S->near[pidx(S, i, j, k)] = 1;
+  return KARST_SUCCESS;
+}
+
+static void shuffle(karst_rng_t *rng, int64_t *v, size_t n) {
+  for (size_t i = n; i > 1; i--) {
+    size_t j = (size_t)karst_rng_below(rng, (uint64_t)i);
+    int64_t t = v[i - 1];
+    v[i - 1] = v[j], v[j] = t;
+  }
+}
+
+typedef struct cells {
+  int64_t *v;
+  size_t n, cap;
+} cells_t;
+
+static int cells_push(cells_t *c, int64_t x) {
+  if (c->n == c->cap) {
+    size_t nc = c->cap ? 2 * c->cap : 4096;
+    int64_t *v = realloc(c->v, sizeof(int64_t) * nc);
+    if (!v) return 0;
+    c->v = v, c->cap = nc;
+  }
+  c->v[c->n++] = x;
+  return 1;
+}
+
+/* A region sampled at the feature radius: a layer |z − L(x, y)| <= band
+ * around a horizon (or the water table), or the permeable volume. */
+typedef struct region {
+  karst_sample_source_t src;
+  const karst_horizon_t *layer; /* NULL for the permeable volume */
+  double band;
+} region_t;
+
+static int region_contains(const sampler_t *S, const region_t *R, const double p[3]) {
+  if (R->layer) return fabs(p[2] - karst_horizon_elevation(R->layer, p[0], p[1])) <= R->band;
+  return karst_permeability_eval(&S->sc->permeability, p) < S->sc->sampling.permeable_threshold;
+}
+
+/* Layer elevation range over a column rectangle (a plane: extremes at corners). */
+static void layer_range(const karst_horizon_t *L, double x0, double x1, double y0, double y1,
+                        double *zlo, double *zhi) {
+  double z[4] = {karst_horizon_elevation(L, x0, y0), karst_horizon_elevation(L, x1, y0),
+                 karst_horizon_elevation(L, x0, y1), karst_horizon_elevation(L, x1, y1)};
+  *zlo = fmin(fmin(z[0], z[1]), fmin(z[2], z[3]));
+  *zhi = fmax(fmax(z[0], z[1]), fmax(z[2], z[3]));
+}
+
+/* Conservative bounding box of {p : node value < t} ("all" = whole space). */
+typedef struct aabb {
+  double lo[3], hi[3];
+  int empty;
+} aabb_t;
+
+static aabb_t aabb_all(void) {
+  aabb_t b = {{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}, 0};
+  return b;
+}
+static aabb_t aabb_none(void) {
+  aabb_t b = {{0, 0, 0}, {0, 0, 0}, 1};
+  return b;
+}
+
+static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
+  if (n->kind == KARST_PERM_SPHERE || n->kind == KARST_PERM_STRATUM) {
+    if (bg < t) return aabb_all();
+    if (!(n->resistance < t)) return aabb_none();
+    aabb_t b = aabb_all();
+    if (n->kind == KARST_PERM_SPHERE) {
+      double r = n->radius + (n->falloff > 0 ? n->falloff : 0.0);
+      for (int a = 0; a < 3; a++)
+        b.lo[a] = n->center[a] - r, b.hi[a] = n->center[a] + r;
+    } else {
+      b.lo[2] = n->bottom, b.hi[2] = n->top;
+    }
+    return b;
+  }
+  if (n->n_children == 0) return bg < t ? aabb_all() : aabb_none();
+  aabb_t acc = perm_region(&n->children[0], bg, t);
+  for (int i = 1; i < n->n_children; i++) {
+    aabb_t c = perm_region(&n->children[i], bg, t);
+    if (n->kind == KARST_PERM_INTERSECTION) { /* max < t iff all children < t */
+      if (acc.empty || c.empty) return aabb_none();
+      for (int a = 0; a < 3; a++)
+        acc.lo[a] = fmax(acc.lo[a], c.lo[a]), acc.hi[a] = fmin(acc.hi[a], c.hi[a]);
+      for (int a = 0; a < 3; a++)
+        if (acc.lo[a] > acc.hi[a]) return aabb_none();
+    } else { /* min (union) or weighted mean (blend) < t needs some child < t */
+      if (c.empty) continue;
+      if (acc.empty) {
+        acc = c;
+        continue;
+      }
+      for (int a = 0; a < 3; a++)
+        acc.lo[a] = fmin(acc.lo[a], c.lo[a]), acc.hi[a] = fmax(acc.hi[a], c.hi[a]);
+    }
+  }
+  return acc;
+}
+
+/* Feature-grid cells (i, j, k) overlapping the region's bounds, in the box
+ * and not entirely above the terrain, as linear keys i + nx (j + ny k).
+ * Columns are taken tile by tile (FILL_TILE^2 columns, tiles in a random
+ * order, cells shuffled inside a tile) for memory locality, as for the fill. */
+#define FILL_TILE 8
+static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out) {
+  const cgrid_t *g = &S->feat;
+  aabb_t box = aabb_all();
+  int64_t *tiles = NULL;
+  karst_error_t err = KARST_SUCCESS;
+  if (!R->layer) {
+    const karst_permeability_t *pm = &S->sc->permeability;
+    box = pm->root
+              ? perm_region(pm->root, pm->background, S->sc->sampling.permeable_threshold)
+              : (pm->background < S->sc->sampling.permeable_threshold ? aabb_all() : aabb_none());
+    if (box.empty) return KARST_SUCCESS;
+  }
+  int64_t lo[3], hi[3];
+  for (int a = 0; a < 3; a++) {
+    double l = fmax(box.lo[a], S->lo[a]), h = fmin(box.hi[a], S->hi[a]);
+    if (l > h) return KARST_SUCCESS;
+    lo[a] = cgrid_coord(g, l, a), hi[a] = cgrid_coord(g, h, a);
+  }
+  double limit = (double)KARST_SAMPLING_MAX_CELLS_PER_SAMPLE * (double)S->sc->sampling.max_samples;
+  int64_t nti = (hi[0] - lo[0]) / FILL_TILE + 1, ntj = (hi[1] - lo[1]) / FILL_TILE + 1;
+  tiles = malloc(sizeof(int64_t) * (size_t)(nti * ntj));
+  if (!tiles) {
+    err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells", S->stage);
+    goto cleanup;
+  }
+  for (int64_t t = 0; t < nti * ntj; t++)
+    tiles[t] = t;
+  shuffle(S->rng, tiles, (size_t)(nti * ntj));
+  for (int64_t t = 0; t < nti * ntj; t++) {
+    size_t first = out->n;
+    int64_t ti = lo[0] + tiles[t] % nti * FILL_TILE, tj = lo[1] + tiles[t] / nti * FILL_TILE;
+    for (int64_t j = tj; j < tj + FILL_TILE && j <= hi[1]; j++)
+      for (int64_t i = ti; i < ti + FILL_TILE && i <= hi[0]; i++) {
+        double x0 = fmax(S->lo[0], g->origin[0] + i * g->cell);
+        double x1 = fmin(S->hi[0], g->origin[0] + (i + 1) * g->cell);
+        double y0 = fmax(S->lo[1], g->origin[1] + j * g->cell);
+        double y1 = fmin(S->hi[1], g->origin[1] + (j + 1) * g->cell);
+        double ztop = karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1);
+        double zlo = fmax(S->lo[2], box.lo[2]), zhi = fmin(fmin(S->hi[2], box.hi[2]), ztop);
+        if (R->layer) {
+          double llo, lhi;
+          layer_range(R->layer, x0, x1, y0, y1, &llo, &lhi);
+          zlo = fmax(zlo, llo - R->band), zhi = fmin(zhi, lhi + R->band);
+        }
+        if (zlo > zhi) continue;
+        for (int64_t k = cgrid_coord(g, zlo, 2); k <= cgrid_coord(g, zhi, 2); k++) {
+          if ((double)out->n >= limit) {
+            err =
+                karst_set_error(S->ctx, KARST_ERANGE,
+                                "the %s samples need more than %.0f grid cells of %g m "
+                                "(%d per allowed sample, sampling.max_samples = %lld): they "
+                                "would exceed max_samples; increase feature_radius or max_samples",
+                                S->stage, limit, g->cell, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
+                                (long long)S->sc->sampling.max_samples);
+            goto cleanup;
+          }
+          if (!cells_push(out, i + g->dims[0] * (j + g->dims[1] * k))) {
+            err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells",
+                                  S->stage);
+            goto cleanup;
+          }
+        }
+      }
+    shuffle(S->rng, out->v + first, out->n - first);
+  }
+cleanup:
+  free(tiles);
+  return err;
+}
+
+/* Uniform point in cell (i, j, k) of a grid, clipped to [zlo, zhi] and to the box. */
+static int dart_in_cell(sampler_t *S, const double origin[3], double cell, const int64_t c[3],
+                        double zlo, double zhi, double p[3]) {
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; a++) {
+    lo[a] = fmax(S->lo[a], origin[a] + c[a] * cell);
+    hi[a] = fmin(S->hi[a], origin[a] + (c[a] + 1) * cell);
+  }
+  lo[2] = fmax(lo[2], zlo), hi[2] = fmin(hi[2], zhi);
+  for (int a = 0; a < 3; a++)
+    if (lo[a] > hi[a]) return 0;
+  for (int a = 0; a < 3; a++)
+    p[a] = karst_rng_uniform_range(S->rng, lo[a], hi[a]);
+  return 1;
+}
+
+static karst_error_t sample_region(sampler_t *S, const region_t *R) {
+  cells_t cells = {0};
+  karst_error_t err = region_cells(S, R, &cells);
+  if (err != KARST_SUCCESS) goto cleanup;
+  cgrid_t *g = &S->feat;
+  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES && cells.n > 0; pass++) {
+    if (karst_interrupted(S->ctx)) {
+      err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
+      goto cleanup;
+    }
+    size_t w = 0;
+    for (size_t q = 0; q < cells.n; q++) {
+      int64_t key = cells.v[q];
+      int64_t c[3] = {key % g->dims[0], key / g->dims[0] % g->dims[1],
+                      key / g->dims[0] / g->dims[1]};
+      if (cgrid_occupied(g, c[0], c[1], c[2])) continue; /* at most one feature sample per cell */
+      double zlo = -INFINITY, zhi = INFINITY, p[3];
+      if (R->layer) {
+        double x0 = g->origin[0] + c[0] * g->cell, y0 = g->origin[1] + c[1] * g->cell;
+        layer_range(R->layer, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
+        zlo -= R->band, zhi += R->band;
+      }
+      cells.v[w++] = key;
+      if (!dart_in_cell(S, g->origin, g->cell, c, zlo, zhi, p)) continue;
+      if (!region_contains(S, R, p) || !karst_cost_in_bedrock(S->sc, p)) continue;
+      if (cgrid_conflict(g, p, S->rf)) continue;
+      if ((err = add_sample(S, p, R->src)) != KARST_SUCCESS) goto cleanup;
+    }
+    cells.n = w;
+  }
+cleanup:
+  free(cells.v);
+  return err;
+}
+
+/* Conflict of a fill dart p in bordered cell `id`: returns -1 when p is
+ * free, else the index of the conflicting fill sample, or -2 for a feature. */
+static int64_t fill_conflict(const sampler_t *S, const double p[3], int64_t id) {
+  const double *xyz = S->s->xyz;
+  double r2 = S->rc * S->rc;
+  for (int o = 0; o < S->n_off; o++) {
+    int32_t e = S->fill[id + S->delta[o]];
+    if (e < 0) continue;
+    const double *q = xyz + 3 * (int64_t)e;
+    double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+    if (dx * dx + dy * dy + dz * dz < r2) return e;
+  }
+  return S->near[id] && cgrid_conflict(&S->feat, p, S->rm) ? -2 : -1;
+}
+
+/* Whether the ball of radius rc around q covers cell c entirely (every
+ * corner strictly inside; the ball is convex): no later dart can succeed. */
+static int cell_covered(const sampler_t *S, const int64_t c[3], const double q[3]) {
+  double r2 = S->rc * S->rc;
+  for (int m = 0; m < 8; m++) {
+    double d2 = 0;
+    for (int a = 0; a < 3; a++) {
+      double x = S->lo[a] + (double)(c[a] + ((m >> a) & 1)) * S->cc - q[a];
+      d2 += x * x;
+    }
+    if (!(d2 < r2)) return 0;
+  }
+  return 1;
+}
+
+static int cmp_off(const void *a, const void *b) {
+  const int *x = a, *y = b;
+  int dx = x[0] * x[0] + x[1] * x[1] + x[2] * x[2], dy = y[0] * y[0] + y[1] * y[1] + y[2] * y[2];
+  return (dx > dy) - (dx < dy);
+}
+
+/* Fill cells are visited tile by tile (tiles of FILL_TILE^3 cells in a random
+ * order, cells in a random order inside each tile): every dart still sees
+ * all samples placed before it, as in plain dart throwing, but consecutive
+ * darts touch the same few kilobytes of the grid instead of random memory. */
+
+static karst_error_t sample_fill(sampler_t *S) {
+  cells_t cells = {0};
+  int64_t *tiles = NULL, *ktop = NULL;
+  karst_error_t err = KARST_SUCCESS;
+  double limit = (double)KARST_SAMPLING_MAX_CELLS_PER_SAMPLE * (double)S->sc->sampling.max_samples;
+  /* Active cells of each column: those starting below the highest terrain point. */
+  ktop = malloc(sizeof(int64_t) * (size_t)(S->cd[0] * S->cd[1]));
+  int64_t nt[3];
+  for (int a = 0; a < 3; a++)
+    nt[a] = (S->cd[a] + FILL_TILE - 1) / FILL_TILE;
+  tiles = malloc(sizeof(int64_t) * (size_t)(nt[0] * nt[1] * nt[2]));
+  if (!ktop || !tiles) {
+    err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
+    goto cleanup;
+  }
+  double total = 0;
+  for (int64_t j = 0; j < S->cd[1]; j++)
+    for (int64_t i = 0; i < S->cd[0]; i++) {
+      double x0 = S->lo[0] + i * S->cc, x1 = fmin(S->hi[0], x0 + S->cc);
+      double y0 = S->lo[1] + j * S->cc, y1 = fmin(S->hi[1], y0 + S->cc);
+      double ztop = fmin(S->hi[2], karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1));
+      int64_t k = 0;
+      while (k < S->cd[2] && S->lo[2] + k * S->cc < ztop)
+        k++;
+      ktop[i + S->cd[0] * j] = k;
+      total += (double)k;
+    }
+  if (total > limit) {
+    err = karst_set_error(S->ctx, KARST_ERANGE,
+                          "the fill samples need %.0f grid cells of %g m, more than %d per "
+                          "allowed sample (sampling.max_samples = %lld): they would exceed "
+                          "max_samples; increase fill_radius or max_samples",
+                          total, S->cc, KARST_SAMPLING_MAX_CELLS_PER_SAMPLE,
+                          (long long)S->sc->sampling.max_samples);
+    goto cleanup;
+  }
+  size_t ntiles = (size_t)(nt[0] * nt[1] * nt[2]);
+  for (size_t t = 0; t < ntiles; t++)
+    tiles[t] = (int64_t)t;
+  shuffle(S->rng, tiles, ntiles);
+  for (size_t t = 0; t < ntiles; t++) {
+    int64_t ti = tiles[t] % nt[0], tj = tiles[t] / nt[0] % nt[1], tk = tiles[t] / nt[0] / nt[1];
+    size_t first = cells.n;
+    for (int64_t k = tk * FILL_TILE; k < (tk + 1) * FILL_TILE && k < S->cd[2]; k++)
+      for (int64_t j = tj * FILL_TILE; j < (tj + 1) * FILL_TILE && j < S->cd[1]; j++)
+        for (int64_t i = ti * FILL_TILE; i < (ti + 1) * FILL_TILE && i < S->cd[0]; i++)
+          if (k < ktop[i + S->cd[0] * j] && !cells_push(&cells, pidx(S, i, j, k))) {
+            err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
+            goto cleanup;
+          }
+    shuffle(S->rng, cells.v + first, cells.n - first);
+  }
+  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES && cells.n > 0; pass++) {
+    if (karst_interrupted(S->ctx)) {
+      err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
+      goto cleanup;
+    }
+    karst_progress(S->ctx, "sampling", pass, KARST_SAMPLING_DART_PASSES);
+    size_t w = 0;
+    for (size_t q = 0; q < cells.n; q++) {
+      int64_t id = cells.v[q];
+      int64_t c[3] = {id % S->pd[0] - 2, id / S->pd[0] % S->pd[1] - 2,
+                      id / S->pd[0] / S->pd[1] - 2};
+      double p[3];
+      if (!dart_in_cell(S, S->lo, S->cc, c, -INFINITY, INFINITY, p)) continue;
+      if (!(p[2] < karst_terrain_height(&S->sc->terrain, p[0], p[1]))) {
+        cells.v[w++] = id;
+        continue;
+      }
+      int64_t e = fill_conflict(S, p, id);
+      if (e >= 0 && cell_covered(S, c, S->s->xyz + 3 * e)) continue; /* never again */
+      if (e != -1) {
+        cells.v[w++] = id;
+        continue;
+      }
+      if ((err = add_sample(S, p, KARST_SAMPLE_FILL)) != KARST_SUCCESS) goto cleanup;
+      S->fill[id] = (int32_t)(S->s->n - 1);
+    }
+    cells.n = w; /* keep the cells that may still take a sample, in the same order */
+  }
+cleanup:
+  free(cells.v);
+  free(tiles);
+  free(ktop);
+  return err;
+}
+
+/* Spread the low 21 bits of x so that two zero bits separate them. */
+static uint64_t spread3(uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffULL;
+  x = (x | x << 16) & 0x1f0000ff0000ffULL;
+  x = (x | x << 8) & 0x100f00f00f00f00fULL;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+  x = (x | x << 2) & 0x1249249249249249ULL;
+  return x;
+}
+
+/* Stable LSD radix sort of (key, idx) pairs on the low 64 bits, 8 per pass;
+ * k1, i1 are scratch of the same size. The result ends in k0, i0 (8 passes). */
+static void radix_sort(uint64_t *k0, int32_t *i0, uint64_t *k1, int32_t *i1, karst_int_t m) {
+  for (int shift = 0; shift < 64; shift += 8) {
+    size_t cnt[257] = {0};
+    for (karst_int_t i = 0; i < m; i++)
+      cnt[((k0[i] >> shift) & 255) + 1]++;
+    for (int b = 0; b < 256; b++)
+      cnt[b + 1] += cnt[b];
+    for (karst_int_t i = 0; i < m; i++) {
+      size_t d = cnt[(k0[i] >> shift) & 255]++;
+      k1[d] = k0[i], i1[d] = i0[i];
+    }
+    uint64_t *tk = k0;
+    k0 = k1, k1 = tk;
+    int32_t *ti = i0;
+    i0 = i1, i1 = ti;
+  }
+}
+
+/* Order each run of samples of one source (key points excepted: they keep
+ * the scenario's order) along a Morton (Z-order) curve of the domain box.
+ * Dart throwing visits cells in a random order; a space-filling order makes
+ * the neighbour search, the graph rows and the paths stage cache-friendly.
+ * Stable radix sort (ties keep the draw order): O(n), deterministic. */
+static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                  karst_samples_t *s) {
+  karst_int_t n = s->n;
+  uint64_t *key = malloc(sizeof(uint64_t) * 2 * (size_t)n + 1);
+  int32_t *idx = malloc(sizeof(int32_t) * 2 * (size_t)n + 1);
+  double *xyz = malloc(sizeof(double) * 3 * (size_t)n + 1);
+  if (!key || !idx || !xyz) {
+    free(key), free(idx), free(xyz);
+    return karst_set_error(ctx, KARST_ENOMEM, "no memory to order %lld samples", (long long)n);
+  }
+  const double scale = 2097151.0; /* 2^21 - 1 cells per axis */
+  for (karst_int_t b = s->n_key_points; b < n;) {
+    karst_int_t e = b;
+    while (e < n && s->source[e] == s->source[b])
+      e++;
+    karst_int_t m = e - b;
+    for (karst_int_t i = 0; i < m; i++) {
+      const double *p = s->xyz + 3 * (b + i);
+      uint64_t c = 0;
+      for (int a = 0; a < 3; a++) {
+        double f = (p[a] - sc->domain_min[a]) / (sc->domain_max[a] - sc->domain_min[a]);
+        c |= spread3((uint64_t)(fmin(fmax(f, 0.0), 1.0) * scale)) << a;
+      }
+      key[i] = c, idx[i] = (int32_t)(b + i);
+    }
+    radix_sort(key, idx, key + n, idx + n, m);
+    for (karst_int_t i = 0; i < m; i++)
+      memcpy(xyz + 3 * i, s->xyz + 3 * (karst_int_t)idx[i], 3 * sizeof(double));
+    memcpy(s->xyz + 3 * b, xyz, sizeof(double) * 3 * (size_t)m);
+    b = e;
+  }
+  free(key), free(idx), free(xyz);
+  return KARST_SUCCESS;
+}
+
+static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc) {
+  const karst_sampling_t *sp = &sc->sampling;
+  for (int a = 0; a < 3; a++)
+    if (!isfinite(sc->domain_min[a]) || !isfinite(sc->domain_max[a]) ||
+        !(sc->domain_min[a] < sc->domain_max[a]))
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "domain: axis %c must have finite min < max, got [%g, %g]", "xyz"[a],
+                             sc -> domain_min[a], sc -> domain_max[a]);
+  if (!(isfinite(sp->fill_radius) && sp->fill_radius > 0))
+    return karst_set_error(ctx, KARST_EINVAL, "sampling.fill_radius must be > 0, got %g",
+                           sp->fill_radius);
+  if (!(isfinite(sp->feature_radius) && sp->feature_radius > 0))
+    return karst_set_error(ctx, KARST_EINVAL, "sampling.feature_radius must be > 0, got %g",
+                           sp->feature_radius);
+  if (!(isfinite(sp->feature_band) && sp->feature_band >= 0))
+    return karst_set_error(ctx, KARST_EINVAL, "sampling.feature_band must be >= 0, got %g",
+                           sp->feature_band);
+  if (!(sp->permeable_threshold >= 0 && sp->permeable_threshold <= 1))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "sampling.permeable_threshold must be within [0, 1], got %g",
+                           sp->permeable_threshold);
+  if (sp->max_samples < 1 || sp->max_samples >= INT32_MAX)
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "sampling.max_samples must be within [1, %d), got %lld", INT32_MAX,
+                           (long long)sp->max_samples);
+  for (int h = 0; h < sc->n_horizons; h++) {
+    const karst_horizon_t *H = &sc->horizons[h];
+    if (!(isfinite(H->radius) && H->radius > 0) || !isfinite(H->elevation) ||
+        !(H->dip >= 0 && H->dip < 90))
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "horizon %d: radius must be > 0 and dip within [0, 90), got radius "
+                             "%g, dip %g, elevation %g",
+                             h + 1, H->radius, H->dip, H->elevation);
+  }
+  double top = karst_i_terrain_max_rect(&sc->terrain, sc->domain_min[0], sc->domain_max[0],
+                                        sc->domain_min[1], sc->domain_max[1]);
+  if (!(top > sc->domain_min[2]))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "the domain box (z from %g to %g m) lies entirely above the terrain "
+                           "(highest terrain point over the box: %g m): there is no bedrock to "
+                           "sample",
+                           sc->domain_min[2], sc->domain_max[2], top);
+  for (int i = 0; i < sc->n_key_points; i++) {
+    const karst_keypoint_t *k = &sc->key_points[i];
+    const double *p = k->p;
+    if (karst_cost_in_bedrock(sc, p)) continue;
+    int inbox = isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
+    for (int a = 0; inbox && a < 3; a++)
+      inbox = p[a] >= sc->domain_min[a] && p[a] <= sc->domain_max[a];
+    if (!inbox)
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "key point '%s' (%g, %g, %g) is outside the domain box", k->name, p[0],
+                             p[1], p[2]);
+    return karst_set_error(
+        ctx, KARST_EINVAL, "key point '%s' (%g, %g, %g) is not below the terrain (terrain at %g m)",
+        k->name, p[0], p[1], p[2], karst_terrain_height(&sc->terrain, p[0], p[1]));
+  }
+  if (sc->n_key_points > sp->max_samples)
+    return karst_set_error(ctx, KARST_ERANGE, "%d key points exceed sampling.max_samples = %lld",
+                           sc->n_key_points, (long long)sp->max_samples);
+  return KARST_SUCCESS;
+}
+
+/**
+ * Adaptive Poisson-sphere sampling of the bedrock (Paris et al. 2021, §4.1,
+ * Fig. 5), in this order, each sample tagged by its source:
+ *  1. the key points, exactly and in order (samples 0 .. n_key_points-1);
+ *  2. points along each prescribed path's straight segment, evenly spaced at
+ *     >= feature_radius, so that low-cost edges exist there (§4.2);
+ *  3. feature-radius Poisson samples within ±feature_band of each inception
+ *     horizon, then of the water table;
+ *  4. feature-radius Poisson samples where the resistance π is below
+ *     sampling.permeable_threshold;
+ *  5. fill samples at fill_radius elsewhere.
+ * Within each source the samples are then ordered along a Morton curve
+ * (cache locality for the graph and path stages).
+ * Only points inside the domain box and strictly below the terrain are kept.
+ * Every random draw comes from @p rng (same stream => same samples).
+ * @param ctx context (errors, progress, interrupt).
+ * @param sc the scenario (validated here: radii, domain, key points).
+ * @param rng the random stream of this stage.
+ * @param out initialised sample set, replaced on success, unchanged on failure.
+ * @return KARST_SUCCESS; KARST_EINVAL for an invalid scenario (e.g. a domain
+ *         entirely above the terrain, a key point outside the bedrock);
+ *         KARST_ERANGE when sampling.max_samples would be exceeded;
+ *         KARST_ENOMEM; KARST_EINTERRUPTED.
+ * Time complexity: O(V / r_c^3 + feature volume / r_f^3) with
+ * KARST_SAMPLING_DART_PASSES darts per background cell, each checking O(1)
+ * neighbouring cells.
+ */
+karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_rng_t *rng,
+                                 karst_samples_t *out) {
+  karst_samples_t s;
+  karst_samples_init(&s);
+  sampler_t S;
+  memset(&S, 0, sizeof S);
+  karst_error_t err = check_scenario(ctx, sc);
+  if (err != KARST_SUCCESS) return err;
+  S.ctx = ctx, S.sc = sc, S.rng = rng, S.s = &s;
+  S.rf = sc->sampling.feature_radius;
+  S.rc = sc->sampling.fill_radius;
+  S.rm = fmin(S.rf, S.rc);
+  memcpy(S.lo, sc->domain_min, sizeof S.lo);
+  memcpy(S.hi, sc->domain_max, sizeof S.hi);
+
+  /* Grids: cells of r/√3 so that a cell's diagonal is r. */
+  int64_t fd[3];
+  double ncells_fill = 1.0, ncells_feat = 1.0;
+  S.cc = S.rc / sqrt(3.0);
+  double fcell = S.rf / sqrt(3.0);
+  for (int a = 0; a < 3; a++) {
+    double ext = S.hi[a] - S.lo[a];
+    double nc = fmax(1.0, ceil(ext / S.cc)), nf = fmax(1.0, ceil(ext / fcell));
+    ncells_fill *= nc + 4, ncells_feat *= nf;
+    S.cd[a] = (int64_t)fmin(nc, 1e18), fd[a] = (int64_t)fmin(nf, 1e18);
+    S.pd[a] = S.cd[a] + 4;
+  }
+  if (ncells_fill > MAX_GRID_CELLS) {
+    err = karst_set_error(ctx, KARST_ERANGE,
+                          "the domain box needs %.3g fill grid cells of %g m, more than %.0f: "
+                          "increase sampling.fill_radius (%g m) or shrink the domain",
+                          ncells_fill, S.cc, MAX_GRID_CELLS, S.rc);
+    goto cleanup;
+  }
+  if ((double)fd[0] * (double)fd[1] > MAX_GRID_CELLS || ncells_feat > 4e18) {
+    err = karst_set_error(ctx, KARST_ERANGE,
+                          "sampling.feature_radius = %g m is too small for the domain box: "
+                          "%.3g grid columns of %g m, more than %.0f",
+                          S.rf, (double)fd[0] * (double)fd[1], fcell, MAX_GRID_CELLS);
+    goto cleanup;
+  }
+  size_t nfill = (size_t)ncells_fill;
+  S.fill = malloc(sizeof(int32_t) * nfill);
+  S.near = calloc(nfill, 1);
+  if (!S.fill || !S.near || !cgrid_init(&S.feat, fcell, S.lo, fd)) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "no memory for a sampling grid of %.0f cells",
+                          ncells_fill);
+    goto cleanup;
+  }
+  memset(S.fill, 0xff, sizeof(int32_t) * nfill);
+  /* Offsets (di, dj, dk) in [-2, 2]^3 whose cells come closer than r_c to
+   * the centre cell: the gap along an axis is (|d| − 1)+ cells, so at most
+   * two coordinates may be ±2. Nearest first: conflicts are found sooner. */
+  int off[125][3];
+  for (int k = -2; k <= 2; k++)
+    for (int j = -2; j <= 2; j++)
+      for (int i = -2; i <= 2; i++) {
+        int gap = (abs(i) == 2) + (abs(j) == 2) + (abs(k) == 2);
+        if (gap == 3 || (i == 0 && j == 0 && k == 0)) continue;
+        off[S.n_off][0] = i, off[S.n_off][1] = j, off[S.n_off][2] = k, S.n_off++;
+      }
+  qsort(off, (size_t)S.n_off, sizeof off[0], cmp_off);
+  for (int o = 0; o < S.n_off; o++)
+    S.delta[o] = off[o][0] + S.pd[0] * (off[o][1] + S.pd[1] * off[o][2]);
+
+  S.stage = "key point";
+  for (int i = 0; i < sc->n_key_points; i++)
+    if ((err = add_sample(&S, sc->key_points[i].p, KARST_SAMPLE_KEYPOINT)) != KARST_SUCCESS)
+      goto cleanup;
+  s.n_key_points = sc->n_key_points;
+
+  S.stage = "prescribed path";
+  for (int i = 0; i < sc->n_prescribed; i++) {
+    int ka = sc->prescribed[i].a, kb = sc->prescribed[i].b;
+    if (ka < 0 || kb < 0 || ka >= sc->n_key_points || kb >= sc->n_key_points) {
+      err = karst_set_error(ctx, KARST_EINVAL,
+                            "prescribed path %d: key point indices (%d, %d) not within [0, %d)",
+                            i + 1, ka, kb, sc->n_key_points);
+      goto cleanup;
+    }
+    const double *P = sc->key_points[ka].p, *Q = sc->key_points[kb].p;
+    double len = sqrt((Q[0] - P[0]) * (Q[0] - P[0]) + (Q[1] - P[1]) * (Q[1] - P[1]) +
+                      (Q[2] - P[2]) * (Q[2] - P[2]));
+    double m = floor(len / S.rf); /* spacing len / m >= r_f */
+    for (double j = 1; j < m; j++) {
+      double p[3];
+      for (int a = 0; a < 3; a++)
+        p[a] = P[a] + (j / m) * (Q[a] - P[a]);
+      if (!karst_cost_in_bedrock(sc, p) || cgrid_conflict(&S.feat, p, S.rf)) continue;
+      if ((err = add_sample(&S, p, KARST_SAMPLE_PRESCRIBED)) != KARST_SUCCESS) goto cleanup;
+    }
+  }
+
+  S.stage = "horizon";
+  for (int h = 0; h < sc->n_horizons; h++) {
+    region_t R = {KARST_SAMPLE_HORIZON, &sc->horizons[h], sc->sampling.feature_band};
+    if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
+  }
+  S.stage = "water table";
+  karst_horizon_t wt;
+  memset(&wt, 0, sizeof wt);
+  wt.elevation = sc->water_table;
+  wt.radius = 1.0;
+  if (isfinite(sc->water_table)) {
+    region_t R = {KARST_SAMPLE_WATER_TABLE, &wt, sc->sampling.feature_band};
+    if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
+  }
+  S.stage = "permeability";
+  {
+    region_t R = {KARST_SAMPLE_PERMEABILITY, NULL, 0.0};
+    if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
+  }
+  S.stage = "fill";
+  if ((err = sample_fill(&S)) != KARST_SUCCESS) goto cleanup;
+  if ((err = morton_order(ctx, sc, &s)) != KARST_SUCCESS) goto cleanup;
+  karst_progress(ctx, "sampling", 1, 1);
+  karst_log(ctx, KARST_LOG_INFO, "sampling: %lld samples (%d key points)", (long long)s.n,
+            sc->n_key_points);
+
+  karst_samples_destroy(out);
+  *out = s;
+  karst_samples_init(&s);
+cleanup:
+  karst_samples_destroy(&s);
+  cgrid_destroy(&S.feat);
+  free(S.fill);
+  free(S.near);
+  return err;
+}

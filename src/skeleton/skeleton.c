@@ -1,0 +1,301 @@
+/* The γ-skeleton of the key points (Paris et al. 2021, §5.1) and the network
+ * that grows path by path on the sample graph. */
+#include "karst/skeleton.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/**
+ * Initialise @p sk as an empty network on graph @p g (which must outlive
+ * it). O(n) for the vertex → node map.
+ */
+karst_error_t karst_skeleton_init(karst_ctx_t *ctx, karst_skeleton_t *sk, const karst_graph_t *g) {
+  memset(sk, 0, sizeof *sk);
+  karst_network_init(&sk->net);
+  sk->n_graph = g->n;
+  sk->node_of_vertex = malloc((size_t)(g->n > 0 ? g->n : 1) * sizeof *sk->node_of_vertex);
+  sk->edge_set_cap = 1024;
+  sk->edge_keys = calloc(sk->edge_set_cap, sizeof *sk->edge_keys);
+  double *d;
+  if (!sk->node_of_vertex || !sk->edge_keys ||
+      karst_network_attr_add(&sk->net, KARST_ATTR_NODE, "kind", 1, 1, &d) ||
+      karst_network_attr_add(&sk->net, KARST_ATTR_EDGE, "cost", 1, 0, &d) ||
+      karst_network_attr_add(&sk->net, KARST_ATTR_EDGE, "branch_id", 1, 1, &d) ||
+      karst_network_attr_add(&sk->net, KARST_ATTR_EDGE, "amplification_step", 1, 1, &d)) {
+    karst_skeleton_destroy(sk);
+    return karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory for %lld vertices",
+                           (long long)g->n);
+  }
+  for (karst_int_t v = 0; v < g->n; v++)
+    sk->node_of_vertex[v] = -1;
+  return KARST_SUCCESS;
+}
+
+void karst_skeleton_destroy(karst_skeleton_t *sk) {
+  karst_network_destroy(&sk->net);
+  free(sk->node_of_vertex);
+  free(sk->vertex_of_node);
+  free(sk->edge_keys);
+  memset(sk, 0, sizeof *sk);
+}
+
+/**
+ * The γ neighbourhood rule of Paris et al. 2021, §5.1: the pair (a, b) is
+ * kept iff d(a, b) is finite and no third key point k has
+ * d(a,k)^γ + d(k,b)^γ < d(a,b)^γ. γ = INFINITY is the limit
+ * max(d(a,k), d(k,b)) < d(a,b) (relative neighbourhood graph); γ = 2 is the
+ * Gabriel graph under the metric d. The test is evaluated on ratios
+ * (d(a,k)/d(a,b))^γ + (d(k,b)/d(a,b))^γ < 1 so large γ cannot overflow. For
+ * γ ≤ 1 nothing is ever pruned on a path metric: d(a,b) ≤ d(a,k) + d(k,b) and
+ * x^γ is subadditive, which is why γ = 0.8 gives the dense mazes of §7.2.
+ * Pairs at distance 0 (coincident key points) are kept.
+ *
+ * @param n     number of key points.
+ * @param dist  n × n symmetric distance matrix (INFINITY: unreachable).
+ * @param gamma γ > 0, or INFINITY.
+ * @param keep  n × n output, keep[a*n+b] = keep[b*n+a] = 1 for kept pairs, 0 elsewhere.
+ * @return KARST_SUCCESS or KARST_EINVAL (γ not > 0, or a NaN / negative distance).
+ * Time complexity: O(n³).
+ */
+karst_error_t karst_skeleton_gamma_keep(karst_ctx_t *ctx, karst_int_t n, const double *dist,
+                                        double gamma, unsigned char *keep) {
+  if (!(gamma > 0)) return karst_set_error(ctx, KARST_EINVAL, "gamma must be > 0, got %g", gamma);
+  for (karst_int_t i = 0; i < n * n; i++)
+    if (!(dist[i] >= 0))
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "key-point distance (%lld, %lld) is %g, not a distance",
+                             (long long)(i / n), (long long)(i % n), dist[i]);
+  memset(keep, 0, (size_t)(n * n));
+  for (karst_int_t a = 0; a < n; a++)
+    for (karst_int_t b = a + 1; b < n; b++) {
+      double dab = dist[a * n + b];
+      if (!(dab < INFINITY)) continue;
+      int pruned = 0;
+      if (dab > 0) {
+        for (karst_int_t k = 0; k < n && !pruned; k++) {
+          if (k == a || k == b) continue;
+          double ra = dist[a * n + k] / dab, rb = dist[k * n + b] / dab;
+          if (isinf(gamma))
+            pruned = fmax(ra, rb) < 1.0;
+          else
+            pruned = pow(ra, gamma) + pow(rb, gamma) < 1.0;
+        }
+      }
+      if (!pruned) keep[a * n + b] = keep[b * n + a] = 1;
+    }
+  return KARST_SUCCESS;
+}
+
+/* splitmix-style mixing of an edge key for the open-addressing set. */
+static size_t hash_key(uint64_t k, size_t cap) {
+  k ^= k >> 33;
+  k *= 0xff51afd7ed558ccdULL;
+  k ^= k >> 33;
+  return (size_t)k & (cap - 1);
+}
+
+/* Insert key (> 0) unless present; *added says which. Load factor ≤ 1/2. */
+static karst_error_t edge_set_insert(karst_skeleton_t *sk, uint64_t key, int *added) {
+  if (2 * ((size_t)sk->net.n_edges + 1) > sk->edge_set_cap) {
+    size_t cap = sk->edge_set_cap * 2;
+    uint64_t *keys = calloc(cap, sizeof *keys);
+    if (!keys) return KARST_ENOMEM;
+    for (size_t i = 0; i < sk->edge_set_cap; i++) {
+      if (!sk->edge_keys[i]) continue;
+      size_t h = hash_key(sk->edge_keys[i], cap);
+      while (keys[h])
+        h = (h + 1) & (cap - 1);
+      keys[h] = sk->edge_keys[i];
+    }
+    free(sk->edge_keys);
+    sk->edge_keys = keys;
+    sk->edge_set_cap = cap;
+  }
+  size_t h = hash_key(key, sk->edge_set_cap);
+  while (sk->edge_keys[h]) {
+    if (sk->edge_keys[h] == key) {
+      *added = 0;
+      return KARST_SUCCESS;
+    }
+    h = (h + 1) & (sk->edge_set_cap - 1);
+  }
+  sk->edge_keys[h] = key;
+  *added = 1;
+  return KARST_SUCCESS;
+}
+
+/* Node of graph vertex v, created (kind interior) when absent. */
+static karst_error_t node_for(karst_ctx_t *ctx, karst_skeleton_t *sk, const karst_graph_t *g,
+                              karst_int_t v, karst_int_t *node) {
+  if (v < 0 || v >= sk->n_graph)
+    return karst_set_error(ctx, KARST_EINVAL, "skeleton: vertex %lld outside the graph (n = %lld)",
+                           (long long)v, (long long)sk->n_graph);
+  if (sk->node_of_vertex[v] >= 0) {
+    *node = sk->node_of_vertex[v];
+    return KARST_SUCCESS;
+  }
+  karst_int_t idx;
+  if (karst_network_add_node(&sk->net, g->xyz[3 * v], g->xyz[3 * v + 1], g->xyz[3 * v + 2], &idx))
+    return karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
+  if (idx >= sk->vertex_cap) {
+    karst_int_t cap = sk->vertex_cap ? 2 * sk->vertex_cap : 256;
+    karst_int_t *vn = realloc(sk->vertex_of_node, (size_t)cap * sizeof *vn);
+    if (!vn) return karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
+    sk->vertex_of_node = vn;
+    sk->vertex_cap = cap;
+  }
+  sk->vertex_of_node[idx] = v;
+  sk->node_of_vertex[v] = idx;
+  *node = idx;
+  return KARST_SUCCESS;
+}
+
+/* Cost of arc u -> w (the cheapest, should the graph hold parallel arcs). */
+static double arc_cost(const karst_graph_t *g, karst_int_t u, karst_int_t w) {
+  double best = INFINITY;
+  for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++)
+    if (g->adj[a] == w && g->cost[a] < best) best = g->cost[a];
+  return best;
+}
+
+/**
+ * Add a path of graph vertices to the network: its vertices become nodes
+ * (once), its consecutive pairs edges (once; an edge already laid keeps its
+ * first branch id and step). The path gets branch id sk->n_paths.
+ *
+ * @param path               vertices of a path on @p g (consecutive ones adjacent).
+ * @param amplification_step 0 for the skeleton, s ≥ 1 for amplification step s.
+ * @return KARST_SUCCESS, KARST_EINVAL (vertices not adjacent), KARST_ENOMEM.
+ * Time complexity: O(path length × degree), amortised.
+ */
+karst_error_t karst_skeleton_add_path(karst_ctx_t *ctx, karst_skeleton_t *sk,
+                                      const karst_graph_t *g, const karst_path_t *path,
+                                      int amplification_step) {
+  karst_int_t prev = -1;
+  for (karst_int_t i = 0; i < path->n; i++) {
+    karst_int_t node = -1;
+    karst_error_t err = node_for(ctx, sk, g, path->v[i], &node);
+    if (err) return err;
+    if (i > 0 && node != prev) {
+      double c = arc_cost(g, path->v[i - 1], path->v[i]);
+      if (!(c < INFINITY))
+        return karst_set_error(ctx, KARST_EINVAL,
+                               "skeleton: path steps from vertex %lld to %lld, which are not "
+                               "joined by a finite-cost edge",
+                               (long long)path->v[i - 1], (long long)path->v[i]);
+      karst_int_t a = prev < node ? prev : node, b = prev < node ? node : prev;
+      if (b >= ((karst_int_t)1 << 32))
+        return karst_set_error(ctx, KARST_ERANGE, "skeleton: more than 2^32 nodes");
+      int added;
+      if (edge_set_insert(sk, (((uint64_t)a << 32) | (uint64_t)b) + 1, &added))
+        return karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
+      if (added) {
+        karst_int_t e;
+        if (karst_network_add_edge(&sk->net, a, b, &e))
+          return karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
+        karst_network_attr_find(&sk->net, KARST_ATTR_EDGE, "cost")->data[e] = c;
+        karst_network_attr_find(&sk->net, KARST_ATTR_EDGE, "branch_id")->data[e] =
+            (double)sk->n_paths;
+        karst_network_attr_find(&sk->net, KARST_ATTR_EDGE, "amplification_step")->data[e] =
+            amplification_step;
+      }
+    }
+    prev = node;
+  }
+  sk->n_paths++;
+  return KARST_SUCCESS;
+}
+
+/** Make graph vertex @p vertex a node (if not yet) and set its kind. O(1) amortised. */
+karst_error_t karst_skeleton_mark_node(karst_ctx_t *ctx, karst_skeleton_t *sk,
+                                       const karst_graph_t *g, karst_int_t vertex,
+                                       karst_node_kind_t kind) {
+  karst_int_t node = -1;
+  karst_error_t err = node_for(ctx, sk, g, vertex, &node);
+  if (err) return err;
+  karst_network_attr_find(&sk->net, KARST_ATTR_NODE, "kind")->data[node] = kind;
+  return KARST_SUCCESS;
+}
+
+/**
+ * Graph vertices shared by paths become junctions (§5.1): every node of kind
+ * interior whose degree is at least 3 gets kind junction. (Two paths that
+ * merely run together over a stretch share degree-2 vertices, which are not
+ * branching points.) Key points and amplification points keep their kind.
+ * O(nodes + edges).
+ */
+void karst_skeleton_mark_junctions(karst_skeleton_t *sk) {
+  karst_network_t *net = &sk->net;
+  karst_int_t *deg = calloc((size_t)(net->n_nodes > 0 ? net->n_nodes : 1), sizeof *deg);
+  if (!deg) return;
+  for (karst_int_t e = 0; e < net->n_edges; e++)
+    deg[net->edges[2 * e]]++, deg[net->edges[2 * e + 1]]++;
+  double *kind = karst_network_attr_find(net, KARST_ATTR_NODE, "kind")->data;
+  for (karst_int_t v = 0; v < net->n_nodes; v++)
+    if (kind[v] == KARST_NODE_INTERIOR && deg[v] >= 3) kind[v] = KARST_NODE_JUNCTION;
+  free(deg);
+}
+
+/**
+ * The large-scale skeleton S (Paris et al. 2021, §5.1): apply the γ rule to
+ * the key-point distance matrix, then lay the least-cost path (A*) of every
+ * kept pair on the graph; the union of these paths is the skeleton. Kept
+ * pairs are processed in (a, b) lexicographic order so branch ids are
+ * deterministic. Key-point nodes get kind interior here; the caller marks
+ * them (sink, spring, waypoint).
+ *
+ * @param g             the sample graph.
+ * @param n_keys, keys  key points as vertices.
+ * @param dist          their distance matrix (karst_paths_keypoint_distances).
+ * @param pred          the shortest-path trees of karst_paths_keypoint_trees, read
+ *                      for the path of pair (a < b) from row a; NULL: one A* per pair.
+ * @param gamma         γ > 0 or INFINITY.
+ * @param lb_per_metre  cost lower bound for the A* heuristic.
+ * @param sk            initialised on @p g; receives the paths.
+ * @param n_kept        receives the number of kept pairs (may be NULL).
+ * @return KARST_SUCCESS, KARST_EINVAL, KARST_ENOMEM.
+ * Time complexity: O(k³) for the rule plus, per kept pair, the path length
+ * (trees) or one A* search (no trees).
+ */
+karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
+                                   const karst_int_t *keys, const double *dist, const int32_t *pred,
+                                   double gamma, double lb_per_metre, karst_skeleton_t *sk,
+                                   karst_int_t *n_kept) {
+  karst_error_t err = KARST_SUCCESS;
+  unsigned char *keep = malloc((size_t)(n_keys * n_keys > 0 ? n_keys * n_keys : 1));
+  karst_search_t *s = NULL;
+  karst_path_t path;
+  karst_path_init(&path);
+  karst_int_t kept = 0;
+  if (!keep) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
+    goto cleanup;
+  }
+  if ((err = karst_skeleton_gamma_keep(ctx, n_keys, dist, gamma, keep))) goto cleanup;
+  if ((err = karst_search_create(ctx, g, &s))) goto cleanup;
+  for (karst_int_t i = 0; i < n_keys; i++)
+    if ((err = karst_skeleton_mark_node(ctx, sk, g, keys[i], KARST_NODE_INTERIOR))) goto cleanup;
+  for (karst_int_t a = 0; a < n_keys; a++)
+    for (karst_int_t b = a + 1; b < n_keys; b++) {
+      if (!keep[a * n_keys + b] || keys[a] == keys[b]) continue;
+      if (karst_interrupted(ctx)) {
+        err = karst_set_error(ctx, KARST_EINTERRUPTED, "skeleton interrupted");
+        goto cleanup;
+      }
+      if (pred)
+        err =
+            karst_paths_tree_path(ctx, g, pred + (size_t)a * (size_t)g->n, keys[a], keys[b], &path);
+      else
+        err = karst_paths_astar(ctx, s, keys[a], keys[b], lb_per_metre, &path);
+      if (err) goto cleanup;
+      if ((err = karst_skeleton_add_path(ctx, sk, g, &path, 0))) goto cleanup;
+      kept++;
+    }
+cleanup:
+  if (n_kept) *n_kept = kept;
+  karst_path_destroy(&path);
+  karst_search_free(s);
+  free(keep);
+  return err;
+}

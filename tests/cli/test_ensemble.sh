@@ -1,0 +1,96 @@
+#!/usr/bin/env bash
+# karst ensemble / compare / report on the real binary: exit codes 0 / 1 / 2, the compare
+# statistics on a hand-made metrics table, and, once the generation pipeline is in the build,
+# byte-identical ensembles for -j 1 and -j 2, kill + re-run, and MPI with 3 processes.
+set -u
+KARST=$1
+SRC=$2
+fail=0
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+check() { # expected-exit description command...
+  local want=$1 what=$2; shift 2
+  "$@" >"$T/out" 2>&1; local got=$?
+  if [ "$got" != "$want" ]; then echo "FAIL: $what: exit $got, expected $want"; cat "$T/out"; fail=1; else echo "ok: $what"; fi
+}
+
+# --- usage errors -----------------------------------------------------------------------
+check 2 "ensemble without arguments" "$KARST" ensemble
+check 2 "ensemble without -o" "$KARST" ensemble x.yaml -n 3
+check 2 "ensemble -n 0" "$KARST" ensemble x.yaml -n 0 -o "$T/e"
+check 2 "ensemble -j x" "$KARST" ensemble x.yaml -n 3 -j x -o "$T/e"
+check 2 "ensemble unknown option" "$KARST" ensemble x.yaml --frob -o "$T/e"
+check 1 "ensemble missing scenario" "$KARST" ensemble /nonexistent.yaml -n 2 -o "$T/e"
+check 2 "compare without directory" "$KARST" compare
+check 2 "compare bad format" "$KARST" compare "$T" --format xml
+check 1 "compare missing ensemble" "$KARST" compare /nonexistent/ens
+check 2 "report without -o" "$KARST" report "$T"
+check 1 "report missing ensemble" "$KARST" report /nonexistent/ens -o "$T/r.html"
+[ ! -e "$T/r.html" ] || { echo "FAIL: report left a file after failing"; fail=1; }
+"$KARST" help ensemble | grep -q -- "--allow-run-as-root" || { echo "FAIL: help ensemble"; fail=1; }
+
+# --- compare on a hand-made ensemble: aspl = 1..10 --------------------------------------
+mkdir -p "$T/hand"
+{ echo "index,seed,aspl,cpd"; for i in $(seq 0 9); do echo "$i,$((i + 100)),$((i + 1)),"; done; } >"$T/hand/metrics.csv"
+check 0 "compare, statistics only" "$KARST" compare "$T/hand" --format json --published "$SRC/datasets/published_metrics.csv"
+# Hand values: mean 5.5, sd sqrt(82.5/9), type-7 p05 = 1.45, p95 = 9.55; cpd undefined (null);
+# 34-cave ASPL range 2.321428571 - 55.72220194 (published_metrics.csv, Collon rows).
+/usr/bin/python3 - "$T/out" <<'PY' || { echo "FAIL: compare json values"; fail=1; }
+import json, math, sys
+d = json.load(open(sys.argv[1]))
+a = d[0]["metrics"]["aspl"]
+assert d[0]["survey"] is None
+assert a["n"] == 10 and abs(a["mean"] - 5.5) < 1e-12 and abs(a["sd"] - math.sqrt(82.5 / 9)) < 1e-12
+assert abs(a["p05"] - 1.45) < 1e-12 and abs(a["p95"] - 9.55) < 1e-12
+assert a["published_min"] == 2.321428571 and a["published_max"] == 55.72220194
+assert d[0]["metrics"]["cpd"]["mean"] is None and d[0]["metrics"]["cpd"]["n"] == 0
+PY
+KARST_DATA_DIR="$SRC/datasets" "$KARST" compare "$T/hand" --format csv -o "$T/cmp.csv" || { echo "FAIL: compare -o"; fail=1; }
+grep -q "^,aspl,,,10,5.5," "$T/cmp.csv" || { echo "FAIL: compare csv row"; cat "$T/cmp.csv"; fail=1; }
+
+# --- the generation pipeline ----------------------------------------------------------------
+SCEN="$SRC/datasets/scenarios/branchwork.yaml"
+if ! "$KARST" ensemble "$SCEN" -n 4 -o "$T/a" -j 1 --seed 11 --quiet 2>"$T/err"; then
+  echo "FAIL: karst ensemble"; cat "$T/err"; exit 1
+fi
+same_tree() { # A B: same files, same bytes (ensemble.json without its timings line)
+  local d=0
+  diff <(cd "$1" && find . -type f | sort) <(cd "$2" && find . -type f | sort) || d=1
+  for f in $(cd "$1" && find . -type f ! -name ensemble.json); do cmp -s "$1/$f" "$2/$f" || { echo "differs: $f"; d=1; }; done
+  diff <(grep -v '"timings"' "$1/ensemble.json") <(grep -v '"timings"' "$2/ensemble.json") || d=1
+  return $d
+}
+check 0 "ensemble -j 2" "$KARST" ensemble "$SCEN" -n 4 -o "$T/b" -j 2 --seed 11 --quiet
+same_tree "$T/a" "$T/b" && echo "ok: -j 1 and -j 2 byte-identical" || { echo "FAIL: -j 1 vs -j 2"; fail=1; }
+[ "$(wc -l <"$T/a/metrics.csv")" = 5 ] || { echo "FAIL: metrics.csv rows"; fail=1; }
+for f in ensemble.pvd ensemble.json realisations/0003/network.vtp realisations/0003/network_nodes.dat realisations/0003/network_links.dat; do
+  [ -s "$T/a/$f" ] || { echo "FAIL: missing $f"; fail=1; }
+done
+# Member i is `karst generate --seed <its seed>`.
+s1=$(sed -n 3p "$T/a/metrics.csv" | cut -d, -f2)
+if "$KARST" generate "$SCEN" -o "$T/g" --seed "$s1" --quiet >/dev/null 2>&1; then
+  cmp -s "$T/g/network.vtp" "$T/a/realisations/0001/network.vtp" && echo "ok: member 1 = karst generate --seed $s1" ||
+    { echo "FAIL: member 1 differs from karst generate --seed $s1"; fail=1; }
+fi
+# Kill mid-run (SIGTERM), re-run, compare with an uninterrupted run.
+check 0 "reference ensemble of 12" "$KARST" ensemble "$SCEN" -n 12 -o "$T/ref" -j 2 --seed 5 --quiet
+"$KARST" ensemble "$SCEN" -n 12 -o "$T/k" -j 2 --seed 5 --quiet &
+pid=$!
+for _ in $(seq 1 400); do [ "$(ls "$T/k/realisations" 2>/dev/null | wc -l)" -ge 3 ] && break; sleep 0.05; done
+kill -TERM $pid; wait $pid; rc=$?
+echo "interrupted run exited with $rc; $(ls "$T/k/realisations" | wc -l) entries kept"
+[ -z "$(find "$T/k" -name '.*.tmp.*')" ] || { echo "FAIL: temporary files left after SIGTERM"; find "$T/k" -name '.*.tmp.*'; fail=1; }
+check 0 "re-run after kill" "$KARST" ensemble "$SCEN" -n 12 -o "$T/k" -j 1 --seed 5 --quiet
+same_tree "$T/ref" "$T/k" && echo "ok: killed + re-run = uninterrupted" || { echo "FAIL: killed + re-run differs"; fail=1; }
+# MPI with 3 processes writes the same files.
+if command -v mpirun >/dev/null 2>&1; then
+  if mpirun --allow-run-as-root --oversubscribe -np 3 "$KARST" ensemble "$SCEN" -n 12 -o "$T/mpi" -j 1 --seed 5 --quiet >"$T/mpi.log" 2>&1; then
+    same_tree "$T/ref" "$T/mpi" && echo "ok: mpirun -np 3 = single process" || { echo "FAIL: MPI output differs"; fail=1; }
+  else
+    echo "FAIL: mpirun"; cat "$T/mpi.log"; fail=1
+  fi
+fi
+# Compare and report on the real ensemble with a real survey.
+check 0 "compare with Sakany" "$KARST" compare "$T/ref" --survey "$SRC/datasets/surveys/karstnet/Sakany_nodes.dat"
+check 0 "report" "$KARST" report "$T/ref" --survey "$SRC/datasets/surveys/karstnet/Sakany_nodes.dat" -o "$T/report.html"
+exit $fail

@@ -1,0 +1,136 @@
+/* Classification (src/classification, Paris et al. 2021 §5.3, Fig. 11):
+ * every cell of the decision table on hand-placed segments, the radius
+ * ranges, the vadose flag and the water-table distance. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "karst.h"
+#include "test_util.h"
+
+/* Terrain at 100 m, water table at 50 m (band ±5), epikarst 10 m, steep from 60°, a ghost-rock
+ * sphere of resistance 0 (radius 5) at (500, 500, 30), background resistance 1. */
+static void make_scenario(karst_scenario_t *sc, karst_perm_node_t *sphere) {
+  karst_scenario_init(sc);
+  sc->domain_max[0] = sc->domain_max[1] = 1000;
+  sc->domain_max[2] = 100;
+  sc->terrain.elevation = 100;
+  sc->water_table = 50;
+  memset(sphere, 0, sizeof *sphere);
+  sphere->kind = KARST_PERM_SPHERE;
+  sphere->resistance = 0;
+  sphere->center[0] = 500, sphere->center[1] = 500, sphere->center[2] = 30;
+  sphere->radius = 5;
+  sc->permeability.root = sphere;
+}
+
+static karst_tunnel_type_t seg(const karst_scenario_t *sc, double x, double z, double dx,
+                               double dz) {
+  double a[3] = {x, 0, z}, b[3] = {x + dx, 0, z + dz};
+  return karst_classification_type(sc, a, b);
+}
+
+static void test_decision_table(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  karst_perm_node_t sphere;
+  make_scenario(&sc, &sphere);
+  /* Each segment is 10 m long, centred at the stated elevation; tan 60° = 1.732. */
+  assert_int_equal(seg(&sc, 0, 75, 10, 0), KARST_TUNNEL_CANYON);  /* vadose, horizontal */
+  assert_int_equal(seg(&sc, 0, 70, 0, 10), KARST_TUNNEL_TUBE);    /* vadose, vertical (centre 75) */
+  assert_int_equal(seg(&sc, 0, 50, 10, 0), KARST_TUNNEL_KEYHOLE); /* at the table, horizontal */
+  assert_int_equal(seg(&sc, 0, 46, 0, 8), KARST_TUNNEL_TUBE);     /* at the table, vertical */
+  assert_int_equal(seg(&sc, 0, 20, 10, 0), KARST_TUNNEL_BED);     /* phreatic, horizontal */
+  assert_int_equal(seg(&sc, 0, 15, 0, 10), KARST_TUNNEL_PASSAGE); /* phreatic, vertical */
+  assert_int_equal(seg(&sc, 0, 95, 10, 0), KARST_TUNNEL_EPIKARST); /* 5 m below the terrain */
+  assert_int_equal(seg(&sc, 0, 91, 0, 6), KARST_TUNNEL_EPIKARST);  /* centre 94: vertical too */
+  assert_int_equal(seg(&sc, 0, 88, 10, 0), KARST_TUNNEL_CANYON); /* 12 m deep: below the epikarst */
+  double a[3] = {495, 500, 30}, b[3] = {505, 500, 30};
+  assert_int_equal(karst_classification_type(&sc, a, b), KARST_TUNNEL_CHAMBER); /* ghost rock */
+  /* Band edges: |z − W| ≤ 5 counts as the table; 5.5 m above is vadose. */
+  assert_int_equal(seg(&sc, 0, 55, 10, 0), KARST_TUNNEL_KEYHOLE);
+  assert_int_equal(seg(&sc, 0, 55.5, 10, 0), KARST_TUNNEL_CANYON);
+  assert_int_equal(seg(&sc, 0, 44.5, 10, 0), KARST_TUNNEL_BED);
+  /* Verticality threshold: 60° exactly is steep, 59° is not (dz/dx = tan θ). */
+  assert_int_equal(seg(&sc, 0, 75, 1, tan(60.0 * M_PI / 180) + 1e-12), KARST_TUNNEL_TUBE);
+  assert_int_equal(seg(&sc, 0, 75, 1, tan(59.0 * M_PI / 180)), KARST_TUNNEL_CANYON);
+  /* Degenerate zero-length segment: gentle. */
+  assert_int_equal(seg(&sc, 0, 20, 0, 0), KARST_TUNNEL_BED);
+  sc.permeability.root = NULL;
+  karst_scenario_destroy(&sc);
+}
+
+static void test_run_radii(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_perm_node_t sphere;
+  make_scenario(&sc, &sphere);
+  karst_network_t net;
+  karst_network_init(&net);
+  /* 2000 horizontal phreatic segments (bed) and one epikarst segment at the end. */
+  const int n = 2000;
+  for (int i = 0; i <= n; i++)
+    karst_network_add_node(&net, i, 0, 20, NULL);
+  for (int i = 0; i < n; i++)
+    karst_network_add_edge(&net, i, i + 1, NULL);
+  karst_int_t u, v;
+  karst_network_add_node(&net, 0, 0, 92, &u);
+  karst_network_add_node(&net, 0, 0, 98, &v);
+  karst_network_add_edge(&net, u, v, NULL);
+  karst_rng_t r;
+  karst_rng_init(&r, 1, 6);
+  assert_int_equal(karst_classification_run(&ctx, &sc, &r, &net), KARST_SUCCESS);
+  const double *type = karst_network_attr_find(&net, KARST_ATTR_EDGE, "tunnel_type")->data;
+  const double *rad = karst_network_attr_find(&net, KARST_ATTR_EDGE, "radius")->data;
+  const double *vad = karst_network_attr_find(&net, KARST_ATTR_EDGE, "vadose")->data;
+  const double *wtd = karst_network_attr_find(&net, KARST_ATTR_NODE, "water_table_distance")->data;
+  double mean = 0, lo = INFINITY, hi = -INFINITY;
+  for (int e = 0; e < n; e++) {
+    assert_int_equal((int)type[e], KARST_TUNNEL_BED);
+    assert_int_equal((int)vad[e], 0);
+    mean += rad[e] / n;
+    lo = fmin(lo, rad[e]);
+    hi = fmax(hi, rad[e]);
+  }
+  /* Uniform on [0.5, 4] (§5.3): mean 2.25, standard error 3.5/sqrt(12·2000) = 0.023; 0.1 is > 4 SE.
+   */
+  assert_close(mean, 2.25, 0.1);
+  assert_true(lo >= 0.5 && hi <= 4.0);
+  assert_true(lo < 0.6 && hi > 3.9);
+  assert_int_equal((int)type[n], KARST_TUNNEL_EPIKARST);
+  assert_close(rad[n], 0.5, 0); /* fixed 50 cm (§5.3) */
+  assert_int_equal((int)vad[n], 1);
+  assert_close(wtd[0], -30, 0);
+  assert_close(wtd[v], 48, 0);
+  /* Configurable ranges; a bad range is refused and named. */
+  sc.classification.radius[KARST_TUNNEL_CANYON].min = 3;
+  sc.classification.radius[KARST_TUNNEL_CANYON].max = 1;
+  assert_int_equal(karst_classification_run(&ctx, &sc, &r, &net), KARST_EINVAL);
+  assert_non_null(strstr(ctx.errmsg, "canyon"));
+  sc.classification.radius[KARST_TUNNEL_CANYON].max = 3;
+  sc.classification.vertical_angle = 95;
+  assert_int_equal(karst_classification_run(&ctx, &sc, &r, &net), KARST_EINVAL);
+  assert_non_null(strstr(ctx.errmsg, "95"));
+  karst_network_destroy(&net);
+  /* Empty network: nothing to do, no error. */
+  sc.classification.vertical_angle = 60;
+  karst_network_init(&net);
+  assert_int_equal(karst_classification_run(&ctx, &sc, &r, &net), KARST_SUCCESS);
+  karst_network_destroy(&net);
+  sc.permeability.root = NULL;
+  karst_scenario_destroy(&sc);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_decision_table),
+      cmocka_unit_test(test_run_radii),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

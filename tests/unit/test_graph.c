@@ -1,0 +1,324 @@
+/* The kNN graph (Paris et al. 2021, §4.1): exact neighbour sets against brute
+ * force, symmetry, thread independence, edge costs and exclusions, and the
+ * CSR builder from edge lists. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "karst.h"
+#include "test_util.h"
+
+/* Box [0, 100]^3 under a terrain at 200 m; cost = w0 = 1 per metre. */
+static void open_scenario(karst_scenario_t *sc, int k) {
+  karst_scenario_init(sc);
+  sc->terrain.elevation = 200;
+  sc->sampling.k = k;
+  sc->cost.horizon = 0, sc->cost.fracture = 0, sc->cost.permeability = 0;
+}
+
+static void random_samples(karst_samples_t *s, int n, uint64_t seed, int line) {
+  karst_rng_t r;
+  karst_rng_init(&r, seed, 0);
+  karst_samples_init(s);
+  for (int i = 0; i < n; i++) {
+    double p[3];
+    for (int a = 0; a < 3; a++)
+      p[a] = karst_rng_uniform_range(&r, 0, 100);
+    if (line) p[1] = p[2] = p[0]; /* collinear: the diagonal of the box */
+    assert_int_equal(karst_samples_add(s, p, KARST_SAMPLE_FILL), KARST_SUCCESS);
+  }
+}
+
+static double d2(const double *a, const double *b) {
+  return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+         (a[2] - b[2]) * (a[2] - b[2]);
+}
+
+typedef struct {
+  double d;
+  int i;
+} di_t;
+static int cmp_di(const void *a, const void *b) {
+  const di_t *x = a, *y = b;
+  return (x->d > y->d) - (x->d < y->d);
+}
+
+/* Brute-force reference: adjacency matrix of the union of the k nearest
+ * neighbour relations (O(n² log n), independent of FLANN). */
+static unsigned char *brute_knn_union(const karst_samples_t *s, int k) {
+  int n = (int)s->n;
+  unsigned char *A = calloc((size_t)n * n, 1);
+  di_t *buf = malloc(sizeof(di_t) * (size_t)n);
+  for (int v = 0; v < n; v++) {
+    int m = 0;
+    for (int u = 0; u < n; u++)
+      if (u != v) buf[m++] = (di_t){d2(s->xyz + 3 * v, s->xyz + 3 * u), u};
+    qsort(buf, (size_t)m, sizeof(di_t), cmp_di);
+    for (int j = 0; j < k && j < m; j++)
+      A[(size_t)v * n + buf[j].i] = A[(size_t)buf[j].i * n + v] = 1;
+  }
+  free(buf);
+  return A;
+}
+
+/* The CSR structure is a simple undirected graph: sorted rows, no self-loop,
+ * every arc mirrored with the same cost. */
+static void check_symmetric(const karst_graph_t *g) {
+  assert_int_equal(g->offsets[0], 0);
+  assert_int_equal(g->offsets[g->n], g->n_arcs);
+  for (karst_int_t v = 0; v < g->n; v++)
+    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
+      karst_int_t u = g->adj[a];
+      assert_true(u != v && u >= 0 && u < g->n);
+      if (a > g->offsets[v]) assert_true(g->adj[a - 1] < u);
+      int found = 0;
+      for (karst_int_t b = g->offsets[u]; b < g->offsets[u + 1]; b++)
+        if (g->adj[b] == v) found = 1, assert_true(g->cost[b] == g->cost[a]);
+      assert_true(found);
+    }
+}
+
+static void check_against_brute(const karst_samples_t *s, const karst_graph_t *g, int k) {
+  unsigned char *A = brute_knn_union(s, k);
+  int n = (int)s->n;
+  karst_int_t arcs = 0;
+  for (int v = 0; v < n; v++) {
+    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++)
+      assert_int_equal(A[(size_t)v * n + g->adj[a]], 1);
+    for (int u = 0; u < n; u++)
+      arcs += A[(size_t)v * n + u];
+  }
+  assert_int_equal(arcs, g->n_arcs); /* same size and included: equal sets */
+  free(A);
+}
+
+/* 3000 random points, k = 12: neighbour sets equal the brute-force union;
+ * the graph is identical with 1 and 2 threads; costs are the edge lengths. */
+static void test_knn_exact(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  open_scenario(&sc, 12);
+  karst_samples_t s;
+  random_samples(&s, 3000, 99, 0);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_graph_t g1, g2;
+  karst_graph_init(&g1), karst_graph_init(&g2);
+  ctx.nthreads = 1;
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g1), KARST_SUCCESS);
+  ctx.nthreads = 2;
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g2), KARST_SUCCESS);
+  check_symmetric(&g1);
+  check_against_brute(&s, &g1, 12);
+  /* The union of the 12-NN relations gives every vertex at least 12 neighbours. */
+  for (karst_int_t v = 0; v < g1.n; v++)
+    assert_true(g1.offsets[v + 1] - g1.offsets[v] >= 12);
+  assert_int_equal(g1.n_arcs, g2.n_arcs);
+  assert_memory_equal(g1.offsets, g2.offsets, sizeof(karst_int_t) * (size_t)(g1.n + 1));
+  assert_memory_equal(g1.adj, g2.adj, sizeof(karst_int_t) * (size_t)g1.n_arcs);
+  assert_memory_equal(g1.cost, g2.cost, sizeof(double) * (size_t)g1.n_arcs);
+  for (karst_int_t v = 0; v < g1.n; v += 97)
+    for (karst_int_t a = g1.offsets[v]; a < g1.offsets[v + 1]; a++)
+      assert_close(g1.cost[a], sqrt(d2(s.xyz + 3 * v, s.xyz + 3 * g1.adj[a])), 1e-12);
+  assert_int_equal(karst_graph_edge_count(&g1), g1.n_arcs / 2);
+  karst_graph_destroy(&g1), karst_graph_destroy(&g2);
+  karst_samples_destroy(&s);
+  karst_scenario_destroy(&sc);
+}
+
+/* Collinear points (degenerate geometry for the k-d tree). */
+static void test_knn_collinear(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  open_scenario(&sc, 4);
+  karst_samples_t s;
+  random_samples(&s, 500, 3, 1);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_graph_t g;
+  karst_graph_init(&g);
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  check_symmetric(&g);
+  check_against_brute(&s, &g, 4);
+  karst_graph_destroy(&g);
+  karst_samples_destroy(&s);
+  karst_scenario_destroy(&sc);
+}
+
+/* Empty set, a single point, k >= n (complete graph), and two far clusters
+ * with small k (disconnected: no edge between them). */
+static void test_graph_small_cases(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  open_scenario(&sc, 40);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_samples_t s;
+  karst_samples_init(&s);
+  karst_graph_t g;
+  karst_graph_init(&g);
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(g.n, 0);
+  assert_int_equal(g.n_arcs, 0);
+  assert_int_equal(g.offsets[0], 0);
+  double p[3] = {1, 2, 3};
+  karst_samples_add(&s, p, KARST_SAMPLE_KEYPOINT);
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(g.n, 1);
+  assert_int_equal(g.n_arcs, 0);
+  for (int i = 0; i < 5; i++) {
+    double q[3] = {10.0 + i, 20.0 + i * i, 30};
+    karst_samples_add(&s, q, KARST_SAMPLE_FILL);
+  }
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(g.n_arcs, 6 * 5); /* complete graph on 6 vertices */
+  karst_samples_destroy(&s);
+
+  karst_samples_init(&s);
+  karst_rng_t r;
+  karst_rng_init(&r, 4, 0);
+  for (int i = 0; i < 40; i++) {
+    double q[3] = {karst_rng_uniform_range(&r, 0, 5), karst_rng_uniform_range(&r, 0, 5),
+                   karst_rng_uniform_range(&r, 0, 5)};
+    if (i >= 20) q[0] += 90;
+    karst_samples_add(&s, q, KARST_SAMPLE_FILL);
+  }
+  sc.sampling.k = 5;
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  check_symmetric(&g);
+  for (karst_int_t v = 0; v < 40; v++)
+    for (karst_int_t a = g.offsets[v]; a < g.offsets[v + 1]; a++)
+      assert_true((v < 20) == (g.adj[a] < 20));
+  /* Invalid k and non-finite samples are refused. */
+  sc.sampling.k = 0;
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_EINVAL);
+  sc.sampling.k = 5;
+  s.xyz[7] = NAN;
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_EINVAL);
+  assert_non_null(strstr(ctx.errmsg, "sample 2"));
+  assert_int_equal(g.n, 40); /* unchanged on failure */
+  karst_graph_destroy(&g);
+  karst_samples_destroy(&s);
+  karst_scenario_destroy(&sc);
+}
+
+/* Edges through the air above a V-shaped valley are removed: two groups of
+ * points on both slopes, the valley floor at 10 m between them. */
+static void test_graph_excludes_air(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  open_scenario(&sc, 3);
+  sc.domain_min[2] = -10;
+  sc.terrain.is_grid = 1, sc.terrain.ncols = 3, sc.terrain.nrows = 2, sc.terrain.cellsize = 50;
+  sc.terrain.z = malloc(6 * sizeof(double));
+  const double v[6] = {90, 10, 90, 90, 10, 90};
+  memcpy(sc.terrain.z, v, sizeof v);
+  karst_samples_t s;
+  karst_samples_init(&s);
+  const double P[4][3] = {{0, 20, 50}, {5, 20, 50}, {95, 20, 50}, {100, 20, 50}};
+  for (int i = 0; i < 4; i++)
+    karst_samples_add(&s, P[i], KARST_SAMPLE_FILL);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_graph_t g;
+  karst_graph_init(&g);
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  /* k = 3 joins everything, but only the two 5 m edges stay under ground. */
+  assert_int_equal(g.n_arcs, 4);
+  check_symmetric(&g);
+  assert_close(g.cost[0], 5.0, 1e-12);
+  karst_graph_destroy(&g);
+  karst_samples_destroy(&s);
+  karst_scenario_destroy(&sc);
+}
+
+/* CSR from edge lists: duplicates keep the cheaper, self-loops and infinite
+ * costs are dropped, rows sorted; bad input is refused with the edge named. */
+static void test_from_edges(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_graph_t g;
+  karst_graph_init(&g);
+  const karst_int_t u[] = {0, 2, 1, 3, 2, 0, 3};
+  const karst_int_t v[] = {1, 0, 0, 3, 3, 4, 0};
+  const double c[] = {5, 2, 3, 1, INFINITY, 7, 4};
+  assert_int_equal(karst_graph_from_edges(&ctx, &g, 5, NULL, 7, u, v, c), KARST_SUCCESS);
+  /* Edges kept: {0,1} cost 3, {0,2} 2, {0,4} 7, {0,3} 4. */
+  assert_int_equal(g.n_arcs, 8);
+  const karst_int_t row0[] = {1, 2, 3, 4};
+  const double cost0[] = {3, 2, 4, 7};
+  assert_int_equal(g.offsets[1] - g.offsets[0], 4);
+  for (int i = 0; i < 4; i++) {
+    assert_int_equal(g.adj[i], row0[i]);
+    assert_close(g.cost[i], cost0[i], 0);
+  }
+  check_symmetric(&g);
+  const karst_int_t bad_v[] = {1, 9};
+  const karst_int_t bad_u[] = {0, 1};
+  const double bc[] = {1, 1};
+  assert_int_equal(karst_graph_from_edges(&ctx, &g, 5, NULL, 2, bad_u, bad_v, bc), KARST_EINVAL);
+  assert_non_null(strstr(ctx.errmsg, "edge 1 (1, 9)"));
+  const double neg[] = {1, -2};
+  assert_int_equal(karst_graph_from_edges(&ctx, &g, 5, NULL, 2, bad_u, u, neg), KARST_EINVAL);
+  assert_int_equal(g.n_arcs, 8); /* unchanged */
+  assert_int_equal(karst_graph_from_edges(&ctx, &g, 0, NULL, 0, NULL, NULL, NULL), KARST_SUCCESS);
+  assert_int_equal(g.n, 0);
+  assert_int_equal(g.offsets[0], 0);
+  karst_graph_destroy(&g);
+}
+
+/* Sampling followed by the graph: every key point has neighbours and the
+ * costs are finite and at least the lower bound times the length. */
+static void test_pipeline(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  sc.domain_max[2] = 60, sc.terrain.elevation = 50, sc.water_table = 30;
+  sc.sampling.fill_radius = 6, sc.sampling.feature_radius = 3, sc.sampling.k = 20;
+  sc.n_fractures = 1;
+  sc.fractures = calloc(1, sizeof(karst_fracture_t));
+  sc.fractures[0].dip = 80, sc.fractures[0].dip_direction = 30, sc.fractures[0].weight = 1;
+  sc.n_key_points = 2;
+  sc.key_points = calloc(2, sizeof(karst_keypoint_t));
+  const double a[3] = {10, 10, 40}, b[3] = {90, 90, 5};
+  memcpy(sc.key_points[0].p, a, sizeof a), memcpy(sc.key_points[1].p, b, sizeof b);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  ctx.nthreads = 2;
+  karst_rng_t rng;
+  karst_rng_init(&rng, 1, 0);
+  karst_samples_t s;
+  karst_samples_init(&s);
+  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
+  karst_graph_t g;
+  karst_graph_init(&g);
+  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  check_symmetric(&g);
+  double lb = karst_cost_lower_bound_per_metre(&sc);
+  for (karst_int_t v = 0; v < g.n; v++) {
+    if (v < 2) assert_true(g.offsets[v + 1] - g.offsets[v] >= 20);
+    for (karst_int_t e = g.offsets[v]; e < g.offsets[v + 1]; e++) {
+      assert_true(isfinite(g.cost[e]));
+      assert_true(g.cost[e] >= lb * sqrt(d2(s.xyz + 3 * v, s.xyz + 3 * g.adj[e])));
+    }
+  }
+  karst_graph_destroy(&g);
+  karst_samples_destroy(&s);
+  karst_scenario_destroy(&sc);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_knn_exact),         cmocka_unit_test(test_knn_collinear),
+      cmocka_unit_test(test_graph_small_cases), cmocka_unit_test(test_graph_excludes_air),
+      cmocka_unit_test(test_from_edges),        cmocka_unit_test(test_pipeline),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,346 @@
+/*
+ * The HTML report on an ensemble built with a fake generator: every plot is
+ * present, each <svg> is well-formed XML (Python's parser), there is no script
+ * and no external reference, and headless Chromium renders it without a
+ * console error (when chromium is installed).
+ */
+#include <inttypes.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "karst.h"
+#include "test_util.h"
+
+static const char *const fake_names[] = {"nodes", "total_length", "aspl", "undefined"};
+
+/* A member: a random chain of 4..9 nodes with tunnel types, from the member seed only. */
+static karst_error_t fake_realise(karst_ctx_t *ctx, void *user, uint64_t seed, karst_int_t index,
+                                  karst_network_t *net) {
+  (void)ctx, (void)user, (void)index;
+  karst_rng_t r;
+  karst_rng_init(&r, seed, 0);
+  int n = 4 + (int)karst_rng_below(&r, 6);
+  for (int i = 0; i < n; i++)
+    karst_network_add_node(net, karst_rng_uniform_range(&r, 0, 400),
+                           karst_rng_uniform_range(&r, 0, 600), karst_rng_uniform_range(&r, 0, 100),
+                           NULL);
+  for (int i = 1; i < n; i++)
+    karst_network_add_edge(net, i - 1, i, NULL);
+  double *type = NULL;
+  karst_network_attr_add(net, KARST_ATTR_EDGE, "tunnel_type", 1, 1, &type);
+  for (karst_int_t e = 0; e < net->n_edges; e++)
+    type[e] = (double)karst_rng_below(&r, KARST_TUNNEL_TYPE_COUNT);
+  return KARST_SUCCESS;
+}
+
+static karst_error_t fake_write(karst_ctx_t *ctx, void *user, const char *dir,
+                                const karst_network_t *net) {
+  (void)user;
+  char path[1024];
+  snprintf(path, sizeof path, "%s/network.vtp", dir);
+  karst_atomic_file_t f;
+  karst_error_t err = karst_atomic_open(ctx, &f, path, "wb");
+  if (err) return err;
+  karst_attr_t *type = karst_network_attr_find(net, KARST_ATTR_EDGE, "tunnel_type");
+  fprintf(f.fp, "%" PRId64 " %" PRId64 "\n", net->n_nodes, net->n_edges);
+  for (karst_int_t i = 0; i < net->n_nodes; i++)
+    fprintf(f.fp, "%.17g %.17g %.17g\n", net->xyz[3 * i], net->xyz[3 * i + 1], net->xyz[3 * i + 2]);
+  for (karst_int_t e = 0; e < net->n_edges; e++)
+    fprintf(f.fp, "%" PRId64 " %" PRId64 " %d\n", net->edges[2 * e], net->edges[2 * e + 1],
+            (int)type->data[e]);
+  return karst_atomic_commit(ctx, &f);
+}
+
+/* Reads what fake_write wrote (stands in for karst_read_network on a .vtp). */
+static karst_error_t fake_read(karst_ctx_t *ctx, void *user, const char *path,
+                               karst_network_t *net) {
+  (void)user;
+  FILE *fp = fopen(path, "r");
+  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot read", path);
+  long long n = 0, m = 0;
+  karst_error_t err = KARST_SUCCESS;
+  if (fscanf(fp, "%lld %lld", &n, &m) != 2) err = karst_set_error(ctx, KARST_EPARSE, "%s:1", path);
+  for (long long i = 0; !err && i < n; i++) {
+    double x, y, z;
+    if (fscanf(fp, "%lf %lf %lf", &x, &y, &z) != 3)
+      err = karst_set_error(ctx, KARST_EPARSE, "%s: node", path);
+    else
+      karst_network_add_node(net, x, y, z, NULL);
+  }
+  double *type = NULL;
+  for (long long e = 0; !err && e < m; e++) {
+    long long a, b;
+    int t;
+    if (fscanf(fp, "%lld %lld %d", &a, &b, &t) != 3) {
+      err = karst_set_error(ctx, KARST_EPARSE, "%s: edge", path);
+      break;
+    }
+    karst_network_add_edge(net, a, b, NULL);
+    karst_network_attr_add(net, KARST_ATTR_EDGE, "tunnel_type", 1, 1, &type);
+    type[e] = t;
+  }
+  fclose(fp);
+  return err;
+}
+
+static karst_error_t fake_measure(karst_ctx_t *ctx, void *user, const karst_network_t *net,
+                                  double *v) {
+  (void)ctx, (void)user;
+  double len = 0;
+  for (karst_int_t e = 0; e < net->n_edges; e++)
+    len += karst_network_edge_length(net, e);
+  v[0] = (double)net->n_nodes;
+  v[1] = len;
+  v[2] = (double)(net->n_nodes + 1) / 3.0;
+  v[3] = NAN;
+  return KARST_SUCCESS;
+}
+
+static char *ens_dir;
+
+static int setup(void **state) {
+  (void)state;
+  char tmpl[] = "/tmp/karst_test_report_XXXXXX";
+  ens_dir = strdup(mkdtemp(tmpl));
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_ensemble_options_t opt;
+  karst_ensemble_options_init(&opt);
+  opt.n = 20;
+  opt.seed = 2021;
+  opt.nthreads = 2;
+  opt.scenario_path = "datasets/scenarios/branchwork <test>.yaml";
+  opt.scenario_hash = "00112233aabbccdd";
+  opt.parameters_json = "    \"name\": \"branchwork & co\",\n    \"skeleton.gamma\": 2\n";
+  karst_ensemble_hooks_t h = {fake_realise, fake_write, fake_measure, NULL, 4, fake_names, NULL};
+  return karst_ensemble_run(&ctx, ens_dir, &opt, &h, NULL) == KARST_SUCCESS ? 0 : -1;
+}
+
+static int teardown(void **state) {
+  (void)state;
+  char cmd[1200];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", ens_dir);
+  int rc = system(cmd);
+  free(ens_dir);
+  return rc;
+}
+
+static char *read_all(const char *path) {
+  FILE *fp = fopen(path, "rb");
+  if (!fp) return NULL;
+  fseek(fp, 0, SEEK_END);
+  long n = ftell(fp);
+  fseek(fp, 0, SEEK_SET);
+  char *s = malloc((size_t)n + 1);
+  size_t got = fread(s, 1, (size_t)n, fp);
+  s[got] = '\0';
+  fclose(fp);
+  return s;
+}
+
+static int count(const char *s, const char *what) {
+  int n = 0;
+  for (const char *p = strstr(s, what); p; p = strstr(p + 1, what))
+    n++;
+  return n;
+}
+
+static void make_survey(karst_report_survey_t *s) {
+  karst_report_survey_init(s);
+  s->label = strdup("Grotte <survey>.3d");
+  s->n_values = 3;
+  s->names[0] = "aspl";
+  s->names[1] = "nodes";
+  s->names[2] = "total_length";
+  s->values[0] = 0.5; /* below every member (aspl of members >= 5/3): outside the band */
+  s->values[1] = 6;
+  s->values[2] = NAN;
+  /* A north–south survey: its rose has one petal at 0°. */
+  karst_network_add_node(&s->net, 0, 0, 0, NULL);
+  karst_network_add_node(&s->net, 0, 50, 0, NULL);
+  karst_network_add_node(&s->net, 0, 80, -10, NULL);
+  karst_network_add_edge(&s->net, 0, 1, NULL);
+  karst_network_add_edge(&s->net, 1, 2, NULL);
+}
+
+static void test_report_content(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_report_survey_t sv;
+  make_survey(&sv);
+  karst_report_options_t opt;
+  karst_report_options_init(&opt);
+  opt.surveys = &sv;
+  opt.n_surveys = 1;
+  opt.published_path = KARST_SOURCE_DIR "/datasets/published_metrics.csv";
+  opt.members_drawn = 3;
+  opt.read_network = fake_read;
+  char out[1200];
+  snprintf(out, sizeof out, "%s/report.html", ens_dir);
+  assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
+  char *html = read_all(out);
+  assert_non_null(html);
+  /* 4 histograms + rose + degrees + 3 members × (plan, section) = 12 plots. */
+  assert_int_equal(count(html, "<svg "), 12);
+  assert_int_equal(count(html, "</svg>"), 12);
+  assert_int_equal(count(html, "<script"), 0);
+  assert_int_equal(count(html, "src="), 0);
+  assert_int_equal(count(html, "href="), 0);
+  /* The only URL is the SVG namespace (a name, never fetched). */
+  assert_int_equal(count(html, "http"), count(html, "http://www.w3.org/2000/svg"));
+  /* Scenario summary, seed, escaped names. */
+  assert_non_null(strstr(html, "branchwork &amp; co"));
+  assert_non_null(strstr(html, "branchwork &lt;test&gt;.yaml"));
+  assert_non_null(strstr(html, "<td class=\"l\">2021</td>"));
+  assert_non_null(strstr(html, "00112233aabbccdd"));
+  /* The comparison: aspl flagged, its 34-cave range (ASPL, published table) shown. */
+  assert_non_null(strstr(html, "Grotte &lt;survey&gt;.3d"));
+  assert_int_equal(count(html, "outside the 5–95 % band"), 1);
+  assert_non_null(strstr(html, "<td>55.72</td>"));
+  assert_non_null(strstr(html, "34 caves: 2.321 – 55.72"));
+  /* Survey value line in the aspl and nodes histograms (total_length undefined). */
+  assert_int_equal(count(html, "stroke-dasharray=\"5 3\""), 2);
+  assert_non_null(strstr(html, "undefined for every member"));
+  /* Maps coloured by tunnel type: at least one path in a palette colour. */
+  assert_non_null(strstr(html, "<path fill=\"none\" stroke=\"#"));
+  assert_non_null(strstr(html, "member 0000 (seed "));
+  assert_non_null(strstr(html, "VTK 9.1"));
+  assert_non_null(strstr(html, "igraph 0.10"));
+  assert_non_null(strstr(html, "Published ranges: 34 caves"));
+
+  /* Each <svg> block parses as XML (Python's parser, independent of our writer). */
+  char cmd[2048];
+  snprintf(cmd, sizeof cmd,
+           "/usr/bin/python3 -c \"import re,sys,xml.etree.ElementTree as E; "
+           "h=open('%s',encoding='utf-8').read(); b=re.findall(r'<svg .*?</svg>', h, re.S); "
+           "[E.fromstring(x) for x in b]; sys.exit(0 if len(b)==12 else 1)\"",
+           out);
+  assert_int_equal(system(cmd), 0);
+  free(html);
+  karst_report_survey_destroy(&sv);
+}
+
+/* Unreadable members are listed; the page is still written. No survey: statistics only. */
+static void test_report_degraded(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_report_options_t opt;
+  karst_report_options_init(&opt);
+  opt.published_path = KARST_SOURCE_DIR "/datasets/published_metrics.csv";
+  opt.members_pooled = 2;
+  char out[1200];
+  snprintf(out, sizeof out, "%s/report_default_reader.html", ens_dir);
+  /* The default reader (karst_read_network) cannot read the fake's text "network.vtp". */
+  assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
+  char *html = read_all(out);
+  assert_non_null(strstr(html, "Members that could not be read"));
+  assert_non_null(strstr(html, "ensemble statistics (no survey given)"));
+  assert_non_null(strstr(html, "no horizontal conduits"));
+  free(html);
+  /* A missing ensemble: error names the file, no output written. */
+  snprintf(out, sizeof out, "%s/nothing.html", ens_dir);
+  assert_int_equal(karst_report_write(&ctx, "/nonexistent/ens", out, &opt), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "/nonexistent/ens/ensemble.json"));
+  assert_int_not_equal(access(out, F_OK), 0);
+}
+
+static karst_error_t seed_only_realise(karst_ctx_t *ctx, void *user, uint64_t seed,
+                                       karst_int_t index, karst_network_t *net) {
+  (void)user;
+  return fake_realise(ctx, NULL, seed, index, net);
+}
+
+/* The real files: members written by the VTK writer and read back by karst_read_network,
+ * every metric of karst_metric_fields, and Monachou (GOCAD PLine) loaded as the survey. */
+static void test_report_real_files(void **state) {
+  (void)state;
+  char tmpl[] = "/tmp/karst_test_report_real_XXXXXX";
+  char *dir = mkdtemp(tmpl);
+  assert_non_null(dir);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  karst_ensemble_hooks_t h;
+  karst_ensemble_pipeline_t pipe;
+  assert_int_equal(karst_ensemble_hooks_pipeline(&ctx, &h, &pipe, &sc), KARST_SUCCESS);
+  h.realise = seed_only_realise;
+  karst_ensemble_options_t eo;
+  karst_ensemble_options_init(&eo);
+  eo.n = 8;
+  eo.nthreads = 2;
+  assert_int_equal(karst_ensemble_run(&ctx, dir, &eo, &h, NULL), KARST_SUCCESS);
+  karst_report_survey_t sv;
+  assert_int_equal(karst_report_survey_load(
+                       &ctx, KARST_SOURCE_DIR "/datasets/surveys/karstnet/Monachou.pl", &sv),
+                   KARST_SUCCESS);
+  karst_report_options_t opt;
+  karst_report_options_init(&opt);
+  opt.surveys = &sv;
+  opt.n_surveys = 1;
+  opt.published_path = KARST_SOURCE_DIR "/datasets/published_metrics.csv";
+  char out[1200];
+  snprintf(out, sizeof out, "%s/report.html", dir);
+  assert_int_equal(karst_report_write(&ctx, dir, out, &opt), KARST_SUCCESS);
+  char *html = read_all(out);
+  assert_non_null(html);
+  assert_null(strstr(html, "could not be read"));
+  /* histograms of every metric + rose + degrees + 4 members x 2 views */
+  assert_int_equal(count(html, "<svg "), h.n_metrics + 2 + 8);
+  /* Monachou's aspl (docs: 7.5810126582278485) appears as the survey value, 4 digits. */
+  assert_non_null(strstr(html, "<td>7.581</td>"));
+  free(html);
+  karst_report_survey_destroy(&sv);
+  karst_scenario_destroy(&sc);
+  char cmd[1200];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  assert_int_equal(system(cmd), 0);
+}
+
+/* Headless Chromium renders the page: no console error, every plot in the DOM. */
+static void test_report_chromium(void **state) {
+  (void)state;
+  if (system("command -v chromium >/dev/null 2>&1") != 0) {
+    print_error("chromium not installed: run scripts/install-deps\n");
+    fail();
+  }
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_report_survey_t sv;
+  make_survey(&sv);
+  karst_report_options_t opt;
+  karst_report_options_init(&opt);
+  opt.surveys = &sv;
+  opt.n_surveys = 1;
+  opt.published_path = KARST_SOURCE_DIR "/datasets/published_metrics.csv";
+  opt.read_network = fake_read;
+  char out[1200];
+  snprintf(out, sizeof out, "%s/chromium.html", ens_dir);
+  assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
+  karst_report_survey_destroy(&sv);
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "bash '%s/tests/cli/test_report_chromium.sh' --check '%s' 14",
+           KARST_SOURCE_DIR, out);
+  assert_int_equal(system(cmd), 0);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_report_content),
+      cmocka_unit_test(test_report_degraded),
+      cmocka_unit_test(test_report_real_files),
+      cmocka_unit_test(test_report_chromium),
+  };
+  return cmocka_run_group_tests(tests, setup, teardown);
+}

@@ -1,0 +1,272 @@
+/* The γ-skeleton (src/skeleton, Paris et al. 2021 §5.1): γ = 2 is the
+ * Gabriel graph and γ = ∞ the relative neighbourhood graph under a Euclidean
+ * cost (checked against brute-force diametral-sphere and lune tests), γ ≤ 1
+ * prunes nothing, and the skeleton is the union of the kept paths with
+ * junctions where paths branch. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#include "graph_fixture.h"
+#include "test_util.h"
+
+static double d3(const double *a, const double *b) {
+  return fx_euclid_cost(a, b, NULL);
+}
+
+/* Key-point distances on the complete graph with cost = Euclidean length (the path metric is then
+ * the Euclidean distance: no detour is shorter than the straight edge). */
+static void euclid_matrix(karst_int_t n, const double *xyz, double *dist) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_int_t m = n * (n - 1) / 2, e = 0;
+  karst_int_t *u = malloc((size_t)(m + 1) * sizeof *u), *v = malloc((size_t)(m + 1) * sizeof *v);
+  double *c = malloc((size_t)(m + 1) * sizeof *c);
+  for (karst_int_t i = 0; i < n; i++)
+    for (karst_int_t j = i + 1; j < n; j++, e++)
+      u[e] = i, v[e] = j, c[e] = d3(&xyz[3 * i], &xyz[3 * j]);
+  karst_graph_t g;
+  fx_graph_from_edges(&g, n, xyz, m, u, v, c);
+  karst_int_t *keys = malloc((size_t)n * sizeof *keys);
+  for (karst_int_t i = 0; i < n; i++)
+    keys[i] = i;
+  assert_int_equal(
+      karst_paths_keypoint_distances(&ctx, &g, n, keys, 1.0, KARST_PATHS_DIJKSTRA_MULTI, dist),
+      KARST_SUCCESS);
+  free(keys), free(u), free(v), free(c);
+  fx_graph_free(&g);
+}
+
+/* Gabriel graph by its definition (Gabriel & Sokal 1969): no point strictly inside the sphere
+ * whose diameter is a–b, i.e. |k − (a+b)/2| < |a − b| / 2. */
+static int gabriel_edge(karst_int_t n, const double *xyz, karst_int_t a, karst_int_t b) {
+  const double *pa = &xyz[3 * a], *pb = &xyz[3 * b];
+  double m[3] = {(pa[0] + pb[0]) / 2, (pa[1] + pb[1]) / 2, (pa[2] + pb[2]) / 2};
+  double r = d3(pa, pb) / 2;
+  for (karst_int_t k = 0; k < n; k++)
+    if (k != a && k != b && d3(&xyz[3 * k], m) < r) return 0;
+  return 1;
+}
+
+/* Relative neighbourhood graph (Toussaint 1980): no point in the lune, i.e. closer to both a and b
+ * than they are to each other. */
+static int rng_edge(karst_int_t n, const double *xyz, karst_int_t a, karst_int_t b) {
+  double dab = d3(&xyz[3 * a], &xyz[3 * b]);
+  for (karst_int_t k = 0; k < n; k++)
+    if (k != a && k != b && d3(&xyz[3 * k], &xyz[3 * a]) < dab &&
+        d3(&xyz[3 * k], &xyz[3 * b]) < dab)
+      return 0;
+  return 1;
+}
+
+static void test_gabriel_and_rng(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  for (uint64_t seed = 1; seed <= 10; seed++) {
+    karst_rng_t r;
+    karst_rng_init(&r, seed, 1);
+    const karst_int_t n = 40;
+    double xyz[3 * 40], dist[40 * 40];
+    unsigned char keep2[40 * 40], keepinf[40 * 40], keep08[40 * 40];
+    for (int i = 0; i < 3 * n; i++)
+      xyz[i] = 1000 * karst_rng_uniform(&r);
+    euclid_matrix(n, xyz, dist);
+    assert_int_equal(karst_skeleton_gamma_keep(&ctx, n, dist, 2.0, keep2), KARST_SUCCESS);
+    assert_int_equal(karst_skeleton_gamma_keep(&ctx, n, dist, INFINITY, keepinf), KARST_SUCCESS);
+    assert_int_equal(karst_skeleton_gamma_keep(&ctx, n, dist, 0.8, keep08), KARST_SUCCESS);
+    int n_gabriel = 0, n_rng = 0;
+    for (karst_int_t a = 0; a < n; a++)
+      for (karst_int_t b = 0; b < n; b++) {
+        if (a == b) continue;
+        assert_int_equal(keep2[a * n + b], gabriel_edge(n, xyz, a, b));
+        assert_int_equal(keepinf[a * n + b], rng_edge(n, xyz, a, b));
+        assert_int_equal(keep08[a * n + b], 1); /* γ ≤ 1 prunes nothing on a metric */
+        assert_true(!keepinf[a * n + b] || keep2[a * n + b]); /* RNG ⊆ Gabriel */
+        n_gabriel += keep2[a * n + b];
+        n_rng += keepinf[a * n + b];
+      }
+    assert_true(n_rng < n_gabriel);       /* the two rules differ on these point sets */
+    assert_true(n_gabriel < n * (n - 1)); /* and both prune */
+  }
+}
+
+/* Collinear key points at 0, 1, 2 (degenerate geometry), hand-checked: for γ = 2, 1² + 1² < 2²
+ * prunes (0, 2); for γ = 1, 1 + 1 < 2 is false, so all three pairs stay; for γ = ∞,
+ * max(1, 1) < 2 prunes (0, 2). Unreachable pairs are never kept; a single point and the empty
+ * set give nothing; γ ≤ 0 is refused. */
+static void test_hand_cases(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  double dist[9] = {0, 1, 2, 1, 0, 1, 2, 1, 0};
+  unsigned char keep[9];
+  assert_int_equal(karst_skeleton_gamma_keep(&ctx, 3, dist, 2.0, keep), KARST_SUCCESS);
+  assert_int_equal(keep[0 * 3 + 2], 0);
+  assert_int_equal(keep[0 * 3 + 1], 1);
+  assert_int_equal(keep[1 * 3 + 2], 1);
+  assert_int_equal(karst_skeleton_gamma_keep(&ctx, 3, dist, 1.0, keep), KARST_SUCCESS);
+  assert_int_equal(keep[0 * 3 + 2], 1);
+  assert_int_equal(karst_skeleton_gamma_keep(&ctx, 3, dist, INFINITY, keep), KARST_SUCCESS);
+  assert_int_equal(keep[0 * 3 + 2], 0);
+  assert_int_equal(keep[2 * 3 + 0], 0);
+  /* Large finite γ on the same triple behaves like ∞ (1/2)^γ · 2 < 1. */
+  assert_int_equal(karst_skeleton_gamma_keep(&ctx, 3, dist, 400.0, keep), KARST_SUCCESS);
+  assert_int_equal(keep[0 * 3 + 2], 0);
+  /* Disconnected: point 2 unreachable from 0 and 1. */
+  double dis[9] = {0, 1, INFINITY, 1, 0, INFINITY, INFINITY, INFINITY, 0};
+  assert_int_equal(karst_skeleton_gamma_keep(&ctx, 3, dis, 2.0, keep), KARST_SUCCESS);
+  assert_int_equal(keep[0 * 3 + 1], 1);
+  assert_int_equal(keep[0 * 3 + 2], 0);
+  assert_int_equal(keep[1 * 3 + 2], 0);
+  double one = 0;
+  assert_int_equal(karst_skeleton_gamma_keep(&ctx, 1, &one, 2.0, keep), KARST_SUCCESS);
+  assert_int_equal(keep[0], 0);
+  assert_int_equal(karst_skeleton_gamma_keep(&ctx, 0, NULL, 2.0, keep), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_gamma_keep(&ctx, 3, dist, 0.0, keep), KARST_EINVAL);
+  assert_non_null(strstr(ctx.errmsg, "gamma must be > 0, got 0"));
+  dist[1] = NAN;
+  assert_int_equal(karst_skeleton_gamma_keep(&ctx, 3, dist, 2.0, keep), KARST_EINVAL);
+}
+
+/* A star graph: centre 0 with leaves 1, 2, 3 at unit cost, plus a chain 3-4-5. Key points 1, 2, 5.
+ * d(1,2) = 2, d(1,5) = d(2,5) = 4. γ = 2: (1,5) is kept since 2² + 4² < 4² is false, likewise
+ * all pairs → the union of the three paths is the whole graph minus nothing: nodes {0..5}, edges
+ * 0-1, 0-2, 0-3, 3-4, 4-5 (five, each once although several paths share them), the centre a
+ * junction (degree 3), vertices 3 and 4 stay interior (degree 2). */
+static void test_union_and_junctions(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  double xyz[] = {0, 0, 0, -1, 0, 0, 0, 1, 0, 1, 0, 0, 2, 0, 0, 3, 0, 0, 9, 9, 9};
+  karst_int_t u[] = {0, 0, 0, 3, 4}, v[] = {1, 2, 3, 4, 5};
+  double c[] = {1, 1, 1, 1, 1};
+  karst_graph_t g;
+  fx_graph_from_edges(&g, 7, xyz, 5, u, v, c); /* vertex 6 isolated, never used */
+  karst_int_t keys[] = {1, 2, 5};
+  double dist[9];
+  assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, 3, keys, 1.0, 0, dist), KARST_SUCCESS);
+  assert_close(dist[0 * 3 + 1], 2, 0);
+  assert_close(dist[0 * 3 + 2], 4, 0);
+  karst_skeleton_t sk;
+  assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+  karst_int_t kept;
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, 2.0, 1.0, &sk, &kept),
+                   KARST_SUCCESS);
+  assert_int_equal(kept, 3);
+  karst_skeleton_mark_junctions(&sk);
+  assert_int_equal(sk.net.n_nodes, 6);
+  assert_int_equal(sk.net.n_edges, 5);
+  const double *kind = karst_network_attr_find(&sk.net, KARST_ATTR_NODE, "kind")->data;
+  assert_int_equal((int)kind[sk.node_of_vertex[0]], KARST_NODE_JUNCTION);
+  assert_int_equal((int)kind[sk.node_of_vertex[3]], KARST_NODE_INTERIOR);
+  assert_int_equal((int)kind[sk.node_of_vertex[4]], KARST_NODE_INTERIOR);
+  assert_int_equal(sk.node_of_vertex[6], -1);
+  /* The first path (1, 2) laid edges 0-1 and 0-2 with branch id 0; amplification step 0. */
+  const double *branch = karst_network_attr_find(&sk.net, KARST_ATTR_EDGE, "branch_id")->data;
+  const double *cost = karst_network_attr_find(&sk.net, KARST_ATTR_EDGE, "cost")->data;
+  assert_close(branch[0], 0, 0);
+  assert_close(branch[4], 1, 0); /* 3-4 or 4-5 came with path (1, 5) */
+  double sum = 0;
+  for (karst_int_t e = 0; e < sk.net.n_edges; e++)
+    sum += cost[e];
+  assert_close(sum, 5.0, 0);
+  karst_skeleton_destroy(&sk);
+  /* A pair whose path is broken (an unreachable key point) is simply not kept. */
+  karst_int_t keys2[] = {1, 6};
+  assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, 2, keys2, 1.0, 0, dist), KARST_SUCCESS);
+  assert_true(isinf(dist[1]));
+  assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 2, keys2, dist, NULL, 2.0, 1.0, &sk, &kept),
+                   KARST_SUCCESS);
+  assert_int_equal(kept, 0);
+  assert_int_equal(sk.net.n_nodes, 2); /* the two key points alone */
+  assert_int_equal(sk.net.n_edges, 0);
+  karst_skeleton_destroy(&sk);
+  fx_graph_free(&g);
+}
+
+/* On a dense 3-D graph with a Euclidean cost the path metric approximates the Euclidean one, so a
+ * γ = 2 skeleton of 8 key points laid on it keeps the Gabriel pairs of those points' positions in
+ * most cases; here we check the structural facts that must hold exactly: every kept pair is
+ * joined in the network, and the network is connected. */
+static void test_skeleton_on_dense_graph(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_rng_t r;
+  karst_rng_init(&r, 21, 0);
+  const double o[3] = {0, 0, 0};
+  double *xyz = fx_jittered_grid(12, 12, 6, 5.0, o, 0.3, &r);
+  const karst_int_t n = 12 * 12 * 6;
+  karst_graph_t g;
+  fx_knn_graph(&g, n, xyz, 16, fx_euclid_cost, NULL);
+  karst_int_t keys[8];
+  for (int i = 0; i < 8; i++)
+    keys[i] = (karst_int_t)karst_rng_below(&r, n);
+  double dist[64];
+  assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, 8, keys, 1.0, 0, dist), KARST_SUCCESS);
+  karst_skeleton_t sk;
+  assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+  karst_int_t kept;
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist, NULL, 2.0, 1.0, &sk, &kept),
+                   KARST_SUCCESS);
+  assert_true(kept >= 7); /* a connected proximity graph on 8 points has at least 7 edges */
+  /* connectivity by union-find over the network edges */
+  karst_int_t *parent = malloc((size_t)sk.net.n_nodes * sizeof *parent);
+  for (karst_int_t i = 0; i < sk.net.n_nodes; i++)
+    parent[i] = i;
+  for (karst_int_t e = 0; e < sk.net.n_edges; e++) {
+    karst_int_t a = sk.net.edges[2 * e], b = sk.net.edges[2 * e + 1];
+    while (parent[a] != a)
+      a = parent[a];
+    while (parent[b] != b)
+      b = parent[b];
+    if (a != b) parent[a] = b;
+  }
+  int roots = 0;
+  for (karst_int_t i = 0; i < sk.net.n_nodes; i++)
+    roots += parent[i] == i;
+  assert_int_equal(roots, 1);
+  free(parent);
+  /* The same skeleton from the key points' shortest-path trees (one Dijkstra per key point
+   * instead of one A* per kept pair): same distances, same paths (no ties on a jittered
+   * lattice), so the same network. */
+  double dist2[64];
+  int32_t *pred = malloc((size_t)7 * (size_t)n * sizeof *pred);
+  assert_int_equal(karst_paths_keypoint_trees(&ctx, &g, 8, keys, dist2, pred), KARST_SUCCESS);
+  assert_memory_equal(dist, dist2, sizeof dist);
+  karst_path_t p;
+  karst_path_init(&p);
+  assert_int_equal(karst_paths_tree_path(&ctx, &g, pred + 2 * n, keys[2], keys[5], &p),
+                   KARST_SUCCESS);
+  assert_rel(p.cost, dist[2 * 8 + 5], 1e-12);
+  karst_path_destroy(&p);
+  karst_skeleton_t sk2;
+  assert_int_equal(karst_skeleton_init(&ctx, &sk2, &g), KARST_SUCCESS);
+  karst_int_t kept2;
+  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist2, pred, 2.0, 1.0, &sk2, &kept2),
+                   KARST_SUCCESS);
+  assert_int_equal(kept2, kept);
+  assert_int_equal(sk2.net.n_nodes, sk.net.n_nodes);
+  assert_int_equal(sk2.net.n_edges, sk.net.n_edges);
+  assert_memory_equal(sk2.net.xyz, sk.net.xyz, (size_t)sk.net.n_nodes * 3 * sizeof(double));
+  karst_skeleton_destroy(&sk2);
+  free(pred);
+  karst_skeleton_destroy(&sk);
+  fx_graph_free(&g);
+  free(xyz);
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_gabriel_and_rng),
+      cmocka_unit_test(test_hand_cases),
+      cmocka_unit_test(test_union_and_junctions),
+      cmocka_unit_test(test_skeleton_on_dense_graph),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}
