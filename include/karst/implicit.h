@@ -85,6 +85,7 @@ typedef enum {
   KARST_SDF_DIFFERENCE,
   KARST_SDF_BLEND,
   KARST_SDF_NOISE,
+  KARST_SDF_REVOLVE,
   KARST_SDF_KIND_COUNT
 } karst_sdf_kind_t;
 
@@ -128,6 +129,23 @@ karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *sdf, const double a
                               const double b[3], const karst_section_t *section, double radius,
                               const double up[3], const karst_sweep_end_t ends[2], int label,
                               karst_int_t *node);
+/**
+ * Revolution of a section about an axis, cut to a wedge: the bend joint
+ * between two sweeps. The section (scaled by @p radius) lies in the plane
+ * through @p o spanned by the unit vectors @p side and @p up (its x and y
+ * axes); the unit @p axis must lie in that plane. The section is revolved
+ * fully about the line (o, axis) and the solid is cut by the two planes through
+ * o with outward unit normals @p n[0], @p n[1]. With r, z the distance to and
+ * the position along the axis, and x the in-plane direction perpendicular to
+ * the axis, the field is
+ *     max(radius min(w(( r x + z axis)/radius), w((-r x + z axis)/radius)), n0.(p-o), n1.(p-o)),
+ * 1-Lipschitz because (r, z) is a 1-Lipschitz function of p.
+ */
+karst_error_t karst_sdf_revolve(karst_ctx_t *ctx, karst_sdf_t *sdf, const double o[3],
+                                const double axis[3], const double side[3], const double up[3],
+                                const karst_section_t *section, double radius, const double n[2][3],
+                                int label, karst_int_t *node);
+
 /**
  * Terrain heightfield (Appendix A): f = (z - h(x, y)) / sqrt(1 + λ²), negative
  * in the bedrock. The grid is copied. λ is the larger of t->lipschitz and the
@@ -200,6 +218,9 @@ typedef struct karst_implicit_params {
   double default_radius;   /**< radius (m) of edges without a "radius" attribute, default 1 */
   double mitre_max_angle;  /**< joints of two edges turning by at most this (degrees) get mitred
                                 sweeps; sharper ones a union of Poisson spheres. Default 60 */
+  int bend_spheres;        /**< sharp bends: 0 (default) revolve the two sections about the bend
+                                axis (two exact primitives); 1 a union of Poisson spheres selected
+                                by distance to interpolated sections (paper §6.2, Fig. 14) */
   double sphere_radius;    /**< R of the Poisson spheres (m), default 0.2 (paper §6.2) */
   double sphere_rel;       /**< ...but at least this fraction of the conduit radius, default 0.25,
                                 which bounds the count per bend to about a thousand */
@@ -214,17 +235,18 @@ typedef struct karst_implicit_params {
 void karst_implicit_params_init(karst_implicit_params_t *par);
 
 typedef struct karst_implicit_stats {
-  karst_int_t n_sweeps, n_mitred_ends, n_ellipsoids, n_joint_balls, n_bends, n_spheres;
+  karst_int_t n_sweeps, n_mitred_ends, n_ellipsoids, n_joint_balls, n_bends, n_spheres, n_revolves;
   karst_int_t n_skipped_edges; /**< zero-length edges */
 } karst_implicit_stats_t;
 
 /**
  * Build the construction tree of a network's conduits into @p sdf and set its
  * root: one sweep per edge (section of its "tunnel_type", scaled by its
- * "radius"), mitred at gentle joints of two edges, a ball at junctions and
- * sharp joints, a union of Poisson spheres selected by distance to
- * interpolated cross-sections around sharp bends, ellipsoids for chambers,
- * optional noise; with @p terrain non-NULL the root is terrain minus conduits.
+ * "radius"), mitred at gentle joints of two edges, a ball at junctions, at
+ * sharp bends either the two sections revolved about the bend axis (default)
+ * or a union of Poisson spheres selected by distance to interpolated
+ * cross-sections (par->bend_spheres), ellipsoids for chambers, optional
+ * noise; with @p terrain non-NULL the root is terrain minus conduits.
  * @p stats may be NULL. Time: O(E log E) plus O(bends × spheres).
  */
 karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,

@@ -67,6 +67,8 @@ static int run(int argc, char **argv) {
                                more ? argv[i + 1] : "");
       have_box = 1;
       i++;
+    } else if (strcmp(a, "--spheres") == 0) {
+      par.bend_spheres = 1;
     } else if (strcmp(a, "--carve") == 0) {
       carve = 1;
     } else if (strcmp(a, "--scenario") == 0) {
@@ -156,13 +158,14 @@ static int run(int argc, char **argv) {
     karst_sdf_stats_t ss;
     karst_sdf_stats(sdf, &ss);
     printf("%s: %lld triangles, %lld vertices, voxel %g m, box %g,%g,%g,%g,%g,%g; tree of %lld "
-           "nodes (%lld sweeps, %lld spheres, %lld ellipsoids, %.1f MB) built in %.2f s, "
+           "nodes (%lld sweeps, %lld revolved, %lld spheres, %lld ellipsoids, %.1f MB) built in "
+           "%.2f s, "
            "polygonized in %.2f s on %d threads%s\n",
            out, (long long)mesh.n_triangles, (long long)mesh.n_vertices, voxel, box[0], box[1],
            box[2], box[3], box[4], box[5], (long long)ss.n_nodes,
-           (long long)ss.by_kind[KARST_SDF_SWEEP], (long long)ss.by_kind[KARST_SDF_SPHERE],
-           (long long)ss.by_kind[KARST_SDF_ELLIPSOID], ss.memory_bytes / 1e6, t1 - t0, t2 - t1,
-           ctx.nthreads, carve ? ", terrain carved" : "");
+           (long long)ss.by_kind[KARST_SDF_SWEEP], (long long)ss.by_kind[KARST_SDF_REVOLVE],
+           (long long)ss.by_kind[KARST_SDF_SPHERE], (long long)ss.by_kind[KARST_SDF_ELLIPSOID],
+           ss.memory_bytes / 1e6, t1 - t0, t2 - t1, ctx.nthreads, carve ? ", terrain carved" : "");
   }
   goto done;
 fail:
@@ -179,10 +182,11 @@ const cli_command_t cli_cmd_mesh = {
     "mesh", run, "polygonize the conduits of a network into a closed triangle mesh",
     "usage: karst mesh NETWORK.vtp -o cave.vtp [--voxel 0.5] [--box x0,y0,z0,x1,y1,z1]\n"
     "                  [--carve --scenario S.yaml] [--sdf cave.vti] [--noise A] [--radius R]\n"
-    "                  [--seed S] [-j THREADS] [--quiet]\n\n"
+    "                  [--spheres] [--seed S] [-j THREADS] [--quiet]\n\n"
     "Builds the implicit geometry of the network's conduits (Paris et al. 2021, §6: one sweep\n"
-    "of the tunnel type's cross-section per edge, scaled by its \"radius\", spheres around sharp\n"
-    "bends, ellipsoids for chambers) and polygonizes it into a closed, manifold, consistently\n"
+    "of the tunnel type's cross-section per edge, scaled by its \"radius\", the sections revolved\n"
+    "about the axis of sharp bends, ellipsoids for chambers) and polygonizes it into a closed, "
+    "manifold, consistently\n"
     "oriented triangle mesh labelled by tunnel type (-1: terrain or box). NETWORK may also be\n"
     "any survey format karst reads (Karstnet, .pl, .sql, .3d, .svx): edges without a radius\n"
     "get --radius, edges without a tunnel type are tubes.\n\n"
@@ -195,6 +199,8 @@ const cli_command_t cli_cmd_mesh = {
     "  --sdf F.vti    also write the sampled field as VTK image data (contour it at 0)\n"
     "  --noise A      wall irregularities of at most A metres (default 0: smooth walls)\n"
     "  --radius R     radius of edges without a \"radius\" attribute (default 1 m)\n"
+    "  --spheres      fill sharp bends with Poisson spheres (the paper's method, slower and\n"
+    "                 bumpier) instead of revolved sections\n"
     "  --seed S       seed of the spheres and the noise (default 1)\n"
     "  -j THREADS     worker threads (default: all processors)\n"
     "  --quiet        no progress bar and no summary line\n\n"

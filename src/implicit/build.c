@@ -1,7 +1,8 @@
 /* From a classified network to the construction tree of its conduits
  * (Paris et al. 2021, §6.2): sweeps along straight edges, mitred at gentle
- * joints; unions of Poisson spheres selected by their distance to
- * interpolated cross-sections around sharp bends; balls at junctions;
+ * joints; at sharp bends the sections revolved about the bend axis, or
+ * unions of Poisson spheres selected by their distance to interpolated
+ * cross-sections (the paper's method, par->bend_spheres); balls at junctions;
  * ellipsoids for breakout chambers; optional wall noise; terrain minus
  * conduits. */
 #include <math.h>
@@ -500,6 +501,31 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
       for (int c = 0; c < 3; c++)
         g2->end[i2 % 2].n[c] = -m[c];
       st.n_mitred_ends += 2;
+    } else if (!par->bend_spheres) {
+      /* revolve each section about the bend axis over its half of the gap
+       * wedge {l1 >= 0, l2 <= 0} between the flat caps, split at the bisector */
+      double b[3], m[3] = {d1[0] + t2[0], d1[1] + t2[1], d1[2] + t2[2]};
+      cross3(d1, t2, b);
+      if (normalize3(b) || normalize3(m)) {
+        /* a U-turn: no bend plane; a ball of the smaller inscribed radius */
+        double rb = fmin(g1->r * inscribed[g1->type], g2->r * inscribed[g2->type]);
+        karst_int_t id;
+        if ((err = karst_sdf_sphere(ctx, sdf, pv, rb, g1->type, &id))) goto cleanup;
+        if (push(&prims, id)) goto nomem;
+        st.n_joint_balls++;
+        continue;
+      }
+      double n1[2][3] = {{-d1[0], -d1[1], -d1[2]}, {m[0], m[1], m[2]}};
+      double n2[2][3] = {{-m[0], -m[1], -m[2]}, {t2[0], t2[1], t2[2]}};
+      karst_int_t id1, id2;
+      if ((err = karst_sdf_revolve(ctx, sdf, pv, b, g1->side, g1->up, &unit[g1->type], g1->r,
+                                   (const double(*)[3])n1, g1->type, &id1)) ||
+          (err = karst_sdf_revolve(ctx, sdf, pv, b, g2->side, g2->up, &unit[g2->type], g2->r,
+                                   (const double(*)[3])n2, g2->type, &id2)))
+        goto cleanup;
+      if (push(&prims, id1) || push(&prims, id2)) goto nomem;
+      st.n_revolves += 2;
+      st.n_bends++;
     } else {
       karst_int_t before = st.n_spheres;
       if ((err = bend_spheres(ctx, sdf, pv, g1, d1, g2, t2, &unit[g1->type], &unit[g2->type], par,
@@ -573,10 +599,11 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
   err = karst_sdf_set_root(ctx, sdf, root);
   karst_log(ctx, KARST_LOG_INFO,
             "geometry: %lld sweeps (%lld mitred ends), %lld ellipsoids, %lld junction balls, "
-            "%lld spheres at %lld sharp bends, %lld zero-length edges skipped",
+            "%lld sharp bends (%lld revolved sections, %lld spheres), %lld zero-length edges "
+            "skipped",
             (long long)st.n_sweeps, (long long)st.n_mitred_ends, (long long)st.n_ellipsoids,
-            (long long)st.n_joint_balls, (long long)st.n_spheres, (long long)st.n_bends,
-            (long long)st.n_skipped_edges);
+            (long long)st.n_joint_balls, (long long)st.n_bends, (long long)st.n_revolves,
+            (long long)st.n_spheres, (long long)st.n_skipped_edges);
   goto cleanup;
 nomem:
   err = karst_set_error(ctx, KARST_ENOMEM, "geometry: out of memory");

@@ -25,6 +25,14 @@ typedef struct karst_i_sweep {
   double n[2][3];
 } karst_i_sweep_t;
 
+typedef struct karst_i_revolve {
+  double o[3], axis[3];
+  double sx[2], sz[2]; /* section coordinates of the in-plane normal x and of the axis */
+  double n[2][3];
+  double radius, rho;
+  int section;
+} karst_i_revolve_t;
+
 typedef struct karst_i_noise {
   karst_int_t child;
   double amplitude;  /* A (m) */
@@ -64,6 +72,7 @@ typedef struct karst_i_node {
       double k;
     } bin;
     karst_i_noise_t noise;
+    karst_i_revolve_t rev;
   } u;
 } karst_i_node_t;
 

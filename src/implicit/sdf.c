@@ -316,6 +316,63 @@ karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3
 }
 
 /**
+ * Revolved section cut to a wedge (the joint of a sharp bend); see implicit.h.
+ * @return KARST_SUCCESS; KARST_EINVAL (non-unit or non-orthogonal frame, axis
+ *         out of the section plane, bad section or radius); KARST_ENOMEM.
+ * Time complexity: O(pieces).
+ */
+karst_error_t karst_sdf_revolve(karst_ctx_t *ctx, karst_sdf_t *t, const double o[3],
+                                const double axis[3], const double side[3], const double up[3],
+                                const karst_section_t *section, double radius, const double n[2][3],
+                                int label, karst_int_t *node) {
+  /* Tolerance on the unit length and orthogonality of the given vectors. */
+  const double tol = 1e-6;
+  if (!finite3(o) || !finite3(axis) || !finite3(side) || !finite3(up))
+    return karst_set_error(ctx, KARST_EINVAL, "revolve: origin or frame is not finite");
+  if (!(radius > 0) || !isfinite(radius))
+    return karst_set_error(ctx, KARST_EINVAL, "revolve: radius %g must be > 0 and finite", radius);
+  karst_error_t err = karst_section_check(ctx, section);
+  if (err) return err;
+  const double *vs[5] = {axis, side, up, n[0], n[1]};
+  for (int i = 0; i < 5; i++)
+    if (!(fabs(dot3(vs[i], vs[i]) - 1) <= tol))
+      return karst_set_error(ctx, KARST_EINVAL, "revolve: vector %d has length %g, must be 1", i,
+                             sqrt(dot3(vs[i], vs[i])));
+  double pn[3];
+  cross3(side, up, pn);
+  if (!(fabs(dot3(side, up)) <= tol) || !(fabs(dot3(axis, pn)) <= tol))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "revolve: side.up = %g and axis.normal = %g, both must be 0",
+                           dot3(side, up), dot3(axis, pn));
+  karst_i_revolve_t rv;
+  memset(&rv, 0, sizeof rv);
+  memcpy(rv.o, o, sizeof rv.o);
+  memcpy(rv.axis, axis, sizeof rv.axis);
+  memcpy(rv.n, n, sizeof rv.n);
+  double x[3];
+  cross3(axis, pn, x); /* in the plane, perpendicular to the axis */
+  rv.sx[0] = dot3(x, side), rv.sx[1] = dot3(x, up);
+  rv.sz[0] = dot3(axis, side), rv.sz[1] = dot3(axis, up);
+  rv.radius = radius;
+  double rmax = 0;
+  for (int i = 0; i < 2 * section->n; i++)
+    rmax = fmax(rmax, hypot(section->cp[i][0], section->cp[i][1]));
+  rv.rho = rmax * radius;
+  if ((err = karst_i_sdf_add_section(ctx, t, section, &rv.section))) return err;
+  karst_i_node_t *nd;
+  if ((err = new_node(ctx, t, KARST_SDF_REVOLVE, &nd, node))) return err;
+  nd->u.rev = rv;
+  nd->label = label;
+  nd->finite = 1;
+  for (int a = 0; a < 3; a++) {
+    nd->box[a] = o[a] - rv.rho;
+    nd->box[a + 3] = o[a] + rv.rho;
+  }
+  pad_box(nd->box);
+  return KARST_SUCCESS;
+}
+
+/**
  * Terrain primitive (Paris et al. 2021, §6.1 and Appendix A):
  * f = (z - h(x, y)) / sqrt(1 + λ²), negative in the bedrock. λ is the larger of
  * t->lipschitz and the maximum slope of the bilinear surface, computed here:
@@ -720,6 +777,24 @@ static double eval_sweep(const karst_sdf_t *t, const karst_i_sweep_t *sw, const 
   return fmax(f, s_mitre);
 }
 
+static double eval_revolve(const karst_sdf_t *t, const karst_i_revolve_t *rv, const double p[3],
+                           double ub) {
+  double v[3] = {p[0] - rv->o[0], p[1] - rv->o[1], p[2] - rv->o[2]};
+  double z = dot3(v, rv->axis);
+  double vp[3] = {v[0] - z * rv->axis[0], v[1] - z * rv->axis[1], v[2] - z * rv->axis[2]};
+  double r = sqrt(dot3(vp, vp));
+  double s = fmax(dot3(v, rv->n[0]), dot3(v, rv->n[1]));
+  double lo = fmax(hypot(r, z) - rv->rho, s); /* the section lies in the disc of radius rho */
+  if (lo >= ub) return lo;
+  const karst_section_t *sec = &t->sections[rv->section];
+  double q1[2] = {(r * rv->sx[0] + z * rv->sz[0]) / rv->radius,
+                  (r * rv->sx[1] + z * rv->sz[1]) / rv->radius};
+  double q2[2] = {(-r * rv->sx[0] + z * rv->sz[0]) / rv->radius,
+                  (-r * rv->sx[1] + z * rv->sz[1]) / rv->radius};
+  double w = rv->radius * fmin(karst_section_distance(sec, q1), karst_section_distance(sec, q2));
+  return fmax(w, s);
+}
+
 static double eval_union(const karst_sdf_t *t, const karst_i_node_t *nd, const double p[3],
                          double ub, int *label, karst_int_t *touched) {
   double best = ub;
@@ -787,6 +862,9 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
   }
   case KARST_SDF_SWEEP:
     v = eval_sweep(t, &nd->u.sweep, p, ub);
+    break;
+  case KARST_SDF_REVOLVE:
+    v = eval_revolve(t, &nd->u.rev, p, ub);
     break;
   case KARST_SDF_TERRAIN: {
     const karst_terrain_t *tr = &t->terrains[nd->u.terrain.index];

@@ -259,6 +259,29 @@ static void test_primitives_values(void **state) {
   karst_sdf_eval_node(t, sw, mid, &label, NULL);
   assert_int_equal(label, 4);
 
+  /* The tube section (a circle bulging to (cos 22.5° + 1/cos 22.5°)/2 = 1.00314
+   * between its joints) revolved about its diameter
+   * is a ball of radius 2: 3 m from the centre inside the wedge f = 1, at the
+   * centre -2 (within the circle's 0.31 % of 2 m); beyond a cutting plane the
+   * plane's distance. */
+  {
+    karst_section_t tube;
+    karst_section_for_type(&ctx, KARST_TUNNEL_TUBE, &tube);
+    double o[3] = {0, 0, 0}, ax[3] = {0, 0, 1}, side[3] = {1, 0, 0}, up[3] = {0, 0, 1};
+    double nn[2][3] = {{0, -1, 0}, {-1, 0, 0}}; /* the quadrant x >= 0, y >= 0 */
+    karst_int_t rv;
+    assert_int_equal(
+        karst_sdf_revolve(&ctx, t, o, ax, side, up, &tube, 2.0, (const double(*)[3])nn, 0, &rv),
+        KARST_SUCCESS);
+    double p3[3] = {3 * cos(0.7) * 0.6, 3 * sin(0.7) * 0.6, 3 * 0.8};
+    assert_close(karst_sdf_eval_node(t, rv, p3, NULL, NULL), 1.0, 2 * 0.00315);
+    assert_close(karst_sdf_eval_node(t, rv, o, NULL, NULL), -0.0, 1e-12); /* on both planes */
+    double pin[3] = {1, 1, 0}; /* the ball's surface (2 - √2 away) is nearer than the planes (1) */
+    assert_close(karst_sdf_eval_node(t, rv, pin, NULL, NULL), sqrt(2.0) - 2, 2 * 0.00315);
+    double pc[3] = {-0.5, 0.5, 0}; /* behind the plane x = 0 by 0.5 */
+    assert_close(karst_sdf_eval_node(t, rv, pc, NULL, NULL), 0.5, 1e-12);
+  }
+
   double lo[3] = {0, 0, 0}, hi[3] = {1, 2, 3};
   assert_int_equal(karst_sdf_box(&ctx, t, lo, hi, &bx), KARST_SUCCESS);
   double pb[3] = {2, 3, 1.5}; /* outside by (1, 1, 0): sqrt 2 */
@@ -390,6 +413,31 @@ static void test_lipschitz_all(void **state) {
     karst_int_t d;
     assert_int_equal(karst_sdf_sweep(&ctx, t, a, b, &s, 1.5, NULL, bad, 1, &d), KARST_EINVAL);
   }
+  /* revolved keyhole, axis tilted in its plane, cut to a 100° wedge */
+  karst_int_t rev;
+  {
+    karst_section_t s;
+    karst_section_for_type(&ctx, KARST_TUNNEL_KEYHOLE, &s);
+    double o[3] = {1, 2, 3}, side[3] = {1, 0, 0}, up[3] = {0, 0.6, 0.8};
+    double ax[3] = {cos(0.3), sin(0.3) * 0.6, sin(0.3) * 0.8};
+    double nn[2][3] = {{0, -0.8, 0.6}, {0, 0, 0}};
+    /* second plane: the first rotated by 100° about the axis */
+    double th = 100 * M_PI / 180, k[3] = {ax[0], ax[1], ax[2]}, v[3] = {0, -0.8, 0.6}, kv[3];
+    kv[0] = k[1] * v[2] - k[2] * v[1], kv[1] = k[2] * v[0] - k[0] * v[2],
+    kv[2] = k[0] * v[1] - k[1] * v[0];
+    double kd = (k[0] * v[0] + k[1] * v[1] + k[2] * v[2]) * (1 - cos(th));
+    for (int c = 0; c < 3; c++)
+      nn[1][c] = -(v[c] * cos(th) + kv[c] * sin(th) + k[c] * kd);
+    assert_int_equal(
+        karst_sdf_revolve(&ctx, t, o, ax, side, up, &s, 1.4, (const double(*)[3])nn, 1, &rev),
+        KARST_SUCCESS);
+    assert_lipschitz(t, rev, 3, N, "revolve");
+    double bad_ax[3] = {0, 0.8, -0.6}; /* the plane's normal: not in the plane */
+    karst_int_t d;
+    assert_int_equal(
+        karst_sdf_revolve(&ctx, t, o, bad_ax, side, up, &s, 1.4, (const double(*)[3])nn, 1, &d),
+        KARST_EINVAL);
+  }
   karst_int_t kids[4] = {sp, el, sweeps[KARST_TUNNEL_CANYON], mit};
   karst_int_t un, in, df, bl, nz, nz2;
   assert_int_equal(karst_sdf_union(&ctx, t, 4, kids, &un), KARST_SUCCESS);
@@ -416,6 +464,7 @@ static void test_lipschitz_all(void **state) {
   karst_sdf_stats(t, &st);
   assert_int_equal(st.n_nodes, t->n_nodes);
   assert_int_equal(st.by_kind[KARST_SDF_SWEEP], KARST_TUNNEL_TYPE_COUNT + 1);
+  assert_int_equal(st.by_kind[KARST_SDF_REVOLVE], 1);
   assert_true(st.memory_bytes > 0);
   karst_sdf_free(t);
 }
@@ -595,51 +644,69 @@ static void test_build_network(void **state) {
   rad[6] = 5;
   karst_implicit_params_t par;
   karst_implicit_params_init(&par);
+  for (int mode = 0; mode < 2; mode++) {
+    par.bend_spheres = mode;
+    karst_sdf_t *t;
+    karst_sdf_create(&ctx, &t);
+    karst_implicit_stats_t st;
+    assert_int_equal(karst_implicit_build(&ctx, &net, &par, NULL, t, &st), KARST_SUCCESS);
+    printf("built: %lld sweeps, %lld mitred ends, %lld ellipsoids, %lld balls, %lld spheres at "
+           "%lld bends\n",
+           (long long)st.n_sweeps, (long long)st.n_mitred_ends, (long long)st.n_ellipsoids,
+           (long long)st.n_joint_balls, (long long)st.n_spheres, (long long)st.n_bends);
+    assert_int_equal(st.n_sweeps, 6);
+    assert_int_equal(st.n_ellipsoids, 1);
+    assert_int_equal(st.n_mitred_ends, 2); /* the 30° joint */
+    assert_int_equal(st.n_bends, 1);       /* the 90° joint */
+    if (mode == 0) {
+      /* the two sections revolved about the bend axis */
+      assert_int_equal(st.n_revolves, 2);
+      assert_int_equal(st.n_spheres, 0);
+      assert_int_equal(st.n_joint_balls, 1); /* the junction */
+    } else {
+      assert_true(st.n_spheres > 50);
+      assert_int_equal(st.n_joint_balls, 2); /* the junction and the sharp bend */
+    }
+    /* Inside / outside by construction. The outer corner of the sharp bend at
+     * node 2, 1 m out along the outer bisector, lies in the rotated section
+     * (radius 1.5) but outside both flat-capped sweeps: the spheres fill it. */
+    double t1[3] = {cos(M_PI / 6), sin(M_PI / 6), 0}, t2[3] = {-sin(M_PI / 6), cos(M_PI / 6), 0};
+    double outer[3] = {t1[0] - t2[0], t1[1] - t2[1], 0};
+    double on = hypot(outer[0], outer[1]);
+    double q[3] = {P[2][0] + 0.9 * outer[0] / on, P[2][1] + 0.9 * outer[1] / on, 0};
+    int label = -9;
+    assert_true(karst_sdf_eval(t, q, &label) < 0);
+    assert_true(label == KARST_TUNNEL_KEYHOLE || label == KARST_TUNNEL_PASSAGE);
+    /* ... and does not bulge: at the axis height the sections reach 1.08 m
+     * (keyhole) and 1.5 m (passage) out, the spheres at most R/2 = 0.19 m more,
+     * the sweeps' caps nothing: 1.8 m out is outside. The revolved passage
+     * reaches exactly 1.5 m: 1.6 m out is at 0.1 m. */
+    if (mode == 0) {
+      double q3[3] = {P[2][0] + 1.6 * outer[0] / on, P[2][1] + 1.6 * outer[1] / on, 0};
+      assert_close(karst_sdf_eval(t, q3, NULL), 0.1, 1e-9);
+    }
+    double q2[3] = {P[2][0] + 1.8 * outer[0] / on, P[2][1] + 1.8 * outer[1] / on, 0};
+    assert_true(karst_sdf_eval(t, q2, NULL) > 0);
+    double mid[3] = {10, 0, 0};
+    assert_true(karst_sdf_eval(t, mid, &label) < -1.0);
+    assert_int_equal(label, KARST_TUNNEL_TUBE);
+    double ch[3] = {50, 60, 0};
+    assert_true(karst_sdf_eval(t, ch, &label) < -2.0);
+    assert_int_equal(label, KARST_TUNNEL_CHAMBER);
+    double far[3] = {10, 30, 0};
+    assert_true(karst_sdf_eval(t, far, NULL) > 5.0);
+    assert_lipschitz(t, karst_sdf_root(t), 3, 4000, "network conduits");
+    karst_sdf_free(t);
+  }
   karst_sdf_t *t;
-  karst_sdf_create(&ctx, &t);
-  karst_implicit_stats_t st;
-  assert_int_equal(karst_implicit_build(&ctx, &net, &par, NULL, t, &st), KARST_SUCCESS);
-  printf("built: %lld sweeps, %lld mitred ends, %lld ellipsoids, %lld balls, %lld spheres at "
-         "%lld bends\n",
-         (long long)st.n_sweeps, (long long)st.n_mitred_ends, (long long)st.n_ellipsoids,
-         (long long)st.n_joint_balls, (long long)st.n_spheres, (long long)st.n_bends);
-  assert_int_equal(st.n_sweeps, 6);
-  assert_int_equal(st.n_ellipsoids, 1);
-  assert_int_equal(st.n_mitred_ends, 2); /* the 30° joint */
-  assert_int_equal(st.n_bends, 1);       /* the 90° joint */
-  assert_true(st.n_spheres > 50);
-  assert_int_equal(st.n_joint_balls, 2); /* the junction and the sharp bend */
-  /* Inside / outside by construction. The outer corner of the sharp bend at
-   * node 2, 1 m out along the outer bisector, lies in the rotated section
-   * (radius 1.5) but outside both flat-capped sweeps: the spheres fill it. */
-  double t1[3] = {cos(M_PI / 6), sin(M_PI / 6), 0}, t2[3] = {-sin(M_PI / 6), cos(M_PI / 6), 0};
-  double outer[3] = {t1[0] - t2[0], t1[1] - t2[1], 0};
-  double on = hypot(outer[0], outer[1]);
-  double q[3] = {P[2][0] + 0.9 * outer[0] / on, P[2][1] + 0.9 * outer[1] / on, 0};
-  int label = -9;
-  assert_true(karst_sdf_eval(t, q, &label) < 0);
-  assert_true(label == KARST_TUNNEL_KEYHOLE || label == KARST_TUNNEL_PASSAGE);
-  /* ... and does not bulge: at the axis height the sections reach 1.08 m
-   * (keyhole) and 1.5 m (passage) out, the spheres at most R/2 = 0.19 m more,
-   * the sweeps' caps nothing: 1.8 m out is outside */
-  double q2[3] = {P[2][0] + 1.8 * outer[0] / on, P[2][1] + 1.8 * outer[1] / on, 0};
-  assert_true(karst_sdf_eval(t, q2, NULL) > 0);
   double mid[3] = {10, 0, 0};
-  assert_true(karst_sdf_eval(t, mid, &label) < -1.0);
-  assert_int_equal(label, KARST_TUNNEL_TUBE);
-  double ch[3] = {50, 60, 0};
-  assert_true(karst_sdf_eval(t, ch, &label) < -2.0);
-  assert_int_equal(label, KARST_TUNNEL_CHAMBER);
-  double far[3] = {10, 30, 0};
-  assert_true(karst_sdf_eval(t, far, NULL) > 5.0);
-  assert_lipschitz(t, karst_sdf_root(t), 3, 4000, "network conduits");
-  karst_sdf_free(t);
 
-  /* with noise and carved from a terrain at z = 3 */
+  /* with noise and carved from a terrain at z = 3 (default bends) */
   karst_terrain_t flat;
   memset(&flat, 0, sizeof flat);
   flat.elevation = 3;
   par.noise_amplitude = 0.3;
+  par.bend_spheres = 0;
   karst_sdf_create(&ctx, &t);
   assert_int_equal(karst_implicit_build(&ctx, &net, &par, &flat, t, NULL), KARST_SUCCESS);
   assert_true(karst_sdf_eval(t, mid, NULL) > 0); /* in the cave: outside the rock */

@@ -286,21 +286,27 @@ static void test_network_mesh(void **state) {
   par.noise_amplitude = 0.2;
   par.noise_wavelength = 1.5;
   karst_sdf_t *t;
-  karst_sdf_create(&ctx, &t);
-  karst_implicit_stats_t bst;
-  assert_int_equal(karst_implicit_build(&ctx, &net, &par, NULL, t, &bst), KARST_SUCCESS);
-  assert_true(bst.n_bends >= 1 && bst.n_spheres > 0 && bst.n_mitred_ends >= 2);
   double box[6] = {-3, -4, -8, 34, 40, 6};
   karst_mesh_t m;
   karst_mesh_init(&m);
-  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.25, &m, NULL), KARST_SUCCESS);
-  double vc = assert_good_mesh(&m);
-  int seen[KARST_TUNNEL_TYPE_COUNT] = {0};
-  for (karst_int_t i = 0; i < m.n_triangles; i++)
-    if (m.tri_label[i] >= 0) seen[m.tri_label[i]] = 1;
-  for (int e = 0; e < 6; e++)
-    assert_true(seen[types[e]]);
-  karst_sdf_free(t);
+  double vc = 0;
+  /* sharp bends filled with Poisson spheres, then revolved (the default) */
+  for (int mode = 1; mode >= 0; mode--) {
+    par.bend_spheres = mode;
+    karst_sdf_create(&ctx, &t);
+    karst_implicit_stats_t bst;
+    assert_int_equal(karst_implicit_build(&ctx, &net, &par, NULL, t, &bst), KARST_SUCCESS);
+    assert_true(bst.n_bends >= 1 && bst.n_mitred_ends >= 2);
+    assert_true(mode ? bst.n_spheres > 0 : bst.n_revolves > 0);
+    assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.25, &m, NULL), KARST_SUCCESS);
+    vc = assert_good_mesh(&m);
+    int seen[KARST_TUNNEL_TYPE_COUNT] = {0};
+    for (karst_int_t i = 0; i < m.n_triangles; i++)
+      if (m.tri_label[i] >= 0) seen[m.tri_label[i]] = 1;
+    for (int e = 0; e < 6; e++)
+      assert_true(seen[types[e]]);
+    karst_sdf_free(t);
+  }
 
   karst_terrain_t flat;
   memset(&flat, 0, sizeof flat);
