@@ -7,6 +7,15 @@
 
 #include "implicit/implicit_internal.h"
 
+/* min / max without the NaN rules of fmin / fmax, which the compiler cannot
+ * inline (the fields never see NaN: inputs are checked when nodes are made). */
+static inline double mn(double a, double b) {
+  return a < b ? a : b;
+}
+static inline double mx(double a, double b) {
+  return a > b ? a : b;
+}
+
 /* ---------------------------------------------------------------------- */
 /* Storage.                                                                */
 /* ---------------------------------------------------------------------- */
@@ -77,7 +86,7 @@ static karst_error_t new_node(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t
 
 static void pad_box(double box[6]) {
   for (int a = 0; a < 3; a++) {
-    double m = fmax(fabs(box[a]), fabs(box[a + 3]));
+    double m = mx(fabs(box[a]), fabs(box[a + 3]));
     double pad = KARST_I_BOX_PAD_ABS + KARST_I_BOX_PAD_REL * m;
     box[a] -= pad;
     box[a + 3] += pad;
@@ -163,7 +172,7 @@ karst_error_t karst_sdf_ellipsoid(karst_ctx_t *ctx, karst_sdf_t *t, const double
   if (err) return err;
   memcpy(nd->u.ell.c, c, sizeof nd->u.ell.c);
   memcpy(nd->u.ell.axes, axes, sizeof nd->u.ell.axes);
-  nd->u.ell.rmin = fmin(radii[0], fmin(radii[1], radii[2]));
+  nd->u.ell.rmin = mn(radii[0], mn(radii[1], radii[2]));
   for (int i = 0; i < 3; i++)
     nd->u.ell.inv[i] = 1.0 / radii[i];
   nd->label = label;
@@ -283,7 +292,7 @@ karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3
   }
   double rmax = 0;
   for (int i = 0; i < 2 * section->n; i++)
-    rmax = fmax(rmax, hypot(section->cp[i][0], section->cp[i][1]));
+    rmax = mx(rmax, hypot(section->cp[i][0], section->cp[i][1]));
   sw.rho = rmax * radius;
   err = karst_i_sdf_add_section(ctx, t, section, &sw.section);
   if (err) return err;
@@ -306,8 +315,8 @@ karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3
       if (sw.mitre[e]) tt -= dot3(sw.n[e], o) / dot3(sw.n[e], sw.u);
       for (int c = 0; c < 3; c++) {
         double x = a[c] + o[c] + tt * sw.u[c];
-        nd->box[c] = fmin(nd->box[c], x);
-        nd->box[c + 3] = fmax(nd->box[c + 3], x);
+        nd->box[c] = mn(nd->box[c], x);
+        nd->box[c + 3] = mx(nd->box[c + 3], x);
       }
     }
   }
@@ -356,7 +365,7 @@ karst_error_t karst_sdf_revolve(karst_ctx_t *ctx, karst_sdf_t *t, const double o
   rv.radius = radius;
   double rmax = 0;
   for (int i = 0; i < 2 * section->n; i++)
-    rmax = fmax(rmax, hypot(section->cp[i][0], section->cp[i][1]));
+    rmax = mx(rmax, hypot(section->cp[i][0], section->cp[i][1]));
   rv.rho = rmax * radius;
   if ((err = karst_i_sdf_add_section(ctx, t, section, &rv.section))) return err;
   karst_i_node_t *nd;
@@ -405,15 +414,15 @@ karst_error_t karst_sdf_terrain(karst_ctx_t *ctx, karst_sdf_t *sdf, const karst_
         double z01 = z[(j + 1) * t->ncols + i], z11 = z[(j + 1) * t->ncols + i + 1];
         double gx0 = (z10 - z00) / t->cellsize, gx1 = (z11 - z01) / t->cellsize;
         double gy0 = (z01 - z00) / t->cellsize, gy1 = (z11 - z10) / t->cellsize;
-        double g2 = fmax(fmax(gx0 * gx0 + gy0 * gy0, gx0 * gx0 + gy1 * gy1),
-                         fmax(gx1 * gx1 + gy0 * gy0, gx1 * gx1 + gy1 * gy1));
-        lambda = fmax(lambda, sqrt(g2));
+        double g2 = mx(mx(gx0 * gx0 + gy0 * gy0, gx0 * gx0 + gy1 * gy1),
+                       mx(gx1 * gx1 + gy0 * gy0, gx1 * gx1 + gy1 * gy1));
+        lambda = mx(lambda, sqrt(g2));
       }
     /* One-row or one-column grids are linear along their only direction. */
     if (t->nrows == 1 || t->ncols == 1) {
       size_t m = (size_t)(t->nrows == 1 ? t->ncols : t->nrows);
       for (size_t i = 0; i + 1 < m; i++)
-        lambda = fmax(lambda, fabs(t->z[i + 1] - t->z[i]) / t->cellsize);
+        lambda = mx(lambda, fabs(t->z[i + 1] - t->z[i]) / t->cellsize);
     }
     c = *t;
     c.path = NULL;
@@ -503,11 +512,11 @@ static karst_error_t bvh_build(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t fir
   for (karst_int_t i = 0; i < n; i++) {
     const double *b = t->nodes[t->kids[first + i]].box;
     for (int a = 0; a < 3; a++) {
-      box[a] = fmin(box[a], b[a]);
-      box[a + 3] = fmax(box[a + 3], b[a + 3]);
+      box[a] = mn(box[a], b[a]);
+      box[a + 3] = mx(box[a + 3], b[a + 3]);
       double c = 0.5 * (b[a] + b[a + 3]);
-      cb[a] = fmin(cb[a], c);
-      cb[a + 3] = fmax(cb[a + 3], c);
+      cb[a] = mn(cb[a], c);
+      cb[a + 3] = mx(cb[a + 3], c);
     }
   }
   memcpy(t->bvh[me].box, box, sizeof box);
@@ -615,8 +624,8 @@ static karst_error_t binary(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t k
     if (na->finite && nb->finite) {
       nd->finite = 1;
       for (int i = 0; i < 3; i++) {
-        nd->box[i] = fmax(na->box[i], nb->box[i]);
-        nd->box[i + 3] = fmin(na->box[i + 3], nb->box[i + 3]);
+        nd->box[i] = mx(na->box[i], nb->box[i]);
+        nd->box[i + 3] = mn(na->box[i + 3], nb->box[i + 3]);
         if (nd->box[i] > nd->box[i + 3]) nd->box[i + 3] = nd->box[i]; /* empty: a point */
       }
     } else if (na->finite || nb->finite) {
@@ -633,8 +642,8 @@ static karst_error_t binary(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t k
      * union of the boxes grown by k/4. */
     nd->finite = na->finite && nb->finite;
     for (int i = 0; i < 3; i++) {
-      nd->box[i] = fmin(na->box[i], nb->box[i]) - 0.25 * k;
-      nd->box[i + 3] = fmax(na->box[i + 3], nb->box[i + 3]) + 0.25 * k;
+      nd->box[i] = mn(na->box[i], nb->box[i]) - 0.25 * k;
+      nd->box[i + 3] = mx(na->box[i + 3], nb->box[i + 3]) + 0.25 * k;
     }
     if (nd->finite) pad_box(nd->box);
     break;
@@ -737,17 +746,17 @@ void karst_sdf_node_box(const karst_sdf_t *t, karst_int_t node, double box[6]) {
 double karst_i_sdbox(const double box[6], const double p[3]) {
   double out = 0, in = -INFINITY;
   for (int a = 0; a < 3; a++) {
-    double q = fmax(box[a] - p[a], p[a] - box[a + 3]);
+    double q = mx(box[a] - p[a], p[a] - box[a + 3]);
     if (q > 0) out += q * q;
     if (q > in) in = q;
   }
-  return sqrt(out) + fmin(in, 0.0);
+  return sqrt(out) + mn(in, 0.0);
 }
 
 /* Exact extrusion combination of an in-plane distance w and a slab distance s. */
 static double extrude(double w, double s) {
-  double wp = fmax(w, 0), sp = fmax(s, 0);
-  return fmin(fmax(w, s), 0.0) + sqrt(wp * wp + sp * sp);
+  double wp = mx(w, 0), sp = mx(s, 0);
+  return mn(mx(w, s), 0.0) + sqrt(wp * wp + sp * sp);
 }
 
 static double eval_sweep(const karst_sdf_t *t, const karst_i_sweep_t *sw, const double p[3],
@@ -761,20 +770,20 @@ static double eval_sweep(const karst_sdf_t *t, const karst_i_sweep_t *sw, const 
     s_flat = -l;
   if (sw->mitre[1]) {
     double e[3] = {d[0] - sw->len * sw->u[0], d[1] - sw->len * sw->u[1], d[2] - sw->len * sw->u[2]};
-    s_mitre = fmax(s_mitre, dot3(e, sw->n[1]));
+    s_mitre = mx(s_mitre, dot3(e, sw->n[1]));
   } else {
-    s_flat = fmax(s_flat, l - sw->len);
+    s_flat = mx(s_flat, l - sw->len);
   }
   /* Lower bound first: the section lies in the disc of radius rho, so
    * w >= hypot(x, y) - rho, and the combination is non-decreasing in w. */
-  double wlo = hypot(x, y) - sw->rho;
+  double wlo = sqrt(x * x + y * y) - sw->rho;
   double lo = s_flat == -INFINITY ? wlo : extrude(wlo, s_flat);
-  lo = fmax(lo, s_mitre);
+  lo = mx(lo, s_mitre);
   if (lo >= ub) return lo;
   double q[2] = {x / sw->radius, y / sw->radius};
   double w = sw->radius * karst_section_distance(&t->sections[sw->section], q);
   double f = s_flat == -INFINITY ? w : extrude(w, s_flat);
-  return fmax(f, s_mitre);
+  return mx(f, s_mitre);
 }
 
 static double eval_revolve(const karst_sdf_t *t, const karst_i_revolve_t *rv, const double p[3],
@@ -783,16 +792,16 @@ static double eval_revolve(const karst_sdf_t *t, const karst_i_revolve_t *rv, co
   double z = dot3(v, rv->axis);
   double vp[3] = {v[0] - z * rv->axis[0], v[1] - z * rv->axis[1], v[2] - z * rv->axis[2]};
   double r = sqrt(dot3(vp, vp));
-  double s = fmax(dot3(v, rv->n[0]), dot3(v, rv->n[1]));
-  double lo = fmax(hypot(r, z) - rv->rho, s); /* the section lies in the disc of radius rho */
+  double s = mx(dot3(v, rv->n[0]), dot3(v, rv->n[1]));
+  double lo = mx(sqrt(r * r + z * z) - rv->rho, s); /* the section lies in the disc of radius rho */
   if (lo >= ub) return lo;
   const karst_section_t *sec = &t->sections[rv->section];
   double q1[2] = {(r * rv->sx[0] + z * rv->sz[0]) / rv->radius,
                   (r * rv->sx[1] + z * rv->sz[1]) / rv->radius};
   double q2[2] = {(-r * rv->sx[0] + z * rv->sz[0]) / rv->radius,
                   (-r * rv->sx[1] + z * rv->sz[1]) / rv->radius};
-  double w = rv->radius * fmin(karst_section_distance(sec, q1), karst_section_distance(sec, q2));
-  return fmax(w, s);
+  double w = rv->radius * mn(karst_section_distance(sec, q1), karst_section_distance(sec, q2));
+  return mx(w, s);
 }
 
 static double eval_union(const karst_sdf_t *t, const karst_i_node_t *nd, const double p[3],
@@ -896,8 +905,8 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     double a = karst_i_sdf_eval(t, nd->u.bin.a, p, INFINITY, &la, touched);
     double b = karst_i_sdf_eval(t, nd->u.bin.b, p, INFINITY, &lb, touched);
     double k = nd->u.bin.k;
-    double h = fmax(k - fabs(a - b), 0.0) / k;
-    v = fmin(a, b) - 0.25 * k * h * h;
+    double h = mx(k - fabs(a - b), 0.0) / k;
+    v = mn(a, b) - 0.25 * k * h * h;
     lab = a <= b ? la : lb;
     break;
   }

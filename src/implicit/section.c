@@ -6,6 +6,15 @@
 
 #include "implicit/implicit_internal.h"
 
+/* min / max without the NaN rules of fmin / fmax, which the compiler cannot
+ * inline (the fields never see NaN: inputs are checked when nodes are made). */
+static inline double mn(double a, double b) {
+  return a < b ? a : b;
+}
+static inline double mx(double a, double b) {
+  return a > b ? a : b;
+}
+
 /* ---------------------------------------------------------------------- */
 /* Building the built-in sections.                                         */
 /* ---------------------------------------------------------------------- */
@@ -266,7 +275,7 @@ static double hull_box_dist2(const double *p0, const double *p1, const double *p
                              const double *q) {
   double d = 0;
   for (int c = 0; c < 2; c++) {
-    double lo = fmin(p0[c], fmin(p1[c], p2[c])), hi = fmax(p0[c], fmax(p1[c], p2[c]));
+    double lo = mn(p0[c], mn(p1[c], p2[c])), hi = mx(p0[c], mx(p1[c], p2[c]));
     double e = q[c] < lo ? lo - q[c] : (q[c] > hi ? q[c] - hi : 0);
     d += e * e;
   }
@@ -302,9 +311,9 @@ static double crossing_x(const double *p0, const double *p1, const double *p2, d
  * with the end values shared exactly between neighbouring parts and pieces,
  * so grazing and horizontal parts are counted consistently. */
 static int piece_crossings(const double *p0, const double *p1, const double *p2, const double *q) {
-  double ylo = fmin(p0[1], fmin(p1[1], p2[1])), yhi = fmax(p0[1], fmax(p1[1], p2[1]));
+  double ylo = mn(p0[1], mn(p1[1], p2[1])), yhi = mx(p0[1], mx(p1[1], p2[1]));
   if (q[1] < ylo || q[1] > yhi) return 0;
-  if (q[0] > fmax(p0[0], fmax(p1[0], p2[0]))) return 0;
+  if (q[0] > mx(p0[0], mx(p1[0], p2[0]))) return 0;
   double ts[3] = {0, 1, 1}, ys[3] = {p0[1], p2[1], p2[1]};
   int nparts = 1;
   double den = p0[1] - 2 * p1[1] + p2[1];
