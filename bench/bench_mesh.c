@@ -1,13 +1,14 @@
 /* Benchmark: construction-tree size, memory and build time, and
- * polygonization time at 0.5 m over the whole extent, for a network the size
- * of the "looping cave" of Paris et al. 2021, Table 1 (0.5 x 0.7 x 0.2 km,
- * 22 km of conduits; the paper: 67 k tree nodes, 7.4 MB, 7.5 s to build, and
- * about 2 minutes to polygonize a 1 x 1 x 0.4 km region). Until the generator
- * lands, the network is synthetic: 47 key points joined to their nearest
- * neighbours by tortuous paths (recursive midpoint displacement by up to 0.2
- * of the segment, down to segments of at most 8 m), one radius in 0.5-4 m and one tunnel type per
- * path. Targets on 2 cores: tree <= 1 s, polygonization <= 60 s. Usage: bench_mesh [VOXEL
- * [THREADS]] */
+ * polygonization time over the whole extent (0.5 m by default) for
+ *  - "synthetic": a network the size of the "looping cave" of Paris et al.
+ *    2021, Table 1 (0.5 x 0.7 x 0.2 km, 22 km of conduits; the paper: 67 k
+ *    tree nodes, 7.4 MB, 7.5 s to build, about 2 minutes to polygonize a
+ *    1 x 1 x 0.4 km region): 47 key points joined to their nearest neighbours
+ *    by tortuous paths (midpoint displacement by up to 0.2 of the segment,
+ *    down to 8 m segments), one radius in 0.5-4 m and one tunnel type per path;
+ *  - "preset": datasets/scenarios/looping_cave.yaml as karst generate makes it.
+ * Targets on 2 cores: tree <= 1 s, polygonization <= 60 s.
+ * Usage: bench_mesh [VOXEL [THREADS [synthetic|preset|both]]] */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -58,9 +59,92 @@ static int path(karst_network_t *net, karst_rng_t *r, karst_int_t ia, karst_int_
   return path(net, r, im, ib, amp, seg, lo, hi, depth + 1, rad, type);
 }
 
+/* Build the tree of @p net and polygonize @p box at @p voxel; print the figures. */
+static int run_case(karst_ctx_t *ctx, const char *name, const karst_network_t *net,
+                    const double box[6], double voxel) {
+  karst_sdf_t *sdf;
+  if (karst_sdf_create(ctx, &sdf)) return -1;
+  karst_implicit_params_t par;
+  karst_implicit_params_init(&par);
+  karst_implicit_stats_t bst;
+  double t0 = now_s();
+  karst_error_t err = karst_implicit_build(ctx, net, &par, NULL, sdf, &bst);
+  double t1 = now_s();
+  if (err) {
+    fprintf(stderr, "bench_mesh: %s\n", ctx->errmsg);
+    karst_sdf_free(sdf);
+    return -1;
+  }
+  karst_sdf_stats_t ss;
+  karst_sdf_stats(sdf, &ss);
+  printf("bench_mesh: %s: tree: %lld nodes (%lld sweeps with %lld mitred ends, %lld revolved "
+         "sections at %lld sharp bends, %lld junction balls, %lld ellipsoids), %lld hierarchy "
+         "nodes, %.2f MB, built in %.3f s (target <= 1 s; paper 67 k nodes, 7.4 MB, 7.5 s)\n",
+         name, (long long)ss.n_nodes, (long long)ss.by_kind[KARST_SDF_SWEEP],
+         (long long)bst.n_mitred_ends, (long long)ss.by_kind[KARST_SDF_REVOLVE],
+         (long long)bst.n_bends, (long long)bst.n_joint_balls,
+         (long long)ss.by_kind[KARST_SDF_ELLIPSOID], (long long)ss.n_bvh_nodes,
+         ss.memory_bytes / 1e6, t1 - t0);
+  fflush(stdout);
+  karst_mesh_t m;
+  karst_mesh_init(&m);
+  karst_polygonize_stats_t ps;
+  double t2 = now_s();
+  err = karst_mesh_polygonize(ctx, sdf, box, voxel, &m, &ps);
+  double t3 = now_s();
+  if (err) {
+    fprintf(stderr, "bench_mesh: %s\n", ctx->errmsg);
+    karst_sdf_free(sdf);
+    return -1;
+  }
+  double grid = (double)(ps.cells[0] + 1) * (ps.cells[1] + 1) * (ps.cells[2] + 1);
+  printf("bench_mesh: %s: polygonized at %g m over the whole extent (%lld x %lld x %lld cells) "
+         "in %.2f s on %d threads (target <= 60 s): %lld triangles, %lld vertices, %.3g field "
+         "evaluations (%.2f %% of the %.3g grid points), %lld of %lld blocks skipped, volume "
+         "%.0f m3\n",
+         name, voxel, (long long)ps.cells[0], (long long)ps.cells[1], (long long)ps.cells[2],
+         t3 - t2, ctx->nthreads, (long long)m.n_triangles, (long long)m.n_vertices,
+         (double)ps.n_evals, 100.0 * ps.n_evals / grid, grid, (long long)ps.n_skipped,
+         (long long)ps.n_blocks, karst_mesh_volume(&m));
+  fflush(stdout);
+  karst_mesh_destroy(&m);
+  karst_sdf_free(sdf);
+  return 0;
+}
+
+/* The looping-cave preset as the generator makes it (seed of the scenario). */
+static int run_preset(karst_ctx_t *ctx, double voxel) {
+  const char *path = KARST_SOURCE_DIR "/datasets/scenarios/looping_cave.yaml";
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  karst_network_t net;
+  karst_network_init(&net);
+  karst_generate_stats_t gs;
+  int rc = -1;
+  if (karst_scenario_load(ctx, path, &sc) ||
+      karst_generate(ctx, &sc, sc.seed, 0, &net, NULL, &gs)) {
+    fprintf(stderr, "bench_mesh: %s\n", ctx->errmsg);
+    goto done;
+  }
+  printf("bench_mesh: looping-cave preset (%s, seed %llu): %lld nodes, %lld edges, %.1f km of "
+         "conduits in %.1f x %.1f x %.1f km\n",
+         path, (unsigned long long)sc.seed, (long long)net.n_nodes, (long long)net.n_edges,
+         gs.total_length / 1000, (sc.domain_max[0] - sc.domain_min[0]) / 1000,
+         (sc.domain_max[1] - sc.domain_min[1]) / 1000,
+         (sc.domain_max[2] - sc.domain_min[2]) / 1000);
+  double box[6] = {sc.domain_min[0], sc.domain_min[1], sc.domain_min[2],
+                   sc.domain_max[0], sc.domain_max[1], sc.domain_max[2]};
+  rc = run_case(ctx, "preset", &net, box, voxel);
+done:
+  karst_network_destroy(&net);
+  karst_scenario_destroy(&sc);
+  return rc;
+}
+
 int main(int argc, char **argv) {
   double voxel = argc > 1 ? atof(argv[1]) : 0.5;
   int threads = argc > 2 ? atoi(argv[2]) : 2;
+  const char *which = argc > 3 ? argv[3] : "both";
   const double lo[3] = {0, 0, 0}, hi[3] = {500, 700, 200};
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
@@ -130,56 +214,16 @@ int main(int argc, char **argv) {
   for (karst_int_t e = 0; e < net.n_edges; e++)
     total += karst_network_edge_length(&net, e);
   long cores = sysconf(_SC_NPROCESSORS_ONLN);
-  printf("bench_mesh: synthetic looping-cave-sized network: %d key points, %d paths, %lld nodes, "
+  printf("bench_mesh: synthetic: looping-cave-sized network: %d key points, %d paths, %lld nodes, "
          "%lld edges, %.1f km of conduits in %.1f x %.1f x %.1f km (machine: %ld cores, %d "
          "threads used)\n",
          K, paths, (long long)net.n_nodes, (long long)net.n_edges, total / 1000, hi[0] / 1000,
          hi[1] / 1000, hi[2] / 1000, cores, ctx.nthreads);
 
-  karst_sdf_t *sdf;
-  karst_sdf_create(&ctx, &sdf);
-  karst_implicit_params_t par;
-  karst_implicit_params_init(&par);
-  karst_implicit_stats_t bst;
-  double t0 = now_s();
-  karst_error_t err = karst_implicit_build(&ctx, &net, &par, NULL, sdf, &bst);
-  double t1 = now_s();
-  if (err) {
-    fprintf(stderr, "bench_mesh: %s\n", ctx.errmsg);
-    return 1;
-  }
-  karst_sdf_stats_t ss;
-  karst_sdf_stats(sdf, &ss);
-  printf("bench_mesh: tree: %lld nodes (%lld sweeps, %lld spheres in %lld bends, %lld "
-         "ellipsoids, %lld mitred ends), %lld hierarchy nodes, %.2f MB, built in %.3f s "
-         "(target <= 1 s; paper 67 k nodes, 7.4 MB, 7.5 s)\n",
-         (long long)ss.n_nodes, (long long)ss.by_kind[KARST_SDF_SWEEP],
-         (long long)ss.by_kind[KARST_SDF_SPHERE], (long long)bst.n_bends,
-         (long long)ss.by_kind[KARST_SDF_ELLIPSOID], (long long)bst.n_mitred_ends,
-         (long long)ss.n_bvh_nodes, ss.memory_bytes / 1e6, t1 - t0);
-
   double box[6] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
-  karst_mesh_t m;
-  karst_mesh_init(&m);
-  karst_polygonize_stats_t ps;
-  double t2 = now_s();
-  err = karst_mesh_polygonize(&ctx, sdf, box, voxel, &m, &ps);
-  double t3 = now_s();
-  if (err) {
-    fprintf(stderr, "bench_mesh: %s\n", ctx.errmsg);
-    return 1;
-  }
-  double grid = (double)(ps.cells[0] + 1) * (ps.cells[1] + 1) * (ps.cells[2] + 1);
-  printf("bench_mesh: polygonized at %g m over the whole extent (%lld x %lld x %lld cells) in "
-         "%.2f s on %d threads (target <= 60 s): %lld triangles, %lld vertices, %.3g field "
-         "evaluations (%.2f %% of the %.3g grid points), %lld of %lld blocks skipped, volume "
-         "%.0f m3\n",
-         voxel, (long long)ps.cells[0], (long long)ps.cells[1], (long long)ps.cells[2], t3 - t2,
-         ctx.nthreads, (long long)m.n_triangles, (long long)m.n_vertices, (double)ps.n_evals,
-         100.0 * ps.n_evals / grid, grid, (long long)ps.n_skipped, (long long)ps.n_blocks,
-         karst_mesh_volume(&m));
-  karst_mesh_destroy(&m);
-  karst_sdf_free(sdf);
+  int rc = 0;
+  if (strcmp(which, "preset") != 0) rc |= run_case(&ctx, "synthetic", &net, box, voxel);
+  if (strcmp(which, "synthetic") != 0) rc |= run_preset(&ctx, voxel);
   karst_network_destroy(&net);
-  return 0;
+  return rc ? 1 : 0;
 }
