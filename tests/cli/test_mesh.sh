@@ -62,4 +62,28 @@ EOF
 check 0 "mesh again with 1 thread" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon1.ply" --voxel 0.5 --radius 0.8 -j 1 --quiet
 cmp -s "$TMP/mon.ply" "$TMP/mon1.ply" && ok "same file with 1 and 2 threads" || bad "output depends on the thread count"
 
+# VTK output read back by VTK itself: closed (no boundary or non-manifold edge by vtkFeatureEdges),
+# the tunnel_type cell array present; the sampled field as image data with values of both signs.
+check 0 "mesh to VTP with the field" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon.vtp" --voxel 0.5 --radius 0.8 --sdf "$TMP/mon.vti" --quiet
+"$PY" - "$TMP/mon.vtp" "$TMP/mon.vti" "$TMP/mon.ply" <<'EOF' && ok "VTP closed, labelled; VTI grid" || bad "VTP/VTI content"
+import sys, vtk
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update()
+pd = r.GetOutput()
+assert pd.GetNumberOfPolys() > 1000, pd.GetNumberOfPolys()
+assert pd.GetCellData().GetArray('tunnel_type') is not None
+fe = vtk.vtkFeatureEdges(); fe.SetInputData(pd)
+fe.BoundaryEdgesOn(); fe.NonManifoldEdgesOn(); fe.FeatureEdgesOff(); fe.ManifoldEdgesOff(); fe.Update()
+assert fe.GetOutput().GetNumberOfCells() == 0, fe.GetOutput().GetNumberOfCells()
+head = open(sys.argv[3], 'rb').read(400).decode('latin-1')
+nf = int([l for l in head.split('\n') if l.startswith('element face')][0].split()[2])
+assert pd.GetNumberOfPolys() == nf, (pd.GetNumberOfPolys(), nf)
+ri = vtk.vtkXMLImageDataReader(); ri.SetFileName(sys.argv[2]); ri.Update()
+im = ri.GetOutput()
+a = im.GetPointData().GetArray('sdf')
+assert a is not None and a.GetNumberOfTuples() == im.GetNumberOfPoints() > 0
+lo, hi = a.GetRange()
+assert lo < 0 < hi, (lo, hi)
+print(pd.GetNumberOfPolys(), 'triangles; image', im.GetDimensions())
+EOF
+
 exit $fail
