@@ -191,7 +191,7 @@ typedef struct {
   karst_int_t *vkey;
   double *vxyz;
   karst_int_t nt, cap_t;
-  karst_int_t *tri; /* tile-local vertex indices */
+  int32_t *tri; /* tile-local vertex indices (a tile has fewer than 2^31 vertices) */
   int *label;
 } tile_out_t;
 
@@ -251,14 +251,15 @@ static int out_triangle(tile_work_t *w, const karst_int_t v[3], int label) {
   tile_out_t *o = w->out;
   if (o->nt == o->cap_t) {
     karst_int_t c = o->cap_t ? 2 * o->cap_t : 2048;
-    karst_int_t *t = realloc(o->tri, (size_t)c * 3 * sizeof *t);
+    int32_t *t = realloc(o->tri, (size_t)c * 3 * sizeof *t);
     if (t) o->tri = t;
     int *l = realloc(o->label, (size_t)c * sizeof *l);
     if (l) o->label = l;
     if (!t || !l) return -1;
     o->cap_t = c;
   }
-  memcpy(o->tri + 3 * o->nt, v, 3 * sizeof *v);
+  for (int k = 0; k < 3; k++)
+    o->tri[3 * o->nt + k] = (int32_t)v[k];
   o->label[o->nt] = label;
   o->nt++;
   return 0;
@@ -416,6 +417,16 @@ static int block(tile_work_t *w, const karst_int_t c0[3], const karst_int_t c1[3
   return 0;
 }
 
+/* First cell and cell counts of tile t. */
+static void tile_range(const grid_t *g, karst_int_t t, karst_int_t t0[3], karst_int_t tn[3]) {
+  karst_int_t tc[3] = {t % g->nt[0], (t / g->nt[0]) % g->nt[1], t / (g->nt[0] * g->nt[1])};
+  for (int a = 0; a < 3; a++) {
+    t0[a] = tc[a] * TILE;
+    tn[a] = g->n[a] - t0[a];
+    if (tn[a] > TILE) tn[a] = TILE;
+  }
+}
+
 /* ---------------------------------------------------------------------- */
 /* Threads.                                                                */
 /* ---------------------------------------------------------------------- */
@@ -458,12 +469,7 @@ static void *worker(void *arg) {
     }
     karst_int_t t = atomic_fetch_add(&sh->next, 1);
     if (t >= sh->ntiles) break;
-    karst_int_t tx = t % g->nt[0], ty = (t / g->nt[0]) % g->nt[1], tz = t / (g->nt[0] * g->nt[1]);
-    w.t0[0] = tx * TILE, w.t0[1] = ty * TILE, w.t0[2] = tz * TILE;
-    for (int a = 0; a < 3; a++) {
-      w.tn[a] = g->n[a] - w.t0[a];
-      if (w.tn[a] > TILE) w.tn[a] = TILE;
-    }
+    tile_range(g, t, w.t0, w.tn);
     memset(w.have, 0, nc);
     for (karst_int_t i = 0; i < w.map.cap; i++)
       w.map.keys[i] = -1;
@@ -567,15 +573,28 @@ karst_error_t karst_mesh_polygonize(karst_ctx_t *ctx, const karst_sdf_t *sdf, co
     err = karst_set_error(ctx, KARST_ENOMEM, "polygonize: out of memory");
     goto cleanup;
   }
-  /* Merge the tiles in their order: the first occurrence of an edge key
-   * numbers the vertex, so the output is independent of the thread count. */
-  karst_int_t nv = 0, nt = 0, maxv = 0;
+  /* Merge the tiles in their order, numbering vertices by first occurrence, so
+   * the output is independent of the thread count. A vertex can be shared
+   * with another tile only when its edge lies on the tile's boundary, that is
+   * when the edge's lower grid point is on a boundary plane of the tile: only
+   * those go through the hash map. */
+  karst_int_t nv = 0, nt = 0, maxv = 0, nb = 0;
+  const karst_int_t gx = g.n[0] + 1, gy = g.n[1] + 1;
+#define ON_TILE_BOUNDARY(key, t0, tn)                                                              \
+  (((key) / 8 % gx == (t0)[0]) || ((key) / 8 % gx == (t0)[0] + (tn)[0]) ||                         \
+   ((key) / 8 / gx % gy == (t0)[1]) || ((key) / 8 / gx % gy == (t0)[1] + (tn)[1]) ||               \
+   ((key) / 8 / gx / gy == (t0)[2]) || ((key) / 8 / gx / gy == (t0)[2] + (tn)[2]))
   for (karst_int_t t = 0; t < sh.ntiles; t++) {
-    nv += sh.outs[t].nv;
-    nt += sh.outs[t].nt;
-    if (sh.outs[t].nv > maxv) maxv = sh.outs[t].nv;
+    tile_out_t *o = &sh.outs[t];
+    nv += o->nv;
+    nt += o->nt;
+    if (o->nv > maxv) maxv = o->nv;
+    karst_int_t t0[3], tn[3];
+    tile_range(&g, t, t0, tn);
+    for (karst_int_t i = 0; i < o->nv; i++)
+      nb += ON_TILE_BOUNDARY(o->vkey[i], t0, tn);
   }
-  if (karst_i_hmap_init(&gmap, nv) ||
+  if (karst_i_hmap_init(&gmap, nb) ||
       !(remap = malloc((size_t)(maxv > 0 ? maxv : 1) * sizeof *remap)) ||
       !(m.xyz = malloc((size_t)(nv > 0 ? nv : 1) * 3 * sizeof *m.xyz)) ||
       !(m.tri = malloc((size_t)(nt > 0 ? nt : 1) * 3 * sizeof *m.tri)) ||
@@ -586,12 +605,17 @@ karst_error_t karst_mesh_polygonize(karst_ctx_t *ctx, const karst_sdf_t *sdf, co
   }
   for (karst_int_t t = 0; t < sh.ntiles; t++) {
     tile_out_t *o = &sh.outs[t];
+    karst_int_t t0[3], tn[3];
+    tile_range(&g, t, t0, tn);
     for (karst_int_t i = 0; i < o->nv; i++) {
-      karst_int_t id;
-      int r = karst_i_hmap_find_or_insert(&gmap, o->vkey[i], m.n_vertices, &id);
-      if (r < 0) {
-        err = karst_set_error(ctx, KARST_ENOMEM, "polygonize: out of memory");
-        goto cleanup;
+      karst_int_t id = m.n_vertices;
+      int r = 1;
+      if (ON_TILE_BOUNDARY(o->vkey[i], t0, tn)) {
+        r = karst_i_hmap_find_or_insert(&gmap, o->vkey[i], m.n_vertices, &id);
+        if (r < 0) {
+          err = karst_set_error(ctx, KARST_ENOMEM, "polygonize: out of memory");
+          goto cleanup;
+        }
       }
       if (r == 1) {
         memcpy(m.xyz + 3 * m.n_vertices, o->vxyz + 3 * i, 3 * sizeof *m.xyz);
@@ -608,6 +632,7 @@ karst_error_t karst_mesh_polygonize(karst_ctx_t *ctx, const karst_sdf_t *sdf, co
     free(o->vkey), free(o->vxyz), free(o->tri), free(o->label);
     memset(o, 0, sizeof *o);
   }
+#undef ON_TILE_BOUNDARY
   m.tri_label_name = "tunnel_type";
   st.n_vertices = m.n_vertices;
   st.n_triangles = m.n_triangles;
