@@ -23,6 +23,12 @@ build: $(BUILD)/Makefile
 
 demo: deps build
 	$(BUILD)/karst validate $(SCENARIO)
+	$(BUILD)/karst generate $(SCENARIO) -o $(DEMO_OUT) --samples
+	$(BUILD)/karst metrics $(DEMO_OUT)/network.vtp --observed
+	@echo
+	@echo "The network is in $(DEMO_OUT)/: open $(DEMO_OUT)/network.vtp in ParaView"
+	@echo "(File > Open, Apply, then colour by tunnel_type, radius or kind);"
+	@echo "$(DEMO_OUT)/samples.vtp holds the sample cloud, $(DEMO_OUT)/run.json every parameter and timing."
 
 test-fast: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -50,7 +50,8 @@ double karst_cost_horizon_term(const karst_scenario_t *sc, const double p[3]);
 /**
  * Fracture term cF(d) = Σ w_k (n_k·d)² for the unit direction of @p dir (cheap
  * along a fracture plane, w_k across it; see cost.c for why this is the 3-D
- * form of the paper's Σ w_k (1 − (n_k·d)²)).
+ * form of the paper's Σ w_k (1 − (n_k·d)²)); with cost.fracture_combine = min,
+ * min_k [W − w_k (1 − (n_k·d)²)], W = max_k w_k (cheap along any one family).
  */
 double karst_cost_fracture_term(const karst_scenario_t *sc, const double dir[3]);
 

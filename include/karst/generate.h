@@ -32,6 +32,9 @@ typedef struct karst_generate_stats {
   karst_int_t n_samples, n_graph_edges, n_key_points, n_skeleton_paths;
   karst_int_t n_nodes, n_edges;
   double total_length;
+  karst_int_t n_skeleton_nodes; /**< graph vertices on the skeleton S before amplification (#S of
+                                   Table 1) */
+  double skeleton_length;       /**< total length (m) of S before amplification */
   double stage_seconds[KARST_STAGE_COUNT];
   size_t peak_bytes; /**< peak resident memory of the process (getrusage), for benchmarks */
 } karst_generate_stats_t;

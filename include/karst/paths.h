@@ -54,6 +54,32 @@ karst_error_t karst_paths_dijkstra(karst_ctx_t *ctx, karst_search_t *s, karst_in
                                    const unsigned char *is_target, karst_int_t stop_after,
                                    karst_int_t *last_target);
 
+/**
+ * Relative safety margin subtracted from the heuristic of karst_paths_astar_reuse so that
+ * rounding in its sums can never make it overestimate. Default 1e-9 (rounding is ~1e-15).
+ */
+#define KARST_PATHS_HEURISTIC_MARGIN 1e-9
+
+/**
+ * Path sharing (Galin et al. 2011; Paris et al. 2021, §5.1): arcs of the network already laid
+ * cost @c factor times their cost.
+ */
+typedef struct karst_reuse {
+  double factor;               /**< r in (0, 1] */
+  const unsigned char *reused; /**< n_arcs flags, set on both arcs of each network edge, or NULL */
+  const double *dist_to_net;   /**< n least original costs to the nearest network vertex, INFINITY
+                                    while the network is empty; NULL: taken as 0 (always safe) */
+} karst_reuse_t;
+
+karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst_int_t source,
+                                      karst_int_t target, double lb_per_metre,
+                                      const float *target_bound, const karst_reuse_t *reuse,
+                                      karst_path_t *path);
+
+karst_error_t karst_paths_lower_distances(karst_ctx_t *ctx, karst_search_t *s,
+                                          karst_int_t n_sources, const karst_int_t *sources,
+                                          double *dist);
+
 /** How the key-point distance matrix is computed. */
 typedef enum {
   KARST_PATHS_DIJKSTRA_MULTI = 0, /**< one multi-target Dijkstra per key point (default) */
@@ -68,6 +94,10 @@ karst_error_t karst_paths_keypoint_distances(karst_ctx_t *ctx, const karst_graph
 karst_error_t karst_paths_keypoint_trees(karst_ctx_t *ctx, const karst_graph_t *g,
                                          karst_int_t n_keys, const karst_int_t *keys, double *dist,
                                          int32_t *pred);
+
+karst_error_t karst_paths_keypoint_bounds(karst_ctx_t *ctx, const karst_graph_t *g,
+                                          karst_int_t n_keys, const karst_int_t *keys, double *dist,
+                                          float *bound);
 
 karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
                                     const int32_t *pred_row, karst_int_t source, karst_int_t target,

@@ -27,6 +27,12 @@ extern "C" {
  */
 #define KARST_SCENARIO_GRID_COVER_SLACK 1e-6
 
+/**
+ * Default of skeleton.reuse (docs/generation.md, "Path sharing"): edges already in the network
+ * cost this fraction of their cost while later skeleton paths are laid (Galin et al. 2011).
+ */
+#define KARST_SCENARIO_DEFAULT_REUSE 0.5
+
 typedef enum { KARST_KEYPOINT_SINK = 0, KARST_KEYPOINT_SPRING = 1, KARST_KEYPOINT_WAYPOINT = 2 } karst_keypoint_type_t;
 
 typedef struct karst_keypoint {
@@ -108,6 +114,13 @@ typedef struct karst_srcpos {
   int line, column;
 } karst_srcpos_t;
 
+/**
+ * How the fracture families combine into cF(d) (cost.fracture_combine, docs/scenario.md):
+ * SUM is the paper's Σ_k w_k (n_k·d)² (§4.2); MIN makes a direction cheap when it follows any
+ * one family, min_k [W − w_k (1 − (n_k·d)²)] with W = max_k w_k (see src/cost/cost.c).
+ */
+typedef enum { KARST_FRACTURE_SUM = 0, KARST_FRACTURE_MIN = 1 } karst_fracture_combine_t;
+
 /** Cost weights of c(p, d) = w0 + wL cL(p) + wF cF(d) + wπ cπ(p) (§4.2). */
 typedef struct karst_cost_weights {
   double w0;                   /**< base cost per metre, > 0 (keeps A* admissible and paths finite) */
@@ -115,6 +128,7 @@ typedef struct karst_cost_weights {
   double fracture;             /**< wF >= 0 */
   double permeability;         /**< wπ >= 0 */
   double prescribed;           /**< cost per metre multiplier on prescribed paths, in (0, 1] */
+  int fracture_combine;        /**< karst_fracture_combine_t, default KARST_FRACTURE_SUM */
 } karst_cost_weights_t;
 
 typedef struct karst_sampling {
@@ -163,6 +177,9 @@ typedef struct karst_scenario {
   karst_cost_weights_t cost;
   karst_sampling_t sampling;
   double gamma;                /**< γ-skeleton parameter, > 0 (§5.1) */
+  double reuse;                /**< skeleton.reuse: cost factor of graph edges already in the
+                                    network while later paths are laid, (0, 1], default
+                                    KARST_SCENARIO_DEFAULT_REUSE (1 = plain union of paths) */
   karst_amplification_t amplification;
   double tortuosity;           /**< θ in [0, 1] (§5.2) */
   karst_classification_t classification;

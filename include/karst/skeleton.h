@@ -54,8 +54,8 @@ void karst_skeleton_mark_junctions(karst_skeleton_t *sk);
 
 karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
                                    const karst_int_t *keys, const double *dist, const int32_t *pred,
-                                   double gamma, double lb_per_metre, karst_skeleton_t *sk,
-                                   karst_int_t *n_kept);
+                                   const float *bound, double gamma, double reuse,
+                                   double lb_per_metre, karst_skeleton_t *sk, karst_int_t *n_kept);
 
 #ifdef __cplusplus
 }

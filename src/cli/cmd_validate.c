@@ -3,6 +3,10 @@
 
 #include "cli.h"
 
+static const char *plural(int n, const char *one, const char *many) {
+  return n == 1 ? one : many;
+}
+
 static int run(int argc, char **argv) {
   if (argc < 2) return cli_usage_error("validate", "no scenario file given");
   int status = CLI_OK;
@@ -26,12 +30,15 @@ static int run(int argc, char **argv) {
         springs += sc.key_points[k].type == KARST_KEYPOINT_SPRING;
         waypoints += sc.key_points[k].type == KARST_KEYPOINT_WAYPOINT;
       }
-      printf("%s: ok: '%s', domain %.6g x %.6g x %.6g m, %d sinks, %d springs, %d waypoints, "
-             "%d horizons, %d fracture families, gamma %.6g, theta %.6g, seed %llu\n",
+      printf("%s: ok: '%s', domain %.6g x %.6g x %.6g m, %d %s, %d %s, %d %s, %d %s, %d %s, "
+             "gamma %.6g, theta %.6g, seed %llu\n",
              argv[i], sc.name ? sc.name : "", sc.domain_max[0] - sc.domain_min[0],
              sc.domain_max[1] - sc.domain_min[1], sc.domain_max[2] - sc.domain_min[2], sinks,
-             springs, waypoints, sc.n_horizons, sc.n_fractures, sc.gamma, sc.tortuosity,
-             (unsigned long long)sc.seed);
+             plural(sinks, "sink", "sinks"), springs, plural(springs, "spring", "springs"),
+             waypoints, plural(waypoints, "waypoint", "waypoints"), sc.n_horizons,
+             plural(sc.n_horizons, "horizon", "horizons"), sc.n_fractures,
+             plural(sc.n_fractures, "fracture family", "fracture families"), sc.gamma,
+             sc.tortuosity, (unsigned long long)sc.seed);
     }
     karst_scenario_destroy(&sc);
   }

@@ -199,7 +199,11 @@ double karst_cost_horizon_term(const karst_scenario_t *sc, const double p[3]) {
 }
 
 static double fracture_term(const karst_scenario_t *sc, const double *normals, const double d[3]) {
-  double len = sqrt(dot3(d, d)), c = 0.0;
+  double len = sqrt(dot3(d, d)), c = 0.0, wmax = 0.0;
+  const int use_min = sc->cost.fracture_combine == KARST_FRACTURE_MIN;
+  for (int k = 0; k < sc->n_fractures; k++)
+    wmax = fmax(wmax, sc->fractures[k].weight);
+  if (use_min) c = wmax;
   for (int k = 0; k < sc->n_fractures; k++) {
     double n[3], w = sc->fractures[k].weight;
     if (normals) {
@@ -208,7 +212,10 @@ static double fracture_term(const karst_scenario_t *sc, const double *normals, c
       karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, n);
     }
     double nd = len > 0 ? dot3(n, d) / len : 1.0;
-    c += w * nd * nd;
+    if (use_min)
+      c = fmin(c, wmax - w * (1.0 - nd * nd));
+    else
+      c += w * nd * nd;
   }
   return c;
 }
@@ -223,7 +230,17 @@ static double fracture_term(const karst_scenario_t *sc, const double *normals, c
  * the right one for a vector lying in the fracture (its 2-D trace), and its
  * 3-D form for a plane of normal n_k is the squared normal component used
  * here: 0 along strike and dip, w_k across the plane.
- * A zero direction gives Σ w_k (the most expensive value).
+ *
+ * With cost.fracture_combine = min: cF(d) = min_k [W − w_k (1 − (n_k·d̂)²)],
+ * W = max_k w_k. Any sum is a quadratic form dᵀMd, whose minimum directions
+ * form one eigenspace: two vertical families (N–S and E–W planes) would make
+ * every horizontal direction cost the same, so a sum cannot favour both axes
+ * over the diagonal (the rectilinear mazes of Fig. 15). The min is cheap
+ * wherever d follows ANY one family: 0 in the planes of the heaviest family,
+ * W − w_k in those of family k (a lighter family attracts less), W along a
+ * direction normal to every plane. With one family both forms give
+ * w (n·d̂)². A zero direction gives Σ w_k (sum) or W (min), the most
+ * expensive values.
  * Time complexity: O(number of fracture families).
  */
 double karst_cost_fracture_term(const karst_scenario_t *sc, const double dir[3]) {
@@ -606,7 +623,10 @@ static double sym3_min_eigenvalue(double A[3][3]) {
  * M = Σ w_k n_k n_kᵀ (because (n·d)² = dᵀ n nᵀ d), and dᵀ M d >= λmin(M) by
  * the Rayleigh quotient, attained by the eigenvector of λmin (with the
  * paper's printed form Σ w_k (1 − (n_k·d)²) = Σ w_k − dᵀ M d the same
- * argument gives Σ w_k − λmax(M)).
+ * argument gives Σ w_k − λmax(M)). With cost.fracture_combine = min,
+ * cF(d) = min_k [W − w_k + w_k (n_k·d)²] >= min_k (W − w_k) = 0 (W = max w_k,
+ * each term >= 0), with equality in the plane of the heaviest family: the
+ * bound is 0.
  * (iii) π is clamped to [0, 1]; every node returns a leaf resistance, the
  * background, a smooth-step mix of the two, their min, max or a weighted
  * mean, so π >= πmin = min(background, leaf resistances). Hence c(p, d) >=
@@ -631,6 +651,9 @@ double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
         M[i][j] += wk * n[i] * n[j];
   }
   double cf_min = sc->n_fractures > 0 ? fmax(0.0, sym3_min_eigenvalue(M)) : 0.0;
+  /* min combination: each candidate W − w_k (1 − (n_k·d)²) >= W − w_k >= 0, and the heaviest
+   * family's candidate is 0 for d in its plane, so the minimum over unit d is exactly 0. */
+  if (sc->cost.fracture_combine == KARST_FRACTURE_MIN) cf_min = 0.0;
   double pi_min = sc->permeability.background;
   const karst_perm_node_t *stack[64];
   int top = 0;

@@ -9,10 +9,10 @@
 #include <time.h>
 
 #include "generate/generate_internal.h"
-#include "karst/cost.h"
-#include "karst/sampling.h"
 #include "karst/amplification.h"
 #include "karst/classification.h"
+#include "karst/cost.h"
+#include "karst/sampling.h"
 #include "karst/skeleton.h"
 
 static const char *const stage_names[KARST_STAGE_COUNT] = {
@@ -104,6 +104,7 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
   karst_int_t *keys = NULL;
   double *dist = NULL;
   int32_t *pred = NULL;
+  float *bound = NULL;
   karst_skeleton_t sk;
   int sk_ready = 0;
   karst_network_t out;
@@ -130,18 +131,25 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
 
   karst_progress(ctx, "paths", 0, 1);
   t = karst_i_now();
-  /* One Dijkstra per key point gives the distances and the trees the skeleton reads its
-   * paths from (see karst_paths_keypoint_distances for why rows beat A* pairs). */
+  /* One Dijkstra per key point gives the distances and, per key point, what the skeleton
+   * needs to lay its paths (see karst_paths_keypoint_distances for why rows beat A* pairs):
+   * with plain union (reuse = 1) the shortest-path trees it reads the paths from; with path
+   * sharing the distance rows that make its A* heuristic tight (karst_paths_astar_reuse). */
+  const int sharing = sc->reuse < 1.0;
   if (n > 1 && (size_t)(n - 1) * (size_t)g->n <= KARST_I_TREE_BUDGET / sizeof(int32_t)) {
-    pred = malloc((size_t)(n - 1) * (size_t)g->n * sizeof *pred);
-    if (!pred) {
+    if (sharing)
+      bound = malloc((size_t)(n - 1) * (size_t)g->n * sizeof *bound);
+    else
+      pred = malloc((size_t)(n - 1) * (size_t)g->n * sizeof *pred);
+    if (!pred && !bound) {
       err = karst_set_error(ctx, KARST_ENOMEM, "out of memory for the key-point trees");
       goto cleanup;
     }
   }
-  err = pred ? karst_paths_keypoint_trees(ctx, g, n, keys, dist, pred)
-             : karst_paths_keypoint_distances(ctx, g, n, keys, lb_per_metre,
-                                              KARST_I_KEYPOINT_METHOD, dist);
+  err = pred    ? karst_paths_keypoint_trees(ctx, g, n, keys, dist, pred)
+        : bound ? karst_paths_keypoint_bounds(ctx, g, n, keys, dist, bound)
+                : karst_paths_keypoint_distances(ctx, g, n, keys, lb_per_metre,
+                                                 KARST_I_KEYPOINT_METHOD, dist);
   if (err) goto cleanup;
   if ((err = check_connected(ctx, sc, n, dist))) goto cleanup;
   if (stats) stats->stage_seconds[KARST_STAGE_PATHS] = karst_i_now() - t;
@@ -151,9 +159,13 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
   if ((err = karst_skeleton_init(ctx, &sk, g))) goto cleanup;
   sk_ready = 1;
   karst_int_t kept = 0;
-  if ((err =
-           karst_skeleton_build(ctx, g, n, keys, dist, pred, sc->gamma, lb_per_metre, &sk, &kept)))
+  if ((err = karst_skeleton_build(ctx, g, n, keys, dist, pred, bound, sc->gamma, sc->reuse,
+                                  lb_per_metre, &sk, &kept)))
     goto cleanup;
+  if (stats) {
+    stats->n_skeleton_nodes = sk.net.n_nodes;
+    stats->skeleton_length = total_length(&sk.net);
+  }
   for (karst_int_t i = 0; i < n; i++) {
     if ((err = karst_skeleton_mark_node(ctx, &sk, g, keys[i], key_kind(sc->key_points[i].type))))
       goto cleanup;
@@ -204,6 +216,7 @@ cleanup:
   free(keys);
   free(dist);
   free(pred);
+  free(bound);
   return err;
 }
 

@@ -184,6 +184,8 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   fputs(", \"fracture\": ", fp), json_num(fp, sc->cost.fracture);
   fputs(", \"permeability\": ", fp), json_num(fp, sc->cost.permeability);
   fputs(", \"prescribed\": ", fp), json_num(fp, sc->cost.prescribed);
+  fprintf(fp, ", \"fracture_combine\": \"%s\"",
+          sc->cost.fracture_combine == KARST_FRACTURE_MIN ? "min" : "sum");
   fputs("},\n    \"sampling\": {\"fill_radius\": ", fp);
   json_num(fp, sc->sampling.fill_radius);
   fputs(", \"feature_radius\": ", fp), json_num(fp, sc->sampling.feature_radius);
@@ -192,6 +194,7 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   fprintf(fp, ", \"k\": %d, \"max_samples\": %lld},\n", sc->sampling.k,
           (long long)sc->sampling.max_samples);
   kv_num(fp, I, "gamma", sc->gamma, 0);
+  kv_num(fp, I, "reuse", sc->reuse, 0);
   kv_num(fp, I, "tortuosity", sc->tortuosity, 0);
   karst_amplification_options_t ao;
   karst_amplification_options_init(&ao);
@@ -227,6 +230,8 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
       fp,
       "    \"skeleton_paths\": %lld,\n    \"network_nodes\": %lld,\n    \"network_edges\": %lld,\n",
       (long long)st->n_skeleton_paths, (long long)st->n_nodes, (long long)st->n_edges);
+  fprintf(fp, "    \"skeleton_nodes\": %lld,\n", (long long)st->n_skeleton_nodes);
+  kv_num(fp, I, "skeleton_length", st->skeleton_length, 0);
   kv_num(fp, I, "total_length", st->total_length, 1);
   fputs("  },\n  \"stage_seconds\": {\n", fp);
   for (int s = 0; s < KARST_STAGE_COUNT; s++)

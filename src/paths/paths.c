@@ -174,6 +174,13 @@ static double euclid(const double *xyz, karst_int_t a, karst_int_t b) {
   return sqrt(dx * dx + dy * dy + dz * dz);
 }
 
+/* The largest float not above x (x >= 0), so a stored lower bound stays a lower bound. */
+static float float_below(double x) {
+  float f = (float)x;
+  if ((double)f > x) f = nextafterf(f, 0.0f);
+  return f;
+}
+
 /*
  * The one search loop behind A* and Dijkstra. Priority = g(v) + h(v) with
  * h(v) = lb · |v − target| (A*; h = 0 when target < 0 or lb = 0). A popped
@@ -307,6 +314,177 @@ karst_error_t karst_paths_dijkstra(karst_ctx_t *ctx, karst_search_t *s, karst_in
 }
 
 /* ------------------------------------------------------------------------ */
+/* Path sharing: least-cost paths on the graph whose network arcs are        */
+/* discounted (Galin et al. 2011, used by Paris et al. 2021, §5.1).          */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * The heuristic of karst_paths_astar_reuse at v (see there for the proof):
+ * max(r·lb·|v − t|, r·D(v) + (1 − r)·min(N(v), D(v))), shrunk by
+ * KARST_PATHS_HEURISTIC_MARGIN against rounding.
+ */
+static double reuse_h(const karst_graph_t *g, karst_int_t v, karst_int_t target, double rlb,
+                      const float *bound, const karst_reuse_t *ru) {
+  double h = rlb > 0 ? rlb * euclid(g->xyz, v, target) : 0.0;
+  if (bound) {
+    double D = bound[v], N = ru->dist_to_net ? ru->dist_to_net[v] : 0.0;
+    double hb = ru->factor * D + (1.0 - ru->factor) * (N < D ? N : D);
+    if (hb > h) h = hb;
+  }
+  return h * (1.0 - KARST_PATHS_HEURISTIC_MARGIN);
+}
+
+/**
+ * Least-cost path from @p source to @p target on the graph in which the arcs
+ * flagged in reuse->reused (the network laid so far) cost reuse->factor = r
+ * times their cost: the path-sharing search of Galin et al. 2011 ("Authoring
+ * hierarchical road networks", on which Paris et al. 2021 §5.1 build), where
+ * a new path prefers to run along conduits already there.
+ *
+ * A* with h(v) = max(h_E(v), h_N(v)), where, with c the original arc costs and
+ * c' the discounted ones (c' = r c on network arcs, c elsewhere):
+ * - h_E(v) = r·lb·|v − t|: c' >= r c >= r·lb·length on every arc, so any path
+ *   from v costs >= r·lb·|v − t| (triangle inequality); the same argument on
+ *   one arc gives consistency. This is the plain A* bound times r.
+ * - h_N(v) = r·D(v) + (1 − r)·min(N(v), D(v)), where D (@p target_bound) is a
+ *   lower bound of the original least cost from v to t that changes by at most
+ *   c(u, w) along an arc (karst_paths_keypoint_bounds gives one; the exact
+ *   distance is one), and N (reuse->dist_to_net) the original least cost from
+ *   v to the nearest network vertex (karst_paths_lower_distances).
+ *   Admissible: a path P from v to t of original cost C >= d(v, t) >= D(v), of
+ *   which Y is spent on non-network arcs, costs C' = r C + (1 − r) Y. If P uses
+ *   no network arc, Y = C >= D(v); otherwise the part of P before its first
+ *   network arc ends at a network vertex, so Y >= N(v). Hence
+ *   C' >= r D(v) + (1 − r) min(N(v), D(v)).
+ *   Consistent: on a network arc both ends are network vertices (N = 0), so
+ *   h_N changes by r |ΔD| <= r c = c'; on any other arc D and N (a least-cost
+ *   distance to a set) change by at most c, so h_N changes by at most
+ *   r c + (1 − r) c = c = c'.
+ *   Why it pays: far from the network it is the exact remaining cost times
+ *   r plus (1 − r) times the cost of reaching the network, so the search stays
+ *   within a thin shell around the network and the straight corridor, where
+ *   h_E alone (a few tenths of the typical cost per metre once multiplied by
+ *   r) lets it flood a ball of radius d(source, target).
+ * The maximum of two consistent heuristics is consistent. Both are shrunk by
+ * the relative KARST_PATHS_HEURISTIC_MARGIN so that rounding cannot make them
+ * overestimate; the search also re-opens vertices, so it stays exact anyway.
+ *
+ * @param s             workspace created on the graph.
+ * @param source, target vertices.
+ * @param lb_per_metre  lower bound of the original cost per metre (>= 0).
+ * @param target_bound  n lower bounds of the original cost to @p target as
+ *                      above, or NULL (then only h_E is used).
+ * @param reuse         the discount: factor in (0, 1], reused = n_arcs flags
+ *                      set on both arcs of every network edge (NULL: no arc is
+ *                      discounted), dist_to_net = n distances (NULL: 0 everywhere,
+ *                      which is always safe: h_N = r·D).
+ * @param path          receives source .. target; path->cost is the discounted cost.
+ * @return KARST_SUCCESS; KARST_EUNREACHABLE; KARST_EINVAL for bad indices,
+ *         bound or factor; KARST_ENOMEM.
+ * Time complexity: O((m + n) log n) in the worst case; in practice the shell
+ * described above.
+ */
+karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst_int_t source,
+                                      karst_int_t target, double lb_per_metre,
+                                      const float *target_bound, const karst_reuse_t *reuse,
+                                      karst_path_t *path) {
+  const karst_graph_t *g = s->g;
+  if (source < 0 || source >= g->n || target < 0 || target >= g->n)
+    return karst_set_error(ctx, KARST_EINVAL, "A*: vertices %lld -> %lld outside [0, %lld)",
+                           (long long)source, (long long)target, (long long)g->n);
+  if (!(lb_per_metre >= 0) || isinf(lb_per_metre))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "A*: the cost lower bound per metre must be finite and >= 0, got %g",
+                           lb_per_metre);
+  if (!reuse || !(reuse->factor > 0 && reuse->factor <= 1))
+    return karst_set_error(ctx, KARST_EINVAL, "A*: the reuse factor must be within (0, 1], got %g",
+                           reuse ? reuse->factor : NAN);
+  const double r = reuse->factor, rlb = g->xyz ? r * lb_per_metre : 0.0;
+  const unsigned char *flag = reuse->reused;
+  search_begin(s);
+  s->stamp[source] = s->cur;
+  s->dist[source] = 0.0;
+  s->pred[source] = -1;
+  if (heap_push(s, reuse_h(g, source, target, rlb, target_bound, reuse), source))
+    return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+  while (s->hn > 0) {
+    heap_entry_t e = heap_pop(s);
+    karst_int_t v = e.v;
+    double gv = s->dist[v];
+    if (e.key != gv + reuse_h(g, v, target, rlb, target_bound, reuse)) continue; /* stale */
+    if (s->settled[v] != s->cur) {
+      s->settled[v] = s->cur;
+      s->n_settled++;
+    }
+    if (v == target) break;
+    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
+      karst_int_t w = g->adj[a];
+      double c = g->cost[a];
+      if (!(c < INFINITY)) continue;
+      if (flag && flag[a]) c *= r;
+      double nd = gv + c;
+      if (nd < get_dist(s, w)) {
+        s->stamp[w] = s->cur;
+        s->dist[w] = nd;
+        s->pred[w] = v;
+        if (heap_push(s, nd + reuse_h(g, w, target, rlb, target_bound, reuse), w))
+          return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+      }
+    }
+  }
+  if (s->settled[target] != s->cur)
+    return karst_set_error(ctx, KARST_EUNREACHABLE,
+                           "no finite-cost path from vertex %lld to vertex %lld", (long long)source,
+                           (long long)target);
+  return karst_search_path_to(ctx, s, target, path);
+}
+
+/**
+ * Lower @p dist (n values, the least cost from every vertex to a growing set
+ * of vertices, INFINITY for the empty set) after @p sources joined the set:
+ * a Dijkstra from the new sources at 0 that only goes where it improves the
+ * stored value, so adding a path to the network costs the region whose
+ * nearest network vertex changes, not a search of the whole graph. The
+ * result equals a multi-source Dijkstra from the whole set.
+ *
+ * @param s         workspace on the graph (its heap is used; the last search is forgotten).
+ * @param n_sources, sources  the new members (indices are checked).
+ * @param dist      n values, updated in place.
+ * @return KARST_SUCCESS, KARST_EINVAL, KARST_ENOMEM.
+ * Time complexity: O((m' + n') log n') for the n' vertices whose value drops.
+ */
+karst_error_t karst_paths_lower_distances(karst_ctx_t *ctx, karst_search_t *s,
+                                          karst_int_t n_sources, const karst_int_t *sources,
+                                          double *dist) {
+  const karst_graph_t *g = s->g;
+  search_begin(s);
+  for (karst_int_t i = 0; i < n_sources; i++) {
+    karst_int_t v = sources[i];
+    if (v < 0 || v >= g->n)
+      return karst_set_error(ctx, KARST_EINVAL, "search: source %lld is not a vertex (n = %lld)",
+                             (long long)v, (long long)g->n);
+    if (dist[v] > 0.0) {
+      dist[v] = 0.0;
+      if (heap_push(s, 0.0, v)) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+    }
+  }
+  while (s->hn > 0) {
+    heap_entry_t e = heap_pop(s);
+    karst_int_t v = e.v;
+    if (e.key != dist[v]) continue; /* stale */
+    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
+      karst_int_t w = g->adj[a];
+      double nd = e.key + g->cost[a];
+      if (nd < dist[w]) {
+        dist[w] = nd;
+        if (heap_push(s, nd, w)) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+      }
+    }
+  }
+  return KARST_SUCCESS;
+}
+
+/* ------------------------------------------------------------------------ */
 /* Key-point distance matrix, one row per task, rows spread over threads.   */
 /* ------------------------------------------------------------------------ */
 typedef struct {
@@ -318,6 +496,7 @@ typedef struct {
   karst_paths_method_t method;
   double *dist;
   int32_t *pred; /* (n_keys − 1) × n trees, or NULL */
+  float *bound;  /* (n_keys − 1) × n lower bounds of the distance to key i, or NULL */
   int thread, nthreads;
   volatile int *interrupt;
   karst_error_t err;
@@ -360,6 +539,17 @@ static void *rows_worker(void *arg) {
         for (karst_int_t v = 0; v < t->g->n; v++)
           row[v] = s->settled[v] == s->cur ? (int32_t)s->pred[v] : -2;
       }
+      if (t->bound) {
+        /* Dijkstra settles in nondecreasing distance, so a vertex it did not settle is at
+         * least as far as the farthest settled one (R): min(d, R) bounds d from below and,
+         * like d, changes by at most the arc cost along an arc. */
+        float *row = t->bound + (size_t)i * (size_t)t->g->n;
+        double R = 0.0;
+        for (karst_int_t v = 0; v < t->g->n; v++)
+          if (s->settled[v] == s->cur && s->dist[v] > R) R = s->dist[v];
+        for (karst_int_t v = 0; v < t->g->n; v++)
+          row[v] = float_below(s->settled[v] == s->cur ? s->dist[v] : R);
+      }
     } else {
       for (karst_int_t j = i + 1; j < t->n_keys; j++) {
         karst_error_t e = karst_paths_astar(&t->ctx, s, ki, t->keys[j], t->lb, &path);
@@ -384,7 +574,8 @@ cleanup:
 
 static karst_error_t keypoint_rows(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
                                    const karst_int_t *keys, double lb_per_metre,
-                                   karst_paths_method_t method, double *dist, int32_t *pred);
+                                   karst_paths_method_t method, double *dist, int32_t *pred,
+                                   float *bound);
 
 /**
  * Least-cost distances between all pairs of key points (the complete graph
@@ -415,7 +606,7 @@ karst_error_t karst_paths_keypoint_distances(karst_ctx_t *ctx, const karst_graph
                                              karst_int_t n_keys, const karst_int_t *keys,
                                              double lb_per_metre, karst_paths_method_t method,
                                              double *dist) {
-  return keypoint_rows(ctx, g, n_keys, keys, lb_per_metre, method, dist, NULL);
+  return keypoint_rows(ctx, g, n_keys, keys, lb_per_metre, method, dist, NULL, NULL);
 }
 
 /**
@@ -439,7 +630,29 @@ karst_error_t karst_paths_keypoint_trees(karst_ctx_t *ctx, const karst_graph_t *
   if (g->n >= INT32_MAX)
     return karst_set_error(ctx, KARST_ERANGE, "key-point trees: %lld vertices exceed 2^31 - 1",
                            (long long)g->n);
-  return keypoint_rows(ctx, g, n_keys, keys, 0.0, KARST_PATHS_DIJKSTRA_MULTI, dist, pred);
+  return keypoint_rows(ctx, g, n_keys, keys, 0.0, KARST_PATHS_DIJKSTRA_MULTI, dist, pred, NULL);
+}
+
+/**
+ * The key-point distance matrix (Dijkstra rows, as karst_paths_keypoint_trees)
+ * together with, for each row i < n_keys − 1, a lower bound of the least cost
+ * from every vertex to key i: the exact distance where the row's search
+ * settled the vertex, else the farthest settled distance R_i (Dijkstra settles
+ * in nondecreasing order, so every other vertex is at least R_i away, and
+ * R_i >= d(i, j) for every key j > i). Values are rounded down to float.
+ * These rows are the A* heuristic of karst_paths_astar_reuse for a pair (a, b),
+ * a < b, searched from b towards a: a bound that knows the geology between the
+ * two key points, not only the minimum cost per metre.
+ *
+ * @param dist   n_keys × n_keys output as in karst_paths_keypoint_distances.
+ * @param bound  (n_keys − 1) × n output, row i for key i.
+ * @return as karst_paths_keypoint_distances.
+ * Time complexity: O(k (m + n) log n); memory 4 (k − 1) n bytes.
+ */
+karst_error_t karst_paths_keypoint_bounds(karst_ctx_t *ctx, const karst_graph_t *g,
+                                          karst_int_t n_keys, const karst_int_t *keys, double *dist,
+                                          float *bound) {
+  return keypoint_rows(ctx, g, n_keys, keys, 0.0, KARST_PATHS_DIJKSTRA_MULTI, dist, NULL, bound);
 }
 
 /**
@@ -489,7 +702,8 @@ karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
 
 static karst_error_t keypoint_rows(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys,
                                    const karst_int_t *keys, double lb_per_metre,
-                                   karst_paths_method_t method, double *dist, int32_t *pred) {
+                                   karst_paths_method_t method, double *dist, int32_t *pred,
+                                   float *bound) {
   karst_error_t err = KARST_SUCCESS;
   rows_task_t *tasks = NULL;
   pthread_t *threads = NULL;
@@ -525,6 +739,7 @@ static karst_error_t keypoint_rows(karst_ctx_t *ctx, const karst_graph_t *g, kar
     tasks[t].method = method;
     tasks[t].dist = dist;
     tasks[t].pred = pred;
+    tasks[t].bound = bound;
     tasks[t].thread = t;
     tasks[t].nthreads = T;
     tasks[t].interrupt = ctx ? ctx->interrupt : NULL;

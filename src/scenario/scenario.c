@@ -47,6 +47,8 @@ void karst_scenario_init(karst_scenario_t *sc) {
   sc->sampling.k = 40;
   sc->sampling.max_samples = 5000000;
   sc->gamma = 2.0;
+  sc->reuse = KARST_SCENARIO_DEFAULT_REUSE;
+  sc->cost.fracture_combine = KARST_FRACTURE_SUM;
   sc->tortuosity = 0.1;
   sc->classification.vertical_angle = 60.0;
   sc->classification.water_table_band = 5.0;
@@ -1006,6 +1008,9 @@ static const field_t permeability_fields[] = {
 };
 static const schema_t permeability_schema = {permeability_fields, 3};
 
+/* Indexed by karst_fracture_combine_t. */
+static const char *const fracture_combine_names[] = {"sum", "min"};
+
 static const field_t cost_fields[] = {
     {.key = "w0",
      .type = T_NUM,
@@ -1027,8 +1032,13 @@ static const field_t cost_fields[] = {
      .type = T_NUM,
      .off = offsetof(karst_cost_weights_t, prescribed),
      .range = RANGE_OPEN_CLOSED(0, 1, "")},
+    {.key = "fracture_combine",
+     .type = T_ENUM,
+     .off = offsetof(karst_cost_weights_t, fracture_combine),
+     .names = fracture_combine_names,
+     .n_names = 2},
 };
-static const schema_t cost_schema = {cost_fields, 5};
+static const schema_t cost_schema = {cost_fields, 6};
 
 static const field_t sampling_fields[] = {
     {.key = "fill_radius",
@@ -1060,8 +1070,12 @@ static const field_t skeleton_fields[] = {
      .type = T_NUM,
      .off = offsetof(karst_scenario_t, gamma),
      .range = RANGE_GT(0, "")},
+    {.key = "reuse",
+     .type = T_NUM,
+     .off = offsetof(karst_scenario_t, reuse),
+     .range = RANGE_OPEN_CLOSED(0, 1, "")},
 };
-static const schema_t skeleton_schema = {skeleton_fields, 1};
+static const schema_t skeleton_schema = {skeleton_fields, 2};
 
 static const field_t amplification_fields[] = {
     {.key = "steps",
@@ -1382,6 +1396,14 @@ static karst_error_t check_values(karst_ctx_t *ctx, const karst_scenario_t *sc, 
     case T_MAP: {
       karst_error_t err = check_values(ctx, sc, f->sub, at, sub, line, col);
       if (err) return err;
+      continue;
+    }
+    case T_ENUM: {
+      int e = *(const int *)at;
+      if (e < 0 || e >= f->n_names)
+        return check_fail(ctx, sc, line, col, KARST_ERANGE,
+                          "%s must be one of %d names (such as '%s'), got the index %d", sub,
+                          f->n_names, f->names[0], e);
       continue;
     }
     default:

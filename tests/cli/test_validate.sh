@@ -26,7 +26,7 @@ expect_err() { # exact first line of stderr
 
 # Exit 0: the shipped scenarios validate cleanly, with a one-line summary on stdout.
 run 0 "branchwork validates" "$KARST" validate "$SRC/datasets/scenarios/branchwork.yaml"
-grep -q "ok: 'branchwork', domain 400 x 600 x 100 m, 12 sinks, 1 springs, 4 waypoints" "$tmp/out" \
+grep -q "ok: 'branchwork', domain 400 x 600 x 100 m, 12 sinks, 1 spring, 4 waypoints" "$tmp/out" \
   || { say "FAIL: branchwork summary: $(cat "$tmp/out")"; fail=1; }
 [ -s "$tmp/err" ] && { say "FAIL: branchwork wrote to stderr: $(cat "$tmp/err")"; fail=1; }
 run 0 "hillside (heightfield) validates" "$KARST" validate "$SRC/datasets/scenarios/hillside.yaml"

@@ -134,7 +134,11 @@ static inline double fx_scenario_cost(const double *a, const double *b, void *us
   if (len == 0) return 0;
   for (int k = 0; k < 3; k++)
     d[k] /= len;
-  double cf = 0;
+  double cf = 0, wmax = 0;
+  const int use_min = sc->cost.fracture_combine == KARST_FRACTURE_MIN;
+  for (int f = 0; f < sc->n_fractures; f++)
+    if (sc->fractures[f].weight > wmax) wmax = sc->fractures[f].weight;
+  if (use_min) cf = wmax; /* the brief's min form: min_k [W − w_k (1 − (n_k·d)^2)], W = max w_k */
   for (int f = 0; f < sc->n_fractures; f++) {
     double nrm[3];
     karst_plane_normal(sc->fractures[f].dip_direction, sc->fractures[f].dip, nrm);
@@ -142,7 +146,12 @@ static inline double fx_scenario_cost(const double *a, const double *b, void *us
     /* The paper's text (§4.2, Fig. 7): directions parallel to the fracture plane are cheaper
      * than orthogonal ones; with n the plane's normal that is w (n·d)^2 (its printed formula
      * w (1 − (n·d)^2) holds for n a direction in the plane). */
-    cf += sc->fractures[f].weight * c * c;
+    if (use_min) {
+      double t = wmax - sc->fractures[f].weight * (1 - c * c);
+      if (t < cf) cf = t;
+    } else {
+      cf += sc->fractures[f].weight * c * c;
+    }
   }
   double sum = 0;
   for (int s = 0; s < cc->steps; s++) {

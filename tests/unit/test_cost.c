@@ -268,6 +268,10 @@ static void test_lower_bound(void **state) {
   add_fracture(&sc, 0, 90, 0.5);
   add_fracture(&sc, 90, 90, 0.5);
   assert_close(karst_cost_lower_bound_per_metre(&sc), 2.0, 1e-8);
+  /* cost.fracture_combine = min: cF = 0 in any of the three planes (hand: W − w_k = 0 for equal
+   * weights), so the bound is w0 = 1. */
+  sc.cost.fracture_combine = KARST_FRACTURE_MIN;
+  assert_close(karst_cost_lower_bound_per_metre(&sc), 1.0, 1e-8);
   karst_scenario_destroy(&sc);
 
   karst_rng_t r;
@@ -278,6 +282,7 @@ static void test_lower_bound(void **state) {
     sc.cost.horizon = karst_rng_uniform(&r);
     sc.cost.fracture = karst_rng_uniform_range(&r, 0, 3);
     sc.cost.permeability = karst_rng_uniform(&r);
+    sc.cost.fracture_combine = trial % 3 == 2 ? KARST_FRACTURE_MIN : KARST_FRACTURE_SUM;
     int nf = (int)karst_rng_below(&r, 5);
     for (int k = 0; k < nf; k++)
       add_fracture(&sc, karst_rng_uniform_range(&r, 0, 360), karst_rng_uniform_range(&r, 0, 90),

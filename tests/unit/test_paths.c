@@ -286,6 +286,198 @@ static void test_fracture_strike(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* Length-weighted fraction of the path's horizontal steps within 20° of the x or the y axis. */
+static double axis_fraction(const karst_graph_t *g, const karst_path_t *p) {
+  double num = 0, den = 0;
+  for (karst_int_t i = 1; i < p->n; i++) {
+    const double *a = &g->xyz[3 * p->v[i - 1]], *b = &g->xyz[3 * p->v[i]];
+    double dx = fabs(b[0] - a[0]), dy = fabs(b[1] - a[1]), l = sqrt(dx * dx + dy * dy);
+    if (l == 0) continue;
+    num += fmin(dx, dy) / l < sin(20.0 * M_PI / 180.0) ? l : 0.0;
+    den += l;
+  }
+  return den > 0 ? num / den : 0;
+}
+
+/* Two vertical fracture families, N–S planes (normal east) and E–W planes (normal north), weight
+ * 10 each, w0 = 1. cost.fracture_combine = min: a direction is cheap when it follows either
+ * family, so by hand cF(x) = cF(y) = min(10 − 10·1, 10 − 10·0) = 0 and cF(diagonal) =
+ * 10 − 10·(1 − 1/2) = 5: 1 per metre along either axis, 6 along the diagonal; a path to a
+ * target 40 m east and 40 m north must be a staircase (80 m at 1 beats 56.6 m at 6). With the
+ * paper's sum, cF(d) = 10 ((n1·d)² + (n2·d)²) = 10 for every horizontal d (a quadratic form
+ * with a double eigenvalue): isotropic, so the path runs along the diagonal. */
+static void test_fracture_min_axes(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_rng_t rng;
+  karst_rng_init(&rng, 5, 0);
+  const double o[3] = {0, 0, 0};
+  double *xyz = fx_jittered_grid(31, 31, 1, 2.0, o, 0.2, &rng);
+  const karst_int_t n = 31 * 31;
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  sc.cost.w0 = 1, sc.cost.horizon = 0, sc.cost.permeability = 0, sc.cost.fracture = 1;
+  karst_fracture_t fr[2] = {{.dip_direction = 90.0, .dip = 90.0, .weight = 10.0},
+                            {.dip_direction = 0.0, .dip = 90.0, .weight = 10.0}};
+  sc.fractures = fr;
+  sc.n_fractures = 2;
+  const double x[3] = {1, 0, 0}, y[3] = {0, 1, 0}, diag[3] = {1, 1, 0};
+  double lb[2], frac[2];
+  for (int mode = 0; mode < 2; mode++) {
+    sc.cost.fracture_combine = mode ? KARST_FRACTURE_MIN : KARST_FRACTURE_SUM;
+    double cx = karst_cost_fracture_term(&sc, x), cy = karst_cost_fracture_term(&sc, y),
+           cd = karst_cost_fracture_term(&sc, diag);
+    assert_close(cx, mode ? 0.0 : 10.0, 1e-12);
+    assert_close(cy, mode ? 0.0 : 10.0, 1e-12);
+    assert_close(cd, mode ? 5.0 : 10.0, 1e-12);
+    lb[mode] = karst_cost_lower_bound_per_metre(&sc);
+    fx_cost_ctx_t cc = {&sc, 1}; /* the cost is constant along an edge: one point is exact */
+    karst_graph_t g;
+    fx_knn_graph(&g, n, xyz, 24, fx_scenario_cost, &cc);
+    karst_int_t a = nearest(xyz, n, 10, 10, 0), b = nearest(xyz, n, 50, 50, 0);
+    karst_search_t *s;
+    assert_int_equal(karst_search_create(&ctx, &g, &s), KARST_SUCCESS);
+    karst_path_t p;
+    karst_path_init(&p);
+    assert_int_equal(karst_paths_astar(&ctx, s, a, b, lb[mode], &p), KARST_SUCCESS);
+    assert_valid_path(&g, &p, a, b);
+    frac[mode] = axis_fraction(&g, &p);
+    print_message("fracture_combine %s: %.3f of the path within 20 degrees of an axis\n",
+                  mode ? "min" : "sum", frac[mode]);
+    karst_path_destroy(&p);
+    karst_search_free(s);
+    fx_graph_free(&g);
+  }
+  /* Lower bounds by hand: sum: w0 + λmin(10 e_x e_xᵀ + 10 e_y e_yᵀ) = 1 + 0 (vertical d);
+   * min: w0 + 0. */
+  assert_close(lb[0], 1.0, 1e-8);
+  assert_close(lb[1], 1.0, 1e-8);
+  assert_true(frac[1] > 0.9); /* staircase */
+  assert_true(frac[0] < 0.5); /* diagonal */
+  sc.fractures = NULL;
+  sc.n_fractures = 0;
+  karst_scenario_destroy(&sc);
+  free(xyz);
+}
+
+/* Copy of g whose arcs flagged in @p flag cost r times as much (the graph karst_paths_astar_reuse
+ * searches implicitly). */
+static void discounted_copy(const karst_graph_t *g, const unsigned char *flag, double r,
+                            karst_graph_t *out, double **cost) {
+  *out = *g;
+  *cost = malloc((size_t)(g->n_arcs + 1) * sizeof **cost);
+  for (karst_int_t a = 0; a < g->n_arcs; a++)
+    (*cost)[a] = flag[a] ? r * g->cost[a] : g->cost[a];
+  out->cost = *cost;
+}
+
+/* Path sharing: A* with the reuse heuristic (key-point distance rows + distance to the network)
+ * equals Dijkstra on an explicitly discounted copy of the graph, on 20 random graphs whose
+ * network grows path by path; the incrementally lowered distance to the network equals a fresh
+ * multi-source Dijkstra from all network vertices; without rows or without the network distance
+ * the cost is the same. Reference: Dijkstra on the copy, an independent computation. */
+static void test_astar_reuse_equals_dijkstra(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  for (uint64_t seed = 1; seed <= 20; seed++) {
+    karst_rng_t rng;
+    karst_rng_init(&rng, seed, 11);
+    const karst_int_t n = 200, K = 6;
+    const double r = 0.1 + 0.8 * karst_rng_uniform(&rng);
+    double *xyz = malloc(3 * n * sizeof *xyz);
+    for (karst_int_t i = 0; i < 3 * n; i++)
+      xyz[i] = 100 * karst_rng_uniform(&rng);
+    karst_graph_t g;
+    fx_knn_graph(&g, n, xyz, 6, random_cost, &rng);
+    karst_int_t keys[6];
+    for (int i = 0; i < K; i++)
+      keys[i] = (karst_int_t)karst_rng_below(&rng, n);
+    double dist[36];
+    float *bound = malloc((size_t)(K - 1) * (size_t)n * sizeof *bound);
+    assert_int_equal(karst_paths_keypoint_bounds(&ctx, &g, K, keys, dist, bound), KARST_SUCCESS);
+    /* The rows are lower bounds of the exact distance to their key point. */
+    karst_search_t *s1, *s2;
+    assert_int_equal(karst_search_create(&ctx, &g, &s1), KARST_SUCCESS);
+    for (int i = 0; i < K - 1; i++) {
+      assert_int_equal(karst_paths_dijkstra(&ctx, s1, 1, &keys[i], NULL, NULL, 0, NULL),
+                       KARST_SUCCESS);
+      for (karst_int_t v = 0; v < n; v++)
+        assert_true((double)bound[(size_t)i * n + v] <= karst_search_dist(s1, v));
+    }
+    unsigned char *flag = calloc((size_t)g.n_arcs + 1, 1), *in_net = calloc((size_t)n, 1);
+    double *to_net = malloc((size_t)n * sizeof *to_net);
+    for (karst_int_t v = 0; v < n; v++)
+      to_net[v] = INFINITY;
+    karst_path_t p, q;
+    karst_path_init(&p);
+    karst_path_init(&q);
+    for (int step = 0; step < 12; step++) {
+      int ia = (int)karst_rng_below(&rng, K - 1);
+      karst_int_t t = keys[ia], src = (karst_int_t)karst_rng_below(&rng, n);
+      karst_graph_t gd;
+      double *cd;
+      discounted_copy(&g, flag, r, &gd, &cd);
+      assert_int_equal(karst_search_create(&ctx, &gd, &s2), KARST_SUCCESS);
+      assert_int_equal(karst_paths_dijkstra(&ctx, s2, 1, &src, NULL, NULL, 0, NULL), KARST_SUCCESS);
+      double dref = karst_search_dist(s2, t);
+      const karst_reuse_t full = {r, flag, to_net}, no_net = {r, flag, NULL};
+      karst_error_t e =
+          karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, bound + (size_t)ia * n, &full, &p);
+      if (!(dref < INFINITY)) {
+        assert_int_equal(e, KARST_EUNREACHABLE);
+      } else {
+        assert_int_equal(e, KARST_SUCCESS);
+        assert_rel(p.cost, dref, 1e-12);
+        assert_valid_path(&gd, &p, src, t);
+        assert_int_equal(karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, NULL, &full, &q),
+                         KARST_SUCCESS);
+        assert_rel(q.cost, dref, 1e-12);
+        assert_int_equal(
+            karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, bound + (size_t)ia * n, &no_net, &q),
+            KARST_SUCCESS);
+        assert_rel(q.cost, dref, 1e-12);
+        /* The path joins the network: flag its arcs, lower the distances. */
+        for (karst_int_t i = 1; i < p.n; i++)
+          for (karst_int_t a = 0; a < g.n_arcs; a++) {
+            karst_int_t u = p.v[i - 1], w = p.v[i];
+            if (a >= g.offsets[u] && a < g.offsets[u + 1] && g.adj[a] == w) flag[a] = 1;
+            if (a >= g.offsets[w] && a < g.offsets[w + 1] && g.adj[a] == u) flag[a] = 1;
+          }
+        for (karst_int_t i = 0; i < p.n; i++)
+          in_net[p.v[i]] = 1;
+        assert_int_equal(karst_paths_lower_distances(&ctx, s1, p.n, p.v, to_net), KARST_SUCCESS);
+        karst_int_t m = 0, *net = malloc((size_t)n * sizeof *net);
+        for (karst_int_t v = 0; v < n; v++)
+          if (in_net[v]) net[m++] = v;
+        assert_int_equal(karst_paths_dijkstra(&ctx, s2, m, net, NULL, NULL, 0, NULL),
+                         KARST_SUCCESS);
+        for (karst_int_t v = 0; v < n; v++) {
+          double ref = karst_search_dist(s2, v);
+          if (ref < INFINITY)
+            assert_rel(to_net[v], ref, 1e-12);
+          else
+            assert_true(isinf(to_net[v]));
+        }
+        free(net);
+      }
+      karst_search_free(s2);
+      free(cd);
+    }
+    /* A factor outside (0, 1] is refused. */
+    const karst_reuse_t bad = {0.0, flag, to_net};
+    assert_int_equal(karst_paths_astar_reuse(&ctx, s1, keys[0], keys[1], 1.0, NULL, &bad, &p),
+                     KARST_EINVAL);
+    karst_path_destroy(&p);
+    karst_path_destroy(&q);
+    karst_search_free(s1);
+    free(flag), free(in_net), free(to_net), free(bound);
+    fx_graph_free(&g);
+    free(xyz);
+  }
+}
+
 /* A low-resistance sphere (π = 0 inside, radius 15 m, centre 25 m off the straight line) attracts
  * the path: with w0 = 0.1, wπ = 1 and background resistance 1, a metre costs 1.1 outside and 0.1
  * inside, so the detour through the sphere (≈ 2 × 22 m outside + 30 m inside ≈ 51) beats the
@@ -399,6 +591,8 @@ int main(void) {
       cmocka_unit_test(test_empty),
       cmocka_unit_test(test_keypoint_distances),
       cmocka_unit_test(test_fracture_strike),
+      cmocka_unit_test(test_fracture_min_axes),
+      cmocka_unit_test(test_astar_reuse_equals_dijkstra),
       cmocka_unit_test(test_sphere_attracts),
       cmocka_unit_test(test_horizon_corridor),
   };

@@ -57,6 +57,8 @@ static void test_init_defaults(void **state) {
   assert_int_equal(sc.sampling.k, 40);
   assert_true(sc.sampling.max_samples == 5000000);
   assert_close(sc.gamma, 2, 0);
+  assert_close(sc.reuse, KARST_SCENARIO_DEFAULT_REUSE, 0);
+  assert_int_equal(sc.cost.fracture_combine, KARST_FRACTURE_SUM);
   assert_int_equal(sc.amplification.steps, 0);
   assert_int_equal(sc.amplification.points, 0);
   assert_close(sc.amplification.dead_end_fraction, 0, 0);
@@ -223,6 +225,8 @@ static void test_full_file(void **state) {
   assert_true(sc.sampling.max_samples == 2000000); /* written 2e6: a whole number */
   assert_close(sc.sampling.feature_band, 0.5, 0);
   assert_close(sc.gamma, 1.5, 0);
+  assert_close(sc.reuse, 0.25, 0);
+  assert_int_equal(sc.cost.fracture_combine, KARST_FRACTURE_MIN);
   assert_int_equal(sc.amplification.steps, 3);
   assert_int_equal(sc.amplification.points, 12);
   assert_close(sc.tortuosity, 0.4, 0);
@@ -334,6 +338,10 @@ BAD(resistance_range, KARST_ERANGE, 17, 64,
     "permeability.tree.union[1].sphere.resistance must be within [0, 1], got 1.5")
 BAD(theta_range, KARST_ERANGE, 13, 13, "tortuosity must be within [0, 1], got 1.2")
 BAD(gamma_zero, KARST_ERANGE, 14, 10, "skeleton.gamma must be > 0, got 0")
+BAD(reuse_zero, KARST_ERANGE, 15, 10, "skeleton.reuse must be within (0, 1], got 0")
+BAD(reuse_above_one, KARST_ERANGE, 14, 10, "skeleton.reuse must be within (0, 1], got 1.5")
+BAD(fracture_combine, KARST_EINVAL, 14, 21,
+    "cost.fracture_combine must be one of sum, min, got 'max'")
 BAD(k_zero, KARST_ERANGE, 14, 6, "sampling.k must be >= 1, got 0")
 BAD(weight_negative, KARST_ERANGE, 14, 42, "fractures[0].weight must be >= 0, got -1")
 BAD(fraction_range, KARST_ERANGE, 14, 22,
@@ -405,6 +413,7 @@ static void test_all_bad_fail(void **state) {
                                       "enum_typo",
                                       "feature_radius",
                                       "fraction_range",
+                                      "fracture_combine",
                                       "gamma_zero",
                                       "heightfield_malformed",
                                       "heightfield_missing",
@@ -512,6 +521,15 @@ static void test_check_in_code(void **state) {
   assert_int_equal(karst_scenario_check(&ctx, &sc), KARST_ERANGE);
   assert_string_equal(ctx.errmsg, "skeleton.gamma must be > 0, got 0");
   sc.gamma = 2;
+  sc.reuse = 0;
+  assert_int_equal(karst_scenario_check(&ctx, &sc), KARST_ERANGE);
+  assert_string_equal(ctx.errmsg, "skeleton.reuse must be within (0, 1], got 0");
+  sc.reuse = 1;
+  sc.cost.fracture_combine = 2;
+  assert_int_equal(karst_scenario_check(&ctx, &sc), KARST_ERANGE);
+  assert_string_equal(ctx.errmsg, "cost.fracture_combine must be one of 2 names (such as 'sum'), "
+                                  "got the index 2");
+  sc.cost.fracture_combine = KARST_FRACTURE_MIN;
   sc.prescribed = calloc(1, sizeof *sc.prescribed);
   sc.n_prescribed = 1;
   sc.prescribed[0].a = sc.prescribed[0].b = 1;
@@ -779,6 +797,9 @@ int main(void) {
       cmocka_unit_test(test_bad_resistance_range),
       cmocka_unit_test(test_bad_theta_range),
       cmocka_unit_test(test_bad_gamma_zero),
+      cmocka_unit_test(test_bad_reuse_zero),
+      cmocka_unit_test(test_bad_reuse_above_one),
+      cmocka_unit_test(test_bad_fracture_combine),
       cmocka_unit_test(test_bad_k_zero),
       cmocka_unit_test(test_bad_weight_negative),
       cmocka_unit_test(test_bad_fraction_range),

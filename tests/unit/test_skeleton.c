@@ -154,8 +154,9 @@ static void test_union_and_junctions(void **state) {
   karst_skeleton_t sk;
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
   karst_int_t kept;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, 2.0, 1.0, &sk, &kept),
-                   KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, NULL, 2.0, 1.0, 1.0, &sk, &kept),
+      KARST_SUCCESS);
   assert_int_equal(kept, 3);
   karst_skeleton_mark_junctions(&sk);
   assert_int_equal(sk.net.n_nodes, 6);
@@ -180,12 +181,77 @@ static void test_union_and_junctions(void **state) {
   assert_int_equal(karst_paths_keypoint_distances(&ctx, &g, 2, keys2, 1.0, 0, dist), KARST_SUCCESS);
   assert_true(isinf(dist[1]));
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 2, keys2, dist, NULL, 2.0, 1.0, &sk, &kept),
-                   KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, 2, keys2, dist, NULL, NULL, 2.0, 1.0, 1.0, &sk, &kept),
+      KARST_SUCCESS);
   assert_int_equal(kept, 0);
   assert_int_equal(sk.net.n_nodes, 2); /* the two key points alone */
   assert_int_equal(sk.net.n_edges, 0);
   karst_skeleton_destroy(&sk);
+  fx_graph_free(&g);
+}
+
+/* Path sharing by hand (Galin et al. 2011): a ladder with one rung. Bottom rail a = (0,0) ..
+ * c = (10,0) in unit edges, top rail b = (0,1) .. (9,1) in unit edges, then (9,1)–c of cost √2,
+ * rung a–b of cost 1. d(a,b) = 1, d(a,c) = 10, d(b,c) = 9 + √2 ≈ 10.414 (its own rail, not
+ * 1 + 10 = 11). γ = 0.8 keeps all three pairs, laid in that order. When (b,c) is laid, rung and
+ * bottom rail are network: following them costs reuse × 11, so the top rail is built iff
+ * reuse × 11 > 9 + √2, i.e. reuse > 0.94673: 11 edges at reuse 0.94, 21 at 0.95 and at 1. */
+static void test_path_sharing_ladder(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  double xyz[3 * 21];
+  for (int i = 0; i <= 10; i++)
+    xyz[3 * i] = i, xyz[3 * i + 1] = 0, xyz[3 * i + 2] = 0;
+  for (int j = 0; j <= 9; j++)
+    xyz[3 * (11 + j)] = j, xyz[3 * (11 + j) + 1] = 1, xyz[3 * (11 + j) + 2] = 0;
+  karst_int_t u[21], v[21];
+  double c[21];
+  int m = 0;
+  for (int i = 0; i < 10; i++, m++)
+    u[m] = i, v[m] = i + 1, c[m] = 1;
+  for (int j = 0; j < 9; j++, m++)
+    u[m] = 11 + j, v[m] = 12 + j, c[m] = 1;
+  u[m] = 20, v[m] = 10, c[m] = sqrt(2), m++;
+  u[m] = 0, v[m] = 11, c[m] = 1, m++;
+  karst_graph_t g;
+  fx_graph_from_edges(&g, 21, xyz, m, u, v, c);
+  karst_int_t keys[] = {0, 11, 10};
+  double dist[9];
+  float *bound = malloc(2 * 21 * sizeof *bound);
+  assert_int_equal(karst_paths_keypoint_bounds(&ctx, &g, 3, keys, dist, bound), KARST_SUCCESS);
+  assert_close(dist[0 * 3 + 1], 1, 0);
+  assert_close(dist[0 * 3 + 2], 10, 0);
+  assert_close(dist[1 * 3 + 2], 9 + sqrt(2), 1e-12);
+  const double reuse[] = {0.94, 0.95, 1.0};
+  const karst_int_t want[] = {11, 21, 21};
+  for (int t = 0; t < 3; t++)
+    for (int with_rows = 0; with_rows < 2; with_rows++) {
+      karst_skeleton_t sk;
+      karst_int_t kept = 0;
+      assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+      assert_int_equal(karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, with_rows ? bound : NULL,
+                                            0.8, reuse[t], 1.0, &sk, &kept),
+                       KARST_SUCCESS);
+      assert_int_equal(kept, 3);
+      assert_int_equal(sk.net.n_edges, want[t]);
+      assert_int_equal(sk.net.n_nodes, want[t] == 11 ? 12 : 21);
+      /* Branch ids follow d: the rung came first (0), the bottom rail second (1). */
+      const double *branch = karst_network_attr_find(&sk.net, KARST_ATTR_EDGE, "branch_id")->data;
+      assert_close(branch[0], 0, 0);
+      assert_close(branch[1], 1, 0);
+      karst_skeleton_destroy(&sk);
+    }
+  /* A reuse factor outside (0, 1] is refused. */
+  karst_skeleton_t sk;
+  assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, 3, keys, dist, NULL, NULL, 0.8, 0.0, 1.0, &sk, NULL),
+      KARST_EINVAL);
+  assert_string_equal(ctx.errmsg, "skeleton.reuse must be within (0, 1], got 0");
+  karst_skeleton_destroy(&sk);
+  free(bound);
   fx_graph_free(&g);
 }
 
@@ -212,8 +278,9 @@ static void test_skeleton_on_dense_graph(void **state) {
   karst_skeleton_t sk;
   assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
   karst_int_t kept;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist, NULL, 2.0, 1.0, &sk, &kept),
-                   KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, 8, keys, dist, NULL, NULL, 2.0, 1.0, 1.0, &sk, &kept),
+      KARST_SUCCESS);
   assert_true(kept >= 7); /* a connected proximity graph on 8 points has at least 7 edges */
   /* connectivity by union-find over the network edges */
   karst_int_t *parent = malloc((size_t)sk.net.n_nodes * sizeof *parent);
@@ -248,8 +315,9 @@ static void test_skeleton_on_dense_graph(void **state) {
   karst_skeleton_t sk2;
   assert_int_equal(karst_skeleton_init(&ctx, &sk2, &g), KARST_SUCCESS);
   karst_int_t kept2;
-  assert_int_equal(karst_skeleton_build(&ctx, &g, 8, keys, dist2, pred, 2.0, 1.0, &sk2, &kept2),
-                   KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, 8, keys, dist2, pred, NULL, 2.0, 1.0, 1.0, &sk2, &kept2),
+      KARST_SUCCESS);
   assert_int_equal(kept2, kept);
   assert_int_equal(sk2.net.n_nodes, sk.net.n_nodes);
   assert_int_equal(sk2.net.n_edges, sk.net.n_edges);
@@ -263,9 +331,8 @@ static void test_skeleton_on_dense_graph(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_gabriel_and_rng),
-      cmocka_unit_test(test_hand_cases),
-      cmocka_unit_test(test_union_and_junctions),
+      cmocka_unit_test(test_gabriel_and_rng),         cmocka_unit_test(test_hand_cases),
+      cmocka_unit_test(test_union_and_junctions),     cmocka_unit_test(test_path_sharing_ladder),
       cmocka_unit_test(test_skeleton_on_dense_graph),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
