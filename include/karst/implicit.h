@@ -1,0 +1,260 @@
+/**
+ * @file implicit.h
+ * @brief Implicit conduit geometry (Paris et al. 2021, §6 and Appendices A–C):
+ *        a construction tree of 1-Lipschitz signed-distance bounds whose leaves
+ *        are skeletal primitives (sweeps of piecewise-quadratic cross-sections,
+ *        ellipsoids, spheres, the terrain heightfield, boxes) and whose inner
+ *        nodes are Boolean, blending and noise operators.
+ *
+ * Sign convention (one, everywhere): a node's field is NEGATIVE INSIDE the
+ * solid it describes and positive outside. The terrain's solid is the
+ * bedrock (f < 0 below the ground), a conduit primitive's solid is the void
+ * of the conduit, and the final model "terrain minus conduits" is the rock:
+ * negative in rock, positive in air and in the caves — the paper's "positive
+ * outside of the bedrock and negative inside" (§6).
+ *
+ * Every field is 1-Lipschitz: |f(p) - f(q)| <= |p - q|. Hence |f(p)| is a
+ * lower bound of the distance from p to the surface, which the polygonizer
+ * and the bounding-volume hierarchy use to skip empty space.
+ *
+ * Every node also satisfies f(p) >= sdbox(p) where sdbox is the exact signed
+ * distance to the node's bounding box (each node's value is clamped from
+ * below by it, which leaves the zero set unchanged because the solid lies
+ * strictly inside the box). That is what makes box distances valid lower
+ * bounds in the hierarchy.
+ */
+#ifndef KARST_IMPLICIT_H
+#define KARST_IMPLICIT_H
+
+#include "karst/common.h"
+#include "karst/network.h"
+#include "karst/scenario.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------------------ */
+/* Cross-sections: closed curves of quadratic Bezier pieces (Appendix C).    */
+/* ------------------------------------------------------------------------ */
+
+/** Most quadratic pieces a cross-section may have. */
+#define KARST_SECTION_MAX_PIECES 16
+
+/**
+ * A closed piecewise-quadratic curve in the cross-section plane, coordinates
+ * (across, up) in units of the conduit radius. Piece k has the control points
+ * cp[2k] (on the curve), cp[2k+1] (off the curve) and cp[(2k+2) mod 2n].
+ * The curve must be simple (no self-intersection); its orientation does not
+ * matter (inside is decided by crossing count).
+ */
+typedef struct karst_section {
+  int n;                                      /**< number of pieces, 2..KARST_SECTION_MAX_PIECES */
+  double cp[2 * KARST_SECTION_MAX_PIECES][2]; /**< control points */
+} karst_section_t;
+
+/**
+ * The unit cross-section of a tunnel type (Paris et al. 2021, Fig. 11/12):
+ * every built-in section has 8 pieces so that two of them can be interpolated
+ * control point by control point. Chambers get the tube section (they are
+ * modelled as ellipsoids, not sweeps).
+ */
+karst_error_t karst_section_for_type(karst_ctx_t *ctx, int tunnel_type, karst_section_t *out);
+/** Check a section: 2..16 pieces, finite control points, non-zero area. */
+karst_error_t karst_section_check(karst_ctx_t *ctx, const karst_section_t *s);
+/** Signed in-plane distance to the section: negative inside (Appendix C). */
+double karst_section_distance(const karst_section_t *s, const double q[2]);
+/** Exact enclosed area (Green's theorem on the quadratic pieces), in squared radius units. */
+double karst_section_area(const karst_section_t *s);
+/** Interpolate two sections with the same piece count: (1-t) a + t b, control point-wise. */
+karst_error_t karst_section_lerp(karst_ctx_t *ctx, const karst_section_t *a,
+                                 const karst_section_t *b, double t, karst_section_t *out);
+
+/* ------------------------------------------------------------------------ */
+/* The construction tree.                                                    */
+/* ------------------------------------------------------------------------ */
+
+typedef enum {
+  KARST_SDF_SPHERE = 0,
+  KARST_SDF_ELLIPSOID,
+  KARST_SDF_SWEEP,
+  KARST_SDF_TERRAIN,
+  KARST_SDF_BOX,
+  KARST_SDF_UNION,
+  KARST_SDF_INTERSECTION,
+  KARST_SDF_DIFFERENCE,
+  KARST_SDF_BLEND,
+  KARST_SDF_NOISE,
+  KARST_SDF_REVOLVE,
+  KARST_SDF_KIND_COUNT
+} karst_sdf_kind_t;
+
+/** Label of nodes that are no conduit (terrain, boxes): written as tunnel_type -1. */
+#define KARST_SDF_NO_LABEL (-1)
+
+/** Opaque construction tree (nodes are referred to by index). */
+typedef struct karst_sdf karst_sdf_t;
+
+/** Allocate an empty tree. */
+karst_error_t karst_sdf_create(karst_ctx_t *ctx, karst_sdf_t **out);
+/** Release a tree (NULL allowed). */
+void karst_sdf_free(karst_sdf_t *sdf);
+
+/** Sphere of centre @p c and radius @p r > 0 (exact distance). */
+karst_error_t karst_sdf_sphere(karst_ctx_t *ctx, karst_sdf_t *sdf, const double c[3], double r,
+                               int label, karst_int_t *node);
+/**
+ * Ellipsoid of centre @p c, orthonormal axes @p axes (rows) and semi-axes
+ * @p radii (all > 0). Its field is the 1-Lipschitz bound
+ * (|D^-1 R (p - c)| - 1) min(radii).
+ */
+karst_error_t karst_sdf_ellipsoid(karst_ctx_t *ctx, karst_sdf_t *sdf, const double c[3],
+                                  const double axes[3][3], const double radii[3], int label,
+                                  karst_int_t *node);
+
+/** End of a sweep: flat cap perpendicular to the segment, or a mitre plane. */
+typedef struct karst_sweep_end {
+  int mitre; /**< 0: flat cap; 1: cut by the plane through the end point with normal @c n */
+  double
+      n[3]; /**< outward unit normal of the mitre plane (n . u must be > 0.1 at b, < -0.1 at a) */
+} karst_sweep_end_t;
+
+/**
+ * Sweep of @p section (scaled by @p radius) along the segment a–b
+ * (Appendix B). The section's "up" axis is @p up projected orthogonally to
+ * the segment (world z when NULL; world y for vertical segments). @p ends
+ * may be NULL (flat caps at both ends).
+ */
+karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *sdf, const double a[3],
+                              const double b[3], const karst_section_t *section, double radius,
+                              const double up[3], const karst_sweep_end_t ends[2], int label,
+                              karst_int_t *node);
+/**
+ * Revolution of a section about an axis, cut to a wedge: the bend joint
+ * between two sweeps. The section (scaled by @p radius) lies in the plane
+ * through @p o spanned by the unit vectors @p side and @p up (its x and y
+ * axes); the unit @p axis must lie in that plane. The section is revolved
+ * fully about the line (o, axis) and the solid is cut by the two planes through
+ * o with outward unit normals @p n[0], @p n[1]. With r, z the distance to and
+ * the position along the axis, and x the in-plane direction perpendicular to
+ * the axis, the field is
+ *     max(radius min(w(( r x + z axis)/radius), w((-r x + z axis)/radius)), n0.(p-o), n1.(p-o)),
+ * 1-Lipschitz because (r, z) is a 1-Lipschitz function of p.
+ */
+karst_error_t karst_sdf_revolve(karst_ctx_t *ctx, karst_sdf_t *sdf, const double o[3],
+                                const double axis[3], const double side[3], const double up[3],
+                                const karst_section_t *section, double radius, const double n[2][3],
+                                int label, karst_int_t *node);
+
+/**
+ * Terrain heightfield (Appendix A): f = (z - h(x, y)) / sqrt(1 + λ²), negative
+ * in the bedrock. The grid is copied. λ is the larger of t->lipschitz and the
+ * maximum slope of the bilinear surface computed here from the grid.
+ */
+karst_error_t karst_sdf_terrain(karst_ctx_t *ctx, karst_sdf_t *sdf, const karst_terrain_t *t,
+                                karst_int_t *node);
+/** Axis-aligned box [lo, hi] (exact distance). */
+karst_error_t karst_sdf_box(karst_ctx_t *ctx, karst_sdf_t *sdf, const double lo[3],
+                            const double hi[3], karst_int_t *node);
+
+/** Union (min) of @p n >= 1 nodes, with a bounding-volume hierarchy over the finite ones. */
+karst_error_t karst_sdf_union(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t n,
+                              const karst_int_t *children, karst_int_t *node);
+/** Intersection max(a, b). */
+karst_error_t karst_sdf_intersection(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t a,
+                                     karst_int_t b, karst_int_t *node);
+/** Difference a minus b: max(a, -b). */
+karst_error_t karst_sdf_difference(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t a, karst_int_t b,
+                                   karst_int_t *node);
+/**
+ * Smooth blend of a and b over a width @p k > 0 (polynomial smooth minimum,
+ * min(a,b) - k h²/4 with h = max(k - |a-b|, 0)/k; its gradient is a convex
+ * combination of the children's, so it stays 1-Lipschitz).
+ */
+karst_error_t karst_sdf_blend(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t a, karst_int_t b,
+                              double k, karst_int_t *node);
+/**
+ * Wall irregularities: f' = (f + A n(p)) / (1 + A Ln), where n is a sparse
+ * Gabor noise (Zanni et al. 2012) with |n| <= 1 and Lipschitz constant Ln
+ * (proved in noise.c), A = @p amplitude (metres, the largest displacement)
+ * and @p wavelength its main wavelength (m). The impulses are a pure function
+ * of the cell and a seed drawn from @p rng.
+ */
+karst_error_t karst_sdf_noise(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t child,
+                              double amplitude, double wavelength, karst_rng_t *rng,
+                              karst_int_t *node);
+
+/** Make @p node the root evaluated by karst_sdf_eval(). */
+karst_error_t karst_sdf_set_root(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t node);
+/** The current root (-1 when none). */
+karst_int_t karst_sdf_root(const karst_sdf_t *sdf);
+
+/**
+ * Field of the root at @p p; @p label (may be NULL) receives the label of the
+ * primitive that decided the value (the nearest primitive in a union).
+ * Thread-safe (the tree is read only). Time: O(log n) for a union of n
+ * well-separated primitives, O(n) worst case.
+ */
+double karst_sdf_eval(const karst_sdf_t *sdf, const double p[3], int *label);
+/** Field of any node; @p touched (may be NULL) is increased by the hierarchy nodes visited. */
+double karst_sdf_eval_node(const karst_sdf_t *sdf, karst_int_t node, const double p[3], int *label,
+                           karst_int_t *touched);
+/** Bounding box {lo, hi} of a node's solid (infinite for the terrain). */
+void karst_sdf_node_box(const karst_sdf_t *sdf, karst_int_t node, double box[6]);
+
+typedef struct karst_sdf_stats {
+  karst_int_t n_nodes; /**< nodes in the tree */
+  karst_int_t by_kind[KARST_SDF_KIND_COUNT];
+  karst_int_t n_bvh_nodes; /**< hierarchy nodes over all unions */
+  size_t memory_bytes;     /**< bytes held by the tree */
+} karst_sdf_stats_t;
+void karst_sdf_stats(const karst_sdf_t *sdf, karst_sdf_stats_t *st);
+
+/* ------------------------------------------------------------------------ */
+/* From a network to a tree (Paris et al. 2021, §6.2).                       */
+/* ------------------------------------------------------------------------ */
+
+typedef struct karst_implicit_params {
+  double default_radius;   /**< radius (m) of edges without a "radius" attribute, default 1 */
+  double mitre_max_angle;  /**< joints of two edges turning by at most this (degrees) get mitred
+                                sweeps; sharper ones a union of Poisson spheres. Default 60 */
+  int bend_spheres;        /**< sharp bends: 0 (default) revolve the two sections about the bend
+                                axis (two exact primitives); 1 a union of Poisson spheres selected
+                                by distance to interpolated sections (paper §6.2, Fig. 14) */
+  double sphere_radius;    /**< R of the Poisson spheres (m), default 0.2 (paper §6.2) */
+  double sphere_rel;       /**< ...but at least this fraction of the conduit radius, default 0.25,
+                                which bounds the count per bend to about a thousand */
+  double chamber_height;   /**< vertical semi-axis of chambers as a fraction of the radius, default
+                              0.6 */
+  double noise_amplitude;  /**< wall irregularity amplitude A (m), default 0 (off) */
+  double noise_wavelength; /**< wavelength of the irregularities (m), default 2 */
+  uint64_t seed;           /**< seed of the Poisson spheres and the noise, default 1 */
+} karst_implicit_params_t;
+
+/** Fill @p par with the documented defaults. */
+void karst_implicit_params_init(karst_implicit_params_t *par);
+
+typedef struct karst_implicit_stats {
+  karst_int_t n_sweeps, n_mitred_ends, n_ellipsoids, n_joint_balls, n_bends, n_spheres, n_revolves;
+  karst_int_t n_skipped_edges; /**< zero-length edges */
+} karst_implicit_stats_t;
+
+/**
+ * Build the construction tree of a network's conduits into @p sdf and set its
+ * root: one sweep per edge (section of its "tunnel_type", scaled by its
+ * "radius"), mitred at gentle joints of two edges, a ball at junctions, at
+ * sharp bends either the two sections revolved about the bend axis (default)
+ * or a union of Poisson spheres selected by distance to interpolated
+ * cross-sections (par->bend_spheres), ellipsoids for chambers, optional
+ * noise; with @p terrain non-NULL the root is terrain minus conduits.
+ * @p stats may be NULL. Time: O(E log E) plus O(bends × spheres).
+ */
+karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
+                                   const karst_implicit_params_t *par,
+                                   const karst_terrain_t *terrain, karst_sdf_t *sdf,
+                                   karst_implicit_stats_t *stats);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* KARST_IMPLICIT_H */

@@ -1,0 +1,619 @@
+/* From a classified network to the construction tree of its conduits
+ * (Paris et al. 2021, §6.2): sweeps along straight edges, mitred at gentle
+ * joints; at sharp bends the sections revolved about the bend axis, or
+ * unions of Poisson spheres selected by their distance to interpolated
+ * cross-sections (the paper's method, par->bend_spheres); balls at junctions;
+ * ellipsoids for breakout chambers; optional wall noise; terrain minus
+ * conduits. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "implicit/implicit_internal.h"
+
+/* Poisson disk sampling tries this many candidates around each active sample
+ * before retiring it (Bridson 2007, k = 30). */
+#define POISSON_TRIES 30
+/* Largest background grid (cells) of one bend's Poisson sampling. */
+#define POISSON_MAX_CELLS (1 << 24)
+
+/**
+ * Documented defaults of the geometry stage (see implicit.h). O(1).
+ */
+void karst_implicit_params_init(karst_implicit_params_t *par) {
+  memset(par, 0, sizeof *par);
+  par->default_radius = 1.0;
+  par->mitre_max_angle = 60.0;
+  par->sphere_radius = 0.2;
+  par->sphere_rel = 0.25;
+  par->chamber_height = 0.6;
+  par->noise_amplitude = 0.0;
+  par->noise_wavelength = 2.0;
+  par->seed = 1;
+}
+
+static double dot3(const double *a, const double *b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static void cross3(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+static int normalize3(double *v) {
+  double n = sqrt(dot3(v, v));
+  if (!(n > 0) || !isfinite(n)) return -1;
+  v[0] /= n, v[1] /= n, v[2] /= n;
+  return 0;
+}
+/* Rotate v by angle th about the unit axis k (Rodrigues). */
+static void rotate(const double *v, const double *k, double th, double *out) {
+  double c = cos(th), s = sin(th), kv[3];
+  cross3(k, v, kv);
+  double kd = dot3(k, v) * (1 - c);
+  for (int i = 0; i < 3; i++)
+    out[i] = v[i] * c + kv[i] * s + k[i] * kd;
+}
+
+static karst_error_t check_params(karst_ctx_t *ctx, const karst_implicit_params_t *p) {
+#define POSITIVE(field)                                                                            \
+  if (!(p->field > 0) || !isfinite(p->field))                                                      \
+    return karst_set_error(ctx, KARST_EINVAL, "geometry parameters: " #field " = %g, must be > 0", \
+                           p->field);
+  POSITIVE(default_radius)
+  POSITIVE(sphere_radius)
+  POSITIVE(sphere_rel)
+  POSITIVE(chamber_height)
+  POSITIVE(noise_wavelength)
+#undef POSITIVE
+  if (!(p->mitre_max_angle >= 0 && p->mitre_max_angle <= 150))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "geometry parameters: mitre_max_angle = %g degrees, must be in [0, 150]",
+                           p->mitre_max_angle);
+  if (!(p->noise_amplitude >= 0) || !isfinite(p->noise_amplitude))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "geometry parameters: noise_amplitude = %g, must be >= 0",
+                           p->noise_amplitude);
+  return KARST_SUCCESS;
+}
+
+/* Growable list of node ids. */
+typedef struct {
+  karst_int_t *v;
+  karst_int_t n, cap;
+} idlist_t;
+
+static int push(idlist_t *l, karst_int_t x) {
+  if (l->n == l->cap) {
+    karst_int_t c = l->cap ? 2 * l->cap : 256;
+    karst_int_t *q = realloc(l->v, (size_t)c * sizeof *q);
+    if (!q) return -1;
+    l->v = q;
+    l->cap = c;
+  }
+  l->v[l->n++] = x;
+  return 0;
+}
+
+/* Per edge: its geometry and classification. */
+typedef struct {
+  int ok;   /* non-degenerate */
+  int type; /* tunnel type */
+  double r; /* radius */
+  double u[3], len;
+  double side[3], up[3];
+  karst_sweep_end_t end[2];
+} edge_geom_t;
+
+/* One interpolated cross-section of a bend: its plane (origin o, normal t,
+ * in-plane axes ex, ey) and its curve in metres. */
+typedef struct {
+  double t[3], ex[3], ey[3];
+  karst_section_t s;
+} bend_section_t;
+
+/* Signed distance from v (relative to the bend node) to the filled section j.
+ * Within the wedge swept by the sections (@p in_wedge) a point that projects
+ * inside the section gets the in-plane distance (its offset from the plane is
+ * at most half the spacing of the sections, R/8, and is ignored); otherwise
+ * the 3-D distance to the planar region. */
+static double section_region_distance(const bend_section_t *bs, const double v[3], int in_wedge) {
+  double h = dot3(v, bs->t);
+  double q[2] = {dot3(v, bs->ex), dot3(v, bs->ey)};
+  double w = karst_section_distance(&bs->s, q);
+  if (w < 0) return in_wedge ? w : fabs(h);
+  return sqrt(h * h + w * w);
+}
+
+/* Unit section of an edge, placed as a 3-D curve around the node: offsets
+ * r (x side + y up) of its control points, with side flipped when @p flip. */
+static void section_offsets(const karst_section_t *unit, const edge_geom_t *e, int flip,
+                            double off[][3]) {
+  for (int k = 0; k < 2 * unit->n; k++)
+    for (int c = 0; c < 3; c++)
+      off[k][c] =
+          e->r * ((flip ? -1 : 1) * unit->cp[k][0] * e->side[c] + unit->cp[k][1] * e->up[c]);
+}
+
+/*
+ * Union of Poisson spheres around the sharp bend at node @p v between edges
+ * e1 (arriving, direction t1) and e2 (leaving, direction t2) (§6.2, Fig. 14):
+ * n+1 cross-sections interpolated between the two edges' sections, rotating
+ * about the bend axis b = t1 x t2 through the node; Poisson disk samples
+ * (Bridson 2007, minimum distance R/2) in their bounding box grown by R;
+ * a sphere of radius R for every sample whose sphere comes closer than R/2
+ * to the interpolated sections, read as: the sphere leaves the section by
+ * less than R/2 (centre at least R/2 inside it). The paper's "minimum distance
+ * lower than R/2" taken for the centre would let the union bulge 1.5 R out of
+ * the conduit; this reading bounds the bulge by R/2. Appends the spheres to
+ * @p prims.
+ */
+static karst_error_t bend_spheres(karst_ctx_t *ctx, karst_sdf_t *sdf, const double node[3],
+                                  const edge_geom_t *e1, const double t1[3], const edge_geom_t *e2,
+                                  const double t2[3], const karst_section_t *sec1,
+                                  const karst_section_t *sec2, const karst_implicit_params_t *par,
+                                  karst_rng_t *rng, idlist_t *prims, karst_int_t *count) {
+  karst_error_t err = KARST_SUCCESS;
+  bend_section_t *bs = NULL;
+  int *grid = NULL;
+  double *pts = NULL;
+  karst_int_t *active = NULL;
+  double b[3];
+  cross3(t1, t2, b);
+  if (normalize3(b)) return KARST_SUCCESS; /* straight or reversed: nothing to fill */
+  double phi = acos(fmax(-1.0, fmin(1.0, dot3(t1, t2))));
+  double rmax = fmax(e1->r, e2->r);
+  double R = fmax(par->sphere_radius, par->sphere_rel * fmin(e1->r, e2->r));
+  double dp = 0.5 * R;
+  /* Extent of the sections (control hull radius, metres). */
+  double rho = 0;
+  for (int k = 0; k < 2 * sec1->n; k++)
+    rho = fmax(rho, e1->r * hypot(sec1->cp[k][0], sec1->cp[k][1]));
+  for (int k = 0; k < 2 * sec2->n; k++)
+    rho = fmax(rho, e2->r * hypot(sec2->cp[k][0], sec2->cp[k][1]));
+  (void)rmax;
+  /* Sections every R/4 of arc at the outer rim. */
+  int n = (int)ceil(phi * rho / (0.25 * R));
+  if (n < 2) n = 2;
+  bs = calloc((size_t)n + 1, sizeof *bs);
+  double(*o1)[3] = malloc(sizeof(double[2 * KARST_SECTION_MAX_PIECES][3]));
+  double(*o2)[3] = malloc(sizeof(double[2 * KARST_SECTION_MAX_PIECES][3]));
+  if (!bs || !o1 || !o2) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "bend: out of memory");
+    goto cleanup;
+  }
+  /* Align the second section's side axis with the first one rotated through
+   * the bend, so that control points correspond (no mirror collapse). */
+  double s1r[3];
+  rotate(e1->side, b, phi, s1r);
+  int flip2 = dot3(s1r, e2->side) < 0;
+  int same = e1->type == e2->type;
+  section_offsets(sec1, e1, 0, o1);
+  section_offsets(sec2, e2, flip2, o2);
+  double bbox[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+  for (int j = 0; j <= n; j++) {
+    double th = phi * j / n, s = (double)j / n;
+    bend_section_t *S = &bs[j];
+    rotate(t1, b, th, S->t);
+    rotate(e1->side, b, th, S->ex);
+    rotate(e1->up, b, th, S->ey);
+    S->s.n = sec1->n;
+    for (int k = 0; k < 2 * sec1->n; k++) {
+      double p1[3], p2[3], o[3];
+      rotate(o1[k], b, th, p1);
+      rotate(o2[k], b, th - phi, p2);
+      for (int c = 0; c < 3; c++) {
+        /* same section: interpolate the control points (and so the radius);
+         * different sections have no common parametrization (an
+         * interpolation could fold), so each keeps its own half of the bend */
+        o[c] = same ? (1 - s) * p1[c] + s * p2[c] : (2 * j <= n ? p1[c] : p2[c]);
+        bbox[c] = fmin(bbox[c], o[c]);
+        bbox[c + 3] = fmax(bbox[c + 3], o[c]);
+      }
+      S->s.cp[k][0] = dot3(o, S->ex);
+      S->s.cp[k][1] = dot3(o, S->ey);
+    }
+  }
+  for (int c = 0; c < 3; c++)
+    bbox[c] -= R, bbox[c + 3] += R;
+  /* Bridson's Poisson disk sampling in the box (coordinates relative to the node). */
+  double cs = dp / sqrt(3.0);
+  karst_int_t gn[3];
+  double gcells = 1;
+  for (int c = 0; c < 3; c++) {
+    gn[c] = (karst_int_t)ceil((bbox[c + 3] - bbox[c]) / cs);
+    if (gn[c] < 1) gn[c] = 1;
+    gcells *= (double)gn[c];
+  }
+  if (gcells > POISSON_MAX_CELLS) {
+    err = karst_set_error(
+        ctx, KARST_EINVAL,
+        "bend at (%g, %g, %g): Poisson grid of %.0f cells (sphere radius %g m "
+        "for conduits of radius %g m) exceeds %d; raise sphere_radius or sphere_rel",
+        node[0], node[1], node[2], gcells, R, rmax, POISSON_MAX_CELLS);
+    goto cleanup;
+  }
+  karst_int_t ncell = (karst_int_t)gcells;
+  grid = malloc((size_t)ncell * sizeof *grid);
+  pts = malloc((size_t)ncell * 3 * sizeof *pts);
+  active = malloc((size_t)ncell * sizeof *active);
+  if (!grid || !pts || !active) {
+    err =
+        karst_set_error(ctx, KARST_ENOMEM, "bend: out of memory for %lld cells", (long long)ncell);
+    goto cleanup;
+  }
+  for (karst_int_t i = 0; i < ncell; i++)
+    grid[i] = -1;
+  karst_int_t npts = 0, nact = 0;
+#define CELL_OF(p, ci)                                                                             \
+  for (int c_ = 0; c_ < 3; c_++) {                                                                 \
+    ci[c_] = (karst_int_t)floor(((p)[c_] - bbox[c_]) / cs);                                        \
+    if (ci[c_] < 0) ci[c_] = 0;                                                                    \
+    if (ci[c_] >= gn[c_]) ci[c_] = gn[c_] - 1;                                                     \
+  }
+  /* Only points of the wedge swept by the sections, within rho of the node,
+   * can be selected (below): the sampling is confined to that region. */
+  double w1[3];
+  cross3(b, t1, w1);
+#define USABLE(v)                                                                                  \
+  (dot3(v, v) <= rho * rho &&                                                                      \
+   (atan2(-dot3(v, t1), dot3(v, w1)) + (atan2(-dot3(v, t1), dot3(v, w1)) < 0 ? M_PI : 0)) <= phi)
+  {
+    /* seed: half way out along the outer bisector, which is in the wedge */
+    double p0[3];
+    for (int c = 0; c < 3; c++)
+      p0[c] = 0.5 * rho * (t1[c] - t2[c]) / sqrt(2 - 2 * cos(phi));
+    karst_int_t ci[3];
+    CELL_OF(p0, ci)
+    memcpy(pts, p0, sizeof p0);
+    grid[(ci[2] * gn[1] + ci[1]) * gn[0] + ci[0]] = 0;
+    active[nact++] = 0;
+    npts = 1;
+  }
+  while (nact > 0) {
+    karst_int_t ai = (karst_int_t)karst_rng_below(rng, (uint64_t)nact);
+    const double *base = pts + 3 * active[ai];
+    int placed = 0;
+    for (int tr = 0; tr < POISSON_TRIES && !placed; tr++) {
+      double d[3], cand[3];
+      karst_rng_unit_vector(rng, d);
+      double rr =
+          dp * cbrt(1.0 + 7.0 * karst_rng_uniform(rng)); /* uniform in the shell [dp, 2dp] */
+      int inside = 1;
+      for (int c = 0; c < 3; c++) {
+        cand[c] = base[c] + rr * d[c];
+        if (cand[c] < bbox[c] || cand[c] > bbox[c + 3]) inside = 0;
+      }
+      if (!inside || !USABLE(cand)) continue;
+      karst_int_t ci[3];
+      CELL_OF(cand, ci)
+      int ok = 1;
+      for (karst_int_t z = ci[2] - 2; z <= ci[2] + 2 && ok; z++)
+        for (karst_int_t y = ci[1] - 2; y <= ci[1] + 2 && ok; y++)
+          for (karst_int_t x = ci[0] - 2; x <= ci[0] + 2 && ok; x++) {
+            if (x < 0 || y < 0 || z < 0 || x >= gn[0] || y >= gn[1] || z >= gn[2]) continue;
+            karst_int_t g = grid[(z * gn[1] + y) * gn[0] + x];
+            if (g < 0) continue;
+            const double *q = pts + 3 * g;
+            double dd = (q[0] - cand[0]) * (q[0] - cand[0]) + (q[1] - cand[1]) * (q[1] - cand[1]) +
+                        (q[2] - cand[2]) * (q[2] - cand[2]);
+            if (dd < dp * dp) ok = 0;
+          }
+      if (!ok) continue;
+      memcpy(pts + 3 * npts, cand, sizeof cand);
+      grid[(ci[2] * gn[1] + ci[1]) * gn[0] + ci[0]] = (int)npts;
+      active[nact++] = npts++;
+      placed = 1;
+    }
+    if (!placed) active[ai] = active[--nact];
+  }
+#undef CELL_OF
+  /* Selection by distance to the interpolated sections. A point's nearest
+   * section planes are those whose angle about b is closest to its own. */
+#undef USABLE
+  for (karst_int_t i = 0; i < npts; i++) {
+    const double *v = pts + 3 * i;
+    double th = atan2(-dot3(v, t1), dot3(v, w1)); /* plane through v and the axis */
+    if (th < 0) th += M_PI;
+    int cand[5] = {0, n, -1, -1, -1};
+    int in_wedge = th <= phi;
+    if (in_wedge) {
+      int j = (int)floor(th / phi * n + 0.5);
+      cand[2] = j - 1, cand[3] = j, cand[4] = j + 1;
+    }
+    double best = INFINITY;
+    int bj = 0;
+    for (int c = 0; c < 5; c++) {
+      int j = cand[c];
+      if (j < 0 || j > n) continue;
+      /* ignoring the offset from the plane is only right for the sections
+       * next to the point's own angle */
+      double d = section_region_distance(&bs[j], v, in_wedge && c >= 2);
+      if (d < best) best = d, bj = j;
+    }
+    if (!(best + R < 0.5 * R)) continue;
+    double cen[3] = {node[0] + v[0], node[1] + v[1], node[2] + v[2]};
+    karst_int_t id;
+    int label = 2 * bj <= n ? e1->type : e2->type;
+    if ((err = karst_sdf_sphere(ctx, sdf, cen, R, label, &id))) goto cleanup;
+    if (push(prims, id)) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "bend: out of memory");
+      goto cleanup;
+    }
+    (*count)++;
+  }
+cleanup:
+  free(bs);
+  free(o1);
+  free(o2);
+  free(grid);
+  free(pts);
+  free(active);
+  return err;
+}
+
+/**
+ * Construction tree of a network's conduits (Paris et al. 2021, §6.2); see
+ * implicit.h. Edges need no attribute: "tunnel_type" defaults to tube and
+ * "radius" to par->default_radius.
+ * @param net      the network (edges with optional "tunnel_type", "radius")
+ * @param par      parameters (NULL: defaults)
+ * @param terrain  when non-NULL the root is terrain minus conduits
+ * @param sdf      an empty tree from karst_sdf_create; its root is set
+ * @param stats    counts of what was built (may be NULL)
+ * @return KARST_SUCCESS; KARST_EINVAL for bad parameters, radii, tunnel types
+ *         or a network without usable edge (and no terrain); KARST_ENOMEM.
+ * Time complexity: O(E log E + bends × Poisson samples).
+ */
+karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
+                                   const karst_implicit_params_t *par,
+                                   const karst_terrain_t *terrain, karst_sdf_t *sdf,
+                                   karst_implicit_stats_t *stats) {
+  karst_error_t err = KARST_SUCCESS;
+  karst_implicit_params_t defaults;
+  edge_geom_t *eg = NULL;
+  karst_int_t *deg = NULL, *start = NULL, *inc = NULL;
+  idlist_t prims = {0};
+  karst_implicit_stats_t st;
+  memset(&st, 0, sizeof st);
+  if (!par) {
+    karst_implicit_params_init(&defaults);
+    par = &defaults;
+  }
+  if (!net || !sdf) return karst_set_error(ctx, KARST_EINVAL, "geometry: no network or tree given");
+  if ((err = check_params(ctx, par))) return err;
+  if (sdf->n_nodes != 0)
+    return karst_set_error(ctx, KARST_EINVAL, "geometry: the tree must be empty (has %lld nodes)",
+                           (long long)sdf->n_nodes);
+  karst_section_t unit[KARST_TUNNEL_TYPE_COUNT];
+  double inscribed[KARST_TUNNEL_TYPE_COUNT];
+  for (int k = 0; k < KARST_TUNNEL_TYPE_COUNT; k++) {
+    if ((err = karst_section_for_type(ctx, k, &unit[k]))) return err;
+    double o[2] = {0, 0};
+    inscribed[k] = fmax(0.0, -karst_section_distance(&unit[k], o));
+  }
+  const karst_attr_t *rad = karst_network_attr_find(net, KARST_ATTR_EDGE, "radius");
+  const karst_attr_t *typ = karst_network_attr_find(net, KARST_ATTR_EDGE, "tunnel_type");
+  karst_int_t E = net->n_edges, V = net->n_nodes;
+  karst_rng_t rng;
+  karst_rng_derive(&rng, par->seed, 0x696d706c69636974ULL /* "implicit" */, 0);
+
+  eg = calloc((size_t)(E > 0 ? E : 1), sizeof *eg);
+  deg = calloc((size_t)(V > 0 ? V : 1) + 1, sizeof *deg);
+  start = calloc((size_t)(V > 0 ? V : 1) + 1, sizeof *start);
+  inc = malloc((size_t)(2 * E > 0 ? 2 * E : 1) * sizeof *inc);
+  if (!eg || !deg || !start || !inc) {
+    err =
+        karst_set_error(ctx, KARST_ENOMEM, "geometry: out of memory for %lld edges", (long long)E);
+    goto cleanup;
+  }
+  /* Edge geometry and classification. */
+  for (karst_int_t e = 0; e < E; e++) {
+    karst_int_t a = net->edges[2 * e], b = net->edges[2 * e + 1];
+    if (a < 0 || b < 0 || a >= V || b >= V) {
+      err = karst_set_error(ctx, KARST_EINVAL,
+                            "geometry: edge %lld joins nodes %lld and %lld, "
+                            "network has %lld nodes",
+                            (long long)e, (long long)a, (long long)b, (long long)V);
+      goto cleanup;
+    }
+    edge_geom_t *g = &eg[e];
+    g->r = rad ? rad->data[e * rad->ncomp] : par->default_radius;
+    if (!(g->r > 0) || !isfinite(g->r)) {
+      err = karst_set_error(ctx, KARST_EINVAL, "geometry: edge %lld has radius %g, must be > 0",
+                            (long long)e, g->r);
+      goto cleanup;
+    }
+    double tv = typ ? typ->data[e * typ->ncomp] : KARST_TUNNEL_TUBE;
+    if (!(tv >= 0 && tv < KARST_TUNNEL_TYPE_COUNT) || tv != floor(tv)) {
+      err = karst_set_error(ctx, KARST_EINVAL,
+                            "geometry: edge %lld has tunnel_type %g, expected an integer in 0..%d",
+                            (long long)e, tv, KARST_TUNNEL_TYPE_COUNT - 1);
+      goto cleanup;
+    }
+    g->type = (int)tv;
+    const double *pa = net->xyz + 3 * a, *pb = net->xyz + 3 * b;
+    if (!isfinite(pa[0] + pa[1] + pa[2] + pb[0] + pb[1] + pb[2])) {
+      err = karst_set_error(ctx, KARST_EINVAL, "geometry: edge %lld has a non-finite end point",
+                            (long long)e);
+      goto cleanup;
+    }
+    for (int c = 0; c < 3; c++)
+      g->u[c] = pb[c] - pa[c];
+    g->len = sqrt(dot3(g->u, g->u));
+    if (a == b || normalize3(g->u) || karst_i_sweep_frame(g->u, NULL, g->side, g->up)) {
+      st.n_skipped_edges++;
+      continue;
+    }
+    g->ok = 1;
+    deg[a]++, deg[b]++;
+  }
+  for (karst_int_t v = 0; v < V; v++)
+    start[v + 1] = start[v] + deg[v];
+  memset(deg, 0, (size_t)(V > 0 ? V : 1) * sizeof *deg);
+  for (karst_int_t e = 0; e < E; e++) {
+    if (!eg[e].ok) continue;
+    for (int k = 0; k < 2; k++) {
+      karst_int_t v = net->edges[2 * e + k];
+      inc[start[v] + deg[v]++] = 2 * e + k; /* edge e at its end k */
+    }
+  }
+  /* Joints. */
+  for (karst_int_t v = 0; v < V; v++) {
+    const double *pv = net->xyz + 3 * v;
+    if (deg[v] >= 3) {
+      double rb = 0;
+      int lab = KARST_TUNNEL_TUBE;
+      for (karst_int_t i = 0; i < deg[v]; i++) {
+        const edge_geom_t *g = &eg[inc[start[v] + i] / 2];
+        if (g->type == KARST_TUNNEL_CHAMBER) continue; /* its ellipsoid covers the node */
+        double r = g->r * inscribed[g->type];
+        if (r > rb) rb = r, lab = g->type;
+      }
+      if (rb > 0) {
+        karst_int_t id;
+        if ((err = karst_sdf_sphere(ctx, sdf, pv, rb, lab, &id))) goto cleanup;
+        if (push(&prims, id)) goto nomem;
+        st.n_joint_balls++;
+      }
+      continue;
+    }
+    if (deg[v] != 2) continue;
+    karst_int_t i1 = inc[start[v]], i2 = inc[start[v] + 1];
+    edge_geom_t *g1 = &eg[i1 / 2], *g2 = &eg[i2 / 2];
+    if (g1->type == KARST_TUNNEL_CHAMBER || g2->type == KARST_TUNNEL_CHAMBER) continue;
+    /* d: unit direction towards the node along each edge. */
+    double d1[3], d2[3];
+    for (int c = 0; c < 3; c++) {
+      d1[c] = (i1 % 2 ? 1 : -1) * g1->u[c];
+      d2[c] = (i2 % 2 ? 1 : -1) * g2->u[c];
+    }
+    double t2[3] = {-d2[0], -d2[1], -d2[2]};
+    double cosphi = fmax(-1.0, fmin(1.0, dot3(d1, t2)));
+    double phi = acos(cosphi) * 180.0 / M_PI;
+    if (cosphi >= 1.0) continue; /* straight: flat caps meet exactly */
+    if (phi <= par->mitre_max_angle) {
+      double m[3] = {d1[0] - d2[0], d1[1] - d2[1], d1[2] - d2[2]};
+      if (normalize3(m)) continue;
+      g1->end[i1 % 2].mitre = 1;
+      memcpy(g1->end[i1 % 2].n, m, sizeof m);
+      g2->end[i2 % 2].mitre = 1;
+      for (int c = 0; c < 3; c++)
+        g2->end[i2 % 2].n[c] = -m[c];
+      st.n_mitred_ends += 2;
+    } else if (!par->bend_spheres) {
+      /* revolve each section about the bend axis over its half of the gap
+       * wedge {l1 >= 0, l2 <= 0} between the flat caps, split at the bisector */
+      double b[3], m[3] = {d1[0] + t2[0], d1[1] + t2[1], d1[2] + t2[2]};
+      cross3(d1, t2, b);
+      if (normalize3(b) || normalize3(m)) {
+        /* a U-turn: no bend plane; a ball of the smaller inscribed radius */
+        double rb = fmin(g1->r * inscribed[g1->type], g2->r * inscribed[g2->type]);
+        karst_int_t id;
+        if ((err = karst_sdf_sphere(ctx, sdf, pv, rb, g1->type, &id))) goto cleanup;
+        if (push(&prims, id)) goto nomem;
+        st.n_joint_balls++;
+        continue;
+      }
+      double n1[2][3] = {{-d1[0], -d1[1], -d1[2]}, {m[0], m[1], m[2]}};
+      double n2[2][3] = {{-m[0], -m[1], -m[2]}, {t2[0], t2[1], t2[2]}};
+      karst_int_t id1, id2;
+      if ((err = karst_sdf_revolve(ctx, sdf, pv, b, g1->side, g1->up, &unit[g1->type], g1->r,
+                                   (const double(*)[3])n1, g1->type, &id1)) ||
+          (err = karst_sdf_revolve(ctx, sdf, pv, b, g2->side, g2->up, &unit[g2->type], g2->r,
+                                   (const double(*)[3])n2, g2->type, &id2)))
+        goto cleanup;
+      if (push(&prims, id1) || push(&prims, id2)) goto nomem;
+      st.n_revolves += 2;
+      st.n_bends++;
+    } else {
+      karst_int_t before = st.n_spheres;
+      if ((err = bend_spheres(ctx, sdf, pv, g1, d1, g2, t2, &unit[g1->type], &unit[g2->type], par,
+                              &rng, &prims, &st.n_spheres)))
+        goto cleanup;
+      if (st.n_spheres > before) st.n_bends++;
+      /* a ball of the inscribed radius guarantees the joint is closed */
+      double rb = fmin(g1->r * inscribed[g1->type], g2->r * inscribed[g2->type]);
+      if (rb > 0) {
+        karst_int_t id;
+        if ((err = karst_sdf_sphere(ctx, sdf, pv, rb, g1->type, &id))) goto cleanup;
+        if (push(&prims, id)) goto nomem;
+        st.n_joint_balls++;
+      }
+    }
+  }
+  /* Edges. */
+  for (karst_int_t e = 0; e < E; e++) {
+    const edge_geom_t *g = &eg[e];
+    if (!g->ok) continue;
+    const double *pa = net->xyz + 3 * net->edges[2 * e], *pb = net->xyz + 3 * net->edges[2 * e + 1];
+    karst_int_t id;
+    if (g->type == KARST_TUNNEL_CHAMBER) {
+      double c[3], axes[3][3], radii[3] = {0.5 * g->len + g->r, g->r, par->chamber_height * g->r};
+      for (int k = 0; k < 3; k++) {
+        c[k] = 0.5 * (pa[k] + pb[k]);
+        axes[0][k] = g->u[k];
+        axes[1][k] = g->side[k];
+        axes[2][k] = g->up[k];
+      }
+      if ((err = karst_sdf_ellipsoid(ctx, sdf, c, (const double(*)[3])axes, radii, g->type, &id)))
+        goto cleanup;
+      st.n_ellipsoids++;
+    } else {
+      if ((err =
+               karst_sdf_sweep(ctx, sdf, pa, pb, &unit[g->type], g->r, NULL, g->end, g->type, &id)))
+        goto cleanup;
+      st.n_sweeps++;
+    }
+    if (push(&prims, id)) goto nomem;
+  }
+  karst_int_t root = -1;
+  if (prims.n > 0) {
+    if ((err = karst_sdf_union(ctx, sdf, prims.n, prims.v, &root))) goto cleanup;
+    if (par->noise_amplitude > 0) {
+      karst_int_t nz;
+      if ((err = karst_sdf_noise(ctx, sdf, root, par->noise_amplitude, par->noise_wavelength, &rng,
+                                 &nz)))
+        goto cleanup;
+      root = nz;
+    }
+  }
+  if (terrain) {
+    karst_int_t tn;
+    if ((err = karst_sdf_terrain(ctx, sdf, terrain, &tn))) goto cleanup;
+    if (root >= 0) {
+      karst_int_t dn;
+      if ((err = karst_sdf_difference(ctx, sdf, tn, root, &dn))) goto cleanup;
+      root = dn;
+    } else {
+      root = tn;
+    }
+  }
+  if (root < 0) {
+    err = karst_set_error(ctx, KARST_EINVAL,
+                          "geometry: the network has no edge of non-zero length (%lld edges, "
+                          "%lld skipped) and no terrain was given: nothing to build",
+                          (long long)E, (long long)st.n_skipped_edges);
+    goto cleanup;
+  }
+  err = karst_sdf_set_root(ctx, sdf, root);
+  karst_log(ctx, KARST_LOG_INFO,
+            "geometry: %lld sweeps (%lld mitred ends), %lld ellipsoids, %lld junction balls, "
+            "%lld sharp bends (%lld revolved sections, %lld spheres), %lld zero-length edges "
+            "skipped",
+            (long long)st.n_sweeps, (long long)st.n_mitred_ends, (long long)st.n_ellipsoids,
+            (long long)st.n_joint_balls, (long long)st.n_bends, (long long)st.n_revolves,
+            (long long)st.n_spheres, (long long)st.n_skipped_edges);
+  goto cleanup;
+nomem:
+  err = karst_set_error(ctx, KARST_ENOMEM, "geometry: out of memory");
+cleanup:
+  if (err) karst_i_sdf_clear(sdf);
+  if (stats) *stats = st;
+  free(eg);
+  free(deg);
+  free(start);
+  free(inc);
+  free(prims.v);
+  return err;
+}

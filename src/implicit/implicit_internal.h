@@ -1,0 +1,125 @@
+/* Private pieces shared by the files of src/implicit/: the node layout of the
+ * construction tree, the bounding-volume hierarchy and the noise. */
+#ifndef KARST_IMPLICIT_INTERNAL_H
+#define KARST_IMPLICIT_INTERNAL_H
+
+#include "karst/implicit.h"
+
+/* Bounding boxes are padded by this absolute margin (m) plus this fraction of
+ * the largest coordinate, so that a solid stays strictly inside its box after
+ * rounding (the field is clamped from below by the box distance). */
+#define KARST_I_BOX_PAD_ABS 1e-6
+#define KARST_I_BOX_PAD_REL 1e-9
+
+/* A sweep is "vertical" (its up axis falls back to world y) when |u . z|
+ * exceeds this cosine (about 2.6 degrees from vertical). */
+#define KARST_I_SWEEP_VERTICAL_COS 0.999
+
+typedef struct karst_i_sweep {
+  double a[3], u[3], side[3], up[3];
+  double len;    /* |b - a| */
+  double radius; /* scale of the section */
+  double rho;    /* radius * max |control point|: the section lies in this disc */
+  int section;   /* index into the tree's section table */
+  int mitre[2];  /* end a, end b */
+  double n[2][3];
+} karst_i_sweep_t;
+
+typedef struct karst_i_revolve {
+  double o[3], axis[3];
+  double sx[2], sz[2]; /* section coordinates of the in-plane normal x and of the axis */
+  double n[2][3];
+  double radius, rho;
+  int section;
+} karst_i_revolve_t;
+
+typedef struct karst_i_noise {
+  karst_int_t child;
+  double amplitude;  /* A (m) */
+  double wavelength; /* λ (m) */
+  double kradius;    /* kernel window radius (m) */
+  double lipschitz;  /* Ln of the normalised noise, 1/m */
+  uint64_t seed;
+} karst_i_noise_t;
+
+typedef struct karst_i_node {
+  karst_sdf_kind_t kind;
+  int label;
+  int finite;    /* box is finite */
+  double box[6]; /* lo, hi of the solid (padded) */
+  union {
+    struct {
+      double c[3], r;
+    } sphere;
+    struct {
+      double c[3], axes[3][3], inv[3], rmin;
+    } ell;
+    karst_i_sweep_t sweep;
+    struct {
+      double lo[3], hi[3];
+    } box;
+    struct {
+      int index;       /* into the tree's terrain table */
+      double inv_norm; /* 1 / sqrt(1 + λ²) */
+    } terrain;
+    struct {
+      karst_int_t first, n;         /* finite children kids[first .. first+n), in hierarchy order */
+      karst_int_t inf_first, n_inf; /* unbounded children */
+      karst_int_t bvh_root;         /* -1 without finite children */
+    } uni;
+    struct {
+      karst_int_t a, b;
+      double k;
+    } bin;
+    karst_i_noise_t noise;
+    karst_i_revolve_t rev;
+  } u;
+} karst_i_node_t;
+
+/* One node of a bounding-volume hierarchy: a leaf holds kids[a .. a+n),
+ * an inner node (n == 0) has children a and b. */
+typedef struct karst_i_bvh {
+  double box[6];
+  karst_int_t a, b;
+  int n;
+} karst_i_bvh_t;
+
+struct karst_sdf {
+  karst_i_node_t *nodes;
+  karst_int_t n_nodes, cap_nodes;
+  karst_int_t *kids;
+  karst_int_t n_kids, cap_kids;
+  karst_i_bvh_t *bvh;
+  karst_int_t n_bvh, cap_bvh;
+  karst_section_t *sections;
+  int n_sections, cap_sections;
+  karst_terrain_t *terrains; /* owned copies (z arrays owned) */
+  int n_terrains, cap_terrains;
+  karst_int_t root;
+};
+
+/* Exact signed distance to an axis-aligned box {lo, hi}. */
+double karst_i_sdbox(const double box[6], const double p[3]);
+
+/* Normalised sparse Gabor noise in [-1, 1] (noise.c) and its Lipschitz bound. */
+double karst_i_noise_eval(const karst_i_noise_t *nz, const double p[3]);
+double karst_i_noise_lipschitz(double kradius, double wavelength);
+
+/* Field of node @p id at @p p. Contract: when the true value is < ub the
+ * exact value is returned (with its label); otherwise some value >= ub. */
+double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3], double ub,
+                        int *label, karst_int_t *touched);
+
+/* Frame (side, up) of a sweep with unit axis u and up hint (world z when NULL):
+ * up is the hint made orthogonal to u (world y, then x, for vertical axes),
+ * side = up x u. Returns -1 when no frame can be made. */
+int karst_i_sweep_frame(const double u[3], const double up[3], double side[3], double upv[3]);
+
+/* Empty a tree (keeps its storage): no half-built tree survives a failure. */
+void karst_i_sdf_clear(karst_sdf_t *t);
+
+/* Add a section to the tree's table (deduplicated by content); index in *out. */
+karst_error_t karst_i_sdf_add_section(karst_ctx_t *ctx, karst_sdf_t *t, const karst_section_t *s,
+                                      int *out);
+
+#endif
