@@ -123,7 +123,7 @@ karst_error_t karst_sdf_sphere(karst_ctx_t *ctx, karst_sdf_t *t, const double c[
                            c[1], c[2]);
   if (!(r > 0) || !isfinite(r))
     return karst_set_error(ctx, KARST_EINVAL, "sphere: radius %g must be > 0 and finite", r);
-  karst_i_node_t *nd;
+  karst_i_node_t *nd = NULL;
   karst_error_t err = new_node(ctx, t, KARST_SDF_SPHERE, &nd, node);
   if (err) return err;
   memcpy(nd->u.sphere.c, c, sizeof nd->u.sphere.c);
@@ -167,7 +167,7 @@ karst_error_t karst_sdf_ellipsoid(karst_ctx_t *ctx, karst_sdf_t *t, const double
                                d, i == j);
     }
   }
-  karst_i_node_t *nd;
+  karst_i_node_t *nd = NULL;
   karst_error_t err = new_node(ctx, t, KARST_SDF_ELLIPSOID, &nd, node);
   if (err) return err;
   memcpy(nd->u.ell.c, c, sizeof nd->u.ell.c);
@@ -296,7 +296,7 @@ karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3
   sw.rho = rmax * radius;
   err = karst_i_sdf_add_section(ctx, t, section, &sw.section);
   if (err) return err;
-  karst_i_node_t *nd;
+  karst_i_node_t *nd = NULL;
   err = new_node(ctx, t, KARST_SDF_SWEEP, &nd, node);
   if (err) return err;
   nd->u.sweep = sw;
@@ -368,7 +368,7 @@ karst_error_t karst_sdf_revolve(karst_ctx_t *ctx, karst_sdf_t *t, const double o
     rmax = mx(rmax, hypot(section->cp[i][0], section->cp[i][1]));
   rv.rho = rmax * radius;
   if ((err = karst_i_sdf_add_section(ctx, t, section, &rv.section))) return err;
-  karst_i_node_t *nd;
+  karst_i_node_t *nd = NULL;
   if ((err = new_node(ctx, t, KARST_SDF_REVOLVE, &nd, node))) return err;
   nd->u.rev = rv;
   nd->label = label;
@@ -445,7 +445,7 @@ karst_error_t karst_sdf_terrain(karst_ctx_t *ctx, karst_sdf_t *sdf, const karst_
     return karst_set_error(ctx, KARST_ENOMEM, "terrain: out of memory");
   }
   sdf->cap_terrains = (int)cap;
-  karst_i_node_t *nd;
+  karst_i_node_t *nd = NULL;
   karst_error_t err = new_node(ctx, sdf, KARST_SDF_TERRAIN, &nd, node);
   if (err) {
     free(c.z);
@@ -469,7 +469,7 @@ karst_error_t karst_sdf_box(karst_ctx_t *ctx, karst_sdf_t *t, const double lo[3]
     if (!isfinite(lo[a]) || !isfinite(hi[a]) || !(lo[a] < hi[a]))
       return karst_set_error(ctx, KARST_EINVAL, "box: axis %d has bounds [%g, %g]", a, lo[a],
                              hi[a]);
-  karst_i_node_t *nd;
+  karst_i_node_t *nd = NULL;
   karst_error_t err = new_node(ctx, t, KARST_SDF_BOX, &nd, node);
   if (err) return err;
   memcpy(nd->u.box.lo, lo, sizeof nd->u.box.lo);
@@ -589,7 +589,7 @@ karst_error_t karst_sdf_union(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t n,
     }
     if ((err = bvh_build(ctx, t, first, nf, tmp, &root))) goto cleanup;
   }
-  karst_i_node_t *nd;
+  karst_i_node_t *nd = NULL;
   if ((err = new_node(ctx, t, KARST_SDF_UNION, &nd, node))) goto cleanup;
   nd->u.uni.first = first;
   nd->u.uni.n = nf;
@@ -613,7 +613,7 @@ static karst_error_t binary(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t k
   karst_error_t err = check_node(ctx, t, a, what);
   if (!err) err = check_node(ctx, t, b, what);
   if (err) return err;
-  karst_i_node_t *nd;
+  karst_i_node_t *nd = NULL;
   if ((err = new_node(ctx, t, kind, &nd, node))) return err;
   nd->u.bin.a = a;
   nd->u.bin.b = b;
@@ -697,7 +697,7 @@ karst_error_t karst_sdf_noise(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t chil
     return karst_set_error(ctx, KARST_EINVAL, "noise: wavelength %g must be > 0 and finite",
                            wavelength);
   if (!rng) return karst_set_error(ctx, KARST_EINVAL, "noise: no random generator given");
-  karst_i_node_t *nd;
+  karst_i_node_t *nd = NULL;
   if ((err = new_node(ctx, t, KARST_SDF_NOISE, &nd, node))) return err;
   const karst_i_node_t *c = &t->nodes[child];
   nd->u.noise.child = child;
