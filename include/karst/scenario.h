@@ -156,6 +156,9 @@ typedef struct karst_classification {
   double water_table_band;     /**< |z - water table| below this (m) counts as "at the water table", default 5 */
   double epikarst_depth;       /**< depth below terrain (m) of the epikarst zone, default 10 */
   double chamber_resistance;   /**< resistance below this makes a chamber, default 0.05 */
+  double radius_correlation;   /**< correlation length (m) of the radius field along and across
+                                    conduits, default 100 (Frantz et al. 2021: 50-200 m); 0 draws
+                                    every segment independently */
   karst_radius_range_t radius[KARST_TUNNEL_TYPE_COUNT]; /**< indexed by karst_tunnel_type_t */
 } karst_classification_t;
 

@@ -2,6 +2,7 @@
 #include "karst/classification.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 /**
  * Zone of elevation @p z: within classification.water_table_band of the
@@ -58,18 +59,50 @@ karst_tunnel_type_t karst_classification_type(const karst_scenario_t *sc, const 
   }
 }
 
+/* Random Fourier features of the radius field: enough waves for a marginal that is normal to
+ * within a few per cent (central limit over cosines of independent phases). */
+#define RADIUS_FIELD_WAVES 256
+
+typedef struct {
+  double w[RADIUS_FIELD_WAVES][3];
+  double phase[RADIUS_FIELD_WAVES];
+} radius_field_t;
+
+/* Draw a stationary Gaussian field with unit variance and covariance exp(-|h|^2 / (2 L^2)):
+ * g(p) = sqrt(2 / M) sum_m cos(w_m . p + phi_m), w_m ~ N(0, I / L^2), phi_m ~ U[0, 2 pi)
+ * (Rahimi & Recht 2007; the spectral method of geostatistics). */
+static void radius_field_draw(radius_field_t *f, double L, karst_rng_t *rng) {
+  for (int m = 0; m < RADIUS_FIELD_WAVES; m++) {
+    for (int a = 0; a < 3; a++) f->w[m][a] = karst_rng_gaussian(rng) / L;
+    f->phase[m] = 2 * M_PI * karst_rng_uniform(rng);
+  }
+}
+
+/* Φ(g(p)) in (0, 1): uniform marginal (approximately, as g is approximately normal). */
+static double radius_field_uniform(const radius_field_t *f, const double p[3]) {
+  double g = 0;
+  for (int m = 0; m < RADIUS_FIELD_WAVES; m++)
+    g += cos(f->w[m][0] * p[0] + f->w[m][1] * p[1] + f->w[m][2] * p[2] + f->phase[m]);
+  g *= sqrt(2.0 / RADIUS_FIELD_WAVES);
+  return 0.5 * erfc(-g / M_SQRT2);
+}
+
 /**
  * Label every edge of @p net (Paris et al. 2021, §5.3): edge attributes
  * "tunnel_type" (karst_tunnel_type_t, karst_classification_type), "radius"
  * (m, uniform in classification.radius[type] — by default 0.5 m for
- * epikarst and [0.5, 4] m otherwise, as in §5.3 — drawn from @p rng in edge
+ * epikarst and [0.5, 4] m otherwise, as in §5.3 — and spatially correlated
+ * over classification.radius_correlation metres, as Frantz et al. 2021
+ * observe on real networks (semi-variogram ranges 50–200 m): the radius is
+ * min + Φ(g(midpoint)) (max − min) for a Gaussian random field g drawn from
+ * @p rng; a correlation length of 0 draws each edge independently, in edge
  * order) and "vadose" (1 when the midpoint is above the water table), and node
  * attribute "water_table_distance" (z − W, positive above).
  *
  * @return KARST_SUCCESS; KARST_EINVAL when vertical_angle is outside [0, 90]
  *         or a radius range is not 0 ≤ min ≤ max (the message names the type);
  *         KARST_ENOMEM.
- * Time complexity: O(nodes + edges × size of the permeability tree).
+ * Time complexity: O(nodes + edges × (size of the permeability tree + 256)).
  */
 karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_scenario_t *sc,
                                        karst_rng_t *rng, karst_network_t *net) {
@@ -92,14 +125,21 @@ karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_scenario_t 
     return karst_set_error(ctx, KARST_ENOMEM, "classification: out of memory");
   for (karst_int_t v = 0; v < net->n_nodes; v++)
     wtd[v] = net->xyz[3 * v + 2] - sc->water_table;
+  radius_field_t *field = NULL;
+  if (cl->radius_correlation > 0) {
+    if (!(field = malloc(sizeof *field)))
+      return karst_set_error(ctx, KARST_ENOMEM, "classification: out of memory");
+    radius_field_draw(field, cl->radius_correlation, rng);
+  }
   for (karst_int_t e = 0; e < net->n_edges; e++) {
     const double *a = &net->xyz[3 * net->edges[2 * e]], *b = &net->xyz[3 * net->edges[2 * e + 1]];
     karst_tunnel_type_t t = karst_classification_type(sc, a, b);
     type[e] = t;
-    radius[e] = cl->radius[t].min == cl->radius[t].max
-                    ? cl->radius[t].min
-                    : karst_rng_uniform_range(rng, cl->radius[t].min, cl->radius[t].max);
+    double mid[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+    double u = field ? radius_field_uniform(field, mid) : karst_rng_uniform(rng);
+    radius[e] = cl->radius[t].min + u * (cl->radius[t].max - cl->radius[t].min);
     vadose[e] = 0.5 * (a[2] + b[2]) > sc->water_table;
   }
+  free(field);
   return KARST_SUCCESS;
 }

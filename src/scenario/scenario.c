@@ -54,6 +54,7 @@ void karst_scenario_init(karst_scenario_t *sc) {
   sc->classification.water_table_band = 5.0;
   sc->classification.epikarst_depth = 10.0;
   sc->classification.chamber_resistance = 0.05;
+  sc->classification.radius_correlation = 100.0;
   for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++) {
     sc->classification.radius[t].min = 0.5;
     sc->classification.radius[t].max = 4.0;
@@ -1110,9 +1111,13 @@ static const field_t classification_fields[] = {
      .type = T_NUM,
      .off = offsetof(karst_classification_t, chamber_resistance),
      .range = RANGE_CLOSED(0, 1, "")},
+    {.key = "radius_correlation",
+     .type = T_NUM,
+     .off = offsetof(karst_classification_t, radius_correlation),
+     .range = RANGE_GE(0, " m")},
     {.key = "radius", .type = T_FN, .fn = read_radius},
 };
-static const schema_t classification_schema = {classification_fields, 5};
+static const schema_t classification_schema = {classification_fields, 6};
 
 static const field_t random_fields[] = {
     {.key = "seed", .type = T_U64, .off = offsetof(karst_scenario_t, seed)},

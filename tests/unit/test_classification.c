@@ -85,6 +85,7 @@ static void test_run_radii(void **state) {
   karst_network_add_edge(&net, u, v, NULL);
   karst_rng_t r;
   karst_rng_init(&r, 1, 6);
+  sc.classification.radius_correlation = 0; /* independent draws, the paper's literal rule */
   assert_int_equal(karst_classification_run(&ctx, &sc, &r, &net), KARST_SUCCESS);
   const double *type = karst_network_attr_find(&net, KARST_ATTR_EDGE, "tunnel_type")->data;
   const double *rad = karst_network_attr_find(&net, KARST_ATTR_EDGE, "radius")->data;
@@ -127,10 +128,74 @@ static void test_run_radii(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* The correlated radius (classification.radius_correlation, after Frantz et al. 2021):
+ * neighbouring segments have nearly equal radii, segments many correlation lengths apart are
+ * unrelated, and the marginal stays uniform on [min, max]. Expected values from the field's
+ * definition: Var(g(p) - g(p + h)) = 2 (1 - exp(-h^2 / (2 L^2))), 2e-4 for h = 2 m, L = 100 m,
+ * so |Δu| <= φ(0) |Δg| < 0.4 × 5 × 0.014 and |Δr| < 0.1 m at 5 sigma (3.5 m range). */
+static void test_run_radii_correlated(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_perm_node_t sphere;
+  make_scenario(&sc, &sphere);
+  sc.classification.radius_correlation = 100;
+  karst_network_t net;
+  karst_network_init(&net);
+  /* a 4 km phreatic line of 2 m segments, then 3000 isolated segments 10 km apart */
+  const int n = 2000, far = 3000;
+  for (int i = 0; i <= n; i++) karst_network_add_node(&net, 2.0 * i, 0, 20, NULL);
+  for (int i = 0; i < n; i++) karst_network_add_edge(&net, i, i + 1, NULL);
+  for (int i = 0; i < far; i++) {
+    karst_int_t u, v;
+    double x = 1e4 * (i % 60), y = 1e4 * (1 + i / 60);
+    karst_network_add_node(&net, x, y, 20, &u);
+    karst_network_add_node(&net, x + 1, y, 20, &v);
+    karst_network_add_edge(&net, u, v, NULL);
+  }
+  karst_rng_t r;
+  karst_rng_init(&r, 3, 6);
+  assert_int_equal(karst_classification_run(&ctx, &sc, &r, &net), KARST_SUCCESS);
+  const double *rad = karst_network_attr_find(&net, KARST_ATTR_EDGE, "radius")->data;
+  double maxstep = 0, lo = INFINITY, hi = -INFINITY;
+  for (int e = 0; e + 1 < n; e++) maxstep = fmax(maxstep, fabs(rad[e + 1] - rad[e]));
+  assert_true(maxstep < 0.1);
+  /* far segments: uniform marginal (mean 2.25, sd 3.5/sqrt(12) = 1.01; with 3000 nearly
+   * independent values the mean is within 0.15 and both ends of the range are reached) and
+   * no correlation between successive far segments (|r| < 0.2, about 4.5 standard errors of the
+   * random-Fourier-feature estimate 1/sqrt(2 x 256)). */
+  double mean = 0, sxy = 0, sxx = 0;
+  for (int i = 0; i < far; i++) {
+    double x = rad[n + i];
+    mean += x / far;
+    lo = fmin(lo, x);
+    hi = fmax(hi, x);
+  }
+  for (int i = 0; i + 1 < far; i++) {
+    sxy += (rad[n + i] - mean) * (rad[n + i + 1] - mean);
+    sxx += (rad[n + i] - mean) * (rad[n + i] - mean);
+  }
+  assert_close(mean, 2.25, 0.15);
+  assert_true(lo >= 0.5 && hi <= 4.0);
+  assert_true(lo < 0.7 && hi > 3.8);
+  assert_true(fabs(sxy / sxx) < 0.2);
+  /* the same stream gives the same radii */
+  karst_network_t copy;
+  assert_int_equal(karst_network_copy(&copy, &net), 0);
+  karst_rng_init(&r, 3, 6);
+  assert_int_equal(karst_classification_run(&ctx, &sc, &r, &copy), KARST_SUCCESS);
+  const double *rad2 = karst_network_attr_find(&copy, KARST_ATTR_EDGE, "radius")->data;
+  for (karst_int_t e = 0; e < net.n_edges; e++) assert_true(rad2[e] == rad[e]);
+  karst_network_destroy(&copy);
+  karst_network_destroy(&net);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_decision_table),
       cmocka_unit_test(test_run_radii),
+      cmocka_unit_test(test_run_radii_correlated),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
