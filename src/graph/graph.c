@@ -167,6 +167,11 @@ typedef struct build {
   int failed[KARST_I_MAX_THREADS];
 } build_t;
 
+/* Contiguous source chunks per thread for the edge costs (see task_cost). */
+#define COST_CHUNKS_PER_THREAD 8
+/* Threads for the edge costs: each holds a cursor per vertex (4 n bytes). */
+#define COST_MAX_THREADS 16
+
 #define CHUNK_BEGIN(B, c) ((B)->n * (karst_int_t)(c) / (B)->nchunks)
 
 /* Whether u is among the k nearest of v: the neighbours of v are exactly
@@ -257,29 +262,48 @@ static void task_merge(void *p, int tid, int nth) {
   free(tmp);
 }
 
-/* Cost of each undirected edge {u, v}, u < v, computed once by the thread
- * owning row u and written to both arcs: no two threads write the same
- * slot, and the value is a pure function of the two positions. */
+/* Cost of each undirected edge {u, v}, u < v, computed once and written to
+ * both arcs. Sources are taken in contiguous chunks, in increasing order:
+ * the sources u < v of one chunk that are neighbours of v then form one run
+ * of v's sorted row, met in the same order, so the reverse arc's slot is a
+ * per-row cursor (started at the chunk's first source by one binary search)
+ * instead of a search per edge. No two chunks write the same slot, and each
+ * value is a pure function of the two positions. */
 static void task_cost(void *p, int tid, int nth) {
   build_t *B = p;
   karst_graph_t *g = B->g;
   karst_int_t n_inf = 0;
-  FOR_ROWS(u, B->n, tid, nth) {
-    if ((u & 4095) == 0 && karst_interrupted(B->ctx)) {
-      B->failed[tid] = 2;
-      return;
-    }
-    for (karst_int_t a = g->offsets[u + 1] - 1; a >= g->offsets[u] && g->adj[a] > u; a--) {
-      karst_int_t v = g->adj[a];
-      double c = B->inside[u] && B->inside[v]
-                     ? karst_i_cost_edge_inside(B->model, g->xyz + 3 * u, g->xyz + 3 * v)
-                     : INFINITY;
-      n_inf += !isfinite(c);
-      g->cost[a] = c;
-      g->cost[find_arc(g->adj, g->offsets[v], g->offsets[v + 1], u)] = c;
-    }
+  int32_t *cursor = malloc(sizeof(int32_t) * ((size_t)B->n + 1));
+  if (!cursor) {
+    B->failed[tid] = 1;
+    return;
   }
+  memset(cursor, 0xff, sizeof(int32_t) * ((size_t)B->n + 1)); /* -1: not started */
+  for (int c = tid; c < B->nchunks; c += nth) {
+    karst_int_t u0 = CHUNK_BEGIN(B, c), u1 = CHUNK_BEGIN(B, c + 1);
+    for (karst_int_t u = u0; u < u1; u++) {
+      if ((u & 4095) == 0 && karst_interrupted(B->ctx)) {
+        B->failed[tid] = 2;
+        goto cleanup;
+      }
+      for (karst_int_t a = g->offsets[u + 1] - 1; a >= g->offsets[u] && g->adj[a] > u; a--) {
+        karst_int_t v = g->adj[a], b = g->offsets[v];
+        double cst = B->inside[u] && B->inside[v]
+                         ? karst_i_cost_edge_inside(B->model, g->xyz + 3 * u, g->xyz + 3 * v)
+                         : INFINITY;
+        n_inf += !isfinite(cst);
+        g->cost[a] = cst;
+        if (cursor[v] < 0) cursor[v] = (int32_t)(find_arc(g->adj, b, g->offsets[v + 1], u0) - b);
+        g->cost[b + cursor[v]++] = cst;
+      }
+    }
+    for (karst_int_t u = u0; u < u1; u++) /* reset what this chunk started */
+      for (karst_int_t a = g->offsets[u + 1] - 1; a >= g->offsets[u] && g->adj[a] > u; a--)
+        cursor[g->adj[a]] = -1;
+  }
+cleanup:
   B->n_infinite[tid] = n_inf;
+  free(cursor);
 }
 
 /**
@@ -367,10 +391,15 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
     g.cost = malloc(sizeof(double) * (size_t)g.n_arcs);
     if (!g.cost) goto nomem;
     karst_progress(ctx, "edge costs", 0, 1);
-    karst_i_parallel_run(nth, task_cost, &B);
+    /* Several chunks per thread balance the costlier regions (near
+     * horizons and permeable bodies) between threads. */
+    int cth = nth < COST_MAX_THREADS ? nth : COST_MAX_THREADS;
+    B.nchunks = cth * COST_CHUNKS_PER_THREAD;
+    karst_i_parallel_run(cth, task_cost, &B);
     karst_int_t n_inf = 0;
     for (int t = 0; t < KARST_I_MAX_THREADS; t++) {
-      if (B.failed[t]) {
+      if (B.failed[t] == 1) goto nomem;
+      if (B.failed[t] == 2) {
         err = karst_set_error(ctx, KARST_EINTERRUPTED, "edge cost evaluation interrupted");
         goto cleanup;
       }
