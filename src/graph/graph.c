@@ -151,6 +151,17 @@ static karst_int_t find_arc(const karst_int_t *adj, karst_int_t b, karst_int_t e
  * scatter of the arcs into rows (one count array of n entries each). */
 #define SCATTER_MAX_CHUNKS 8
 
+/* First slot of the sorted run adj[b .. e) holding x or more. Usually few
+ * entries precede x (neighbours have nearby indices in the samples' Morton
+ * order): a short forward scan reads one cache line where a binary search
+ * misses four; long runs fall back to the search. */
+static karst_int_t first_at_least(const karst_int_t *adj, karst_int_t b, karst_int_t e,
+                                  karst_int_t x) {
+  for (karst_int_t i = b; i < e && i < b + 8; i++)
+    if (adj[i] >= x) return i;
+  return find_arc(adj, b, e, x);
+}
+
 typedef struct build {
   karst_ctx_t *ctx;
   karst_int_t n;
@@ -293,7 +304,8 @@ static void task_cost(void *p, int tid, int nth) {
                          : INFINITY;
         n_inf += !isfinite(cst);
         g->cost[a] = cst;
-        if (cursor[v] < 0) cursor[v] = (int32_t)(find_arc(g->adj, b, g->offsets[v + 1], u0) - b);
+        if (cursor[v] < 0)
+          cursor[v] = (int32_t)(first_at_least(g->adj, b, g->offsets[v + 1], u0) - b);
         g->cost[b + cursor[v]++] = cst;
       }
     }
