@@ -32,7 +32,8 @@ static inline int karst_i_knn_less(double d, int32_t i, double e, int32_t j) {
  * @param xyz 3 n coordinates, all finite; @param n points, 2 <= n < INT32_MAX.
  * @param k neighbours per point, 1 <= k <= n − 1.
  * @param nthreads worker threads (the result does not depend on them).
- * @param nbr out, n k indices: the neighbours of v are nbr[v k .. v k + k − 1], increasing.
+ * @param nbr out, n k indices: the neighbours of v are nbr[v k .. v k + k − 1], in
+ *        an unspecified (but deterministic) order.
  * @param kd2 out, n: the k-th smallest squared distance (karst_i_dist2) of v.
  * @param kidx out, n: the index of that k-th neighbour.
  * @return KARST_SUCCESS, KARST_ENOMEM, KARST_EINTERRUPTED.
