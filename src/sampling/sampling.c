@@ -88,6 +88,28 @@ static int cgrid_insert(cgrid_t *g, const double p[3]) {
   return 1;
 }
 
+/* Room for `extra` more entries, so that entries can be written at
+ * reserved slots without reallocation (by several threads). */
+static int cgrid_reserve(cgrid_t *g, size_t extra) {
+  if (g->n + extra <= g->ncap) return 1;
+  size_t nc = g->n + extra;
+  double *xyz = realloc(g->xyz, sizeof(double) * 3 * nc);
+  if (!xyz) return 0;
+  g->xyz = xyz;
+  int32_t *next = realloc(g->next, sizeof(int32_t) * nc);
+  if (!next) return 0;
+  g->next = next, g->ncap = nc;
+  return 1;
+}
+
+/* Entry e (reserved, e < ncap) holds p, linked into p's column. */
+static void cgrid_put(cgrid_t *g, int32_t e, const double p[3]) {
+  int64_t col = cgrid_coord(g, p[0], 0) + g->dims[0] * cgrid_coord(g, p[1], 1);
+  memcpy(g->xyz + 3 * e, p, 3 * sizeof(double));
+  g->next[e] = g->head[col];
+  g->head[col] = e;
+}
+
 /* Whether cell (i, j, k) already holds a feature sample. */
 static int cgrid_occupied(const cgrid_t *g, int64_t i, int64_t j, int64_t k) {
   for (int32_t e = g->head[i + g->dims[0] * j]; e >= 0; e = g->next[e])
@@ -141,7 +163,10 @@ static int64_t pidx(const sampler_t *S, int64_t i, int64_t j, int64_t k) {
   return (i + 2) + S->pd[0] * ((j + 2) + S->pd[1] * (k + 2));
 }
 
-static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
+/* Append p to the samples and, for a feature sample, mark the fill cells a
+ * later fill dart would have to check against it (p is already in the
+ * feature grid, or is put there by add_sample). */
+static karst_error_t record_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
   if (S->s->n >= S->sc->sampling.max_samples)
     return karst_set_error(S->ctx, KARST_ERANGE,
                            "sampling needs more than sampling.max_samples = %lld samples "
@@ -152,9 +177,6 @@ static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_so
     return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for %lld samples",
                            (long long)S->s->n + 1);
   if (src == KARST_SAMPLE_FILL) return KARST_SUCCESS;
-  if (!cgrid_insert(&S->feat, p))
-    return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the feature sample grid");
-  /* Mark the fill cells a later fill dart would have to check against p. */
   int64_t lo[3], hi[3];
   for (int a = 0; a < 3; a++) {
     double l = floor((p[a] - S->rm - S->lo[a]) / S->cc),
@@ -167,6 +189,12 @@ static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_so
       for (int64_t i = lo[0]; i <= hi[0]; i++)
         S->near[pidx(S, i, j, k)] = 1;
   return KARST_SUCCESS;
+}
+
+static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
+  if (src != KARST_SAMPLE_FILL && !cgrid_insert(&S->feat, p))
+    return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the feature sample grid");
+  return record_sample(S, p, src);
 }
 
 static void shuffle(karst_rng_t *rng, int64_t *v, size_t n) {
@@ -289,15 +317,23 @@ static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
 }
 
 /* Feature-grid cells (i, j, k) overlapping the region's bounds, in the box
- * and not entirely above the terrain, as linear keys i + nx (j + ny k).
- * Columns are taken tile by tile (FILL_TILE^2 columns, tiles in a random
- * order, cells shuffled inside a tile) for memory locality, as for the fill. */
+ * and not entirely above the terrain, as linear keys i + nx (j + ny k),
+ * grouped by tiles of FILL_TILE^2 columns (in tile order; see
+ * sample_region). Each non-empty tile is recorded in *tiles. */
 #define FILL_TILE 8
-static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out) {
+typedef struct ftile {
+  size_t first, n; /* its remaining cells: cells[first .. first + n) */
+  int colour;      /* parities of its tile coordinates */
+  int32_t placed;  /* its samples, in feature-grid slots base + first .. */
+} ftile_t;
+
+static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out,
+                                  ftile_t **tiles_out, size_t *n_tiles) {
   const cgrid_t *g = &S->feat;
   aabb_t box = aabb_all();
-  int64_t *tiles = NULL;
+  ftile_t *tiles = NULL;
   karst_error_t err = KARST_SUCCESS;
+  *tiles_out = NULL, *n_tiles = 0;
   if (!R->layer) {
     const karst_permeability_t *pm = &S->sc->permeability;
     box = pm->root
@@ -313,17 +349,14 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out)
   }
   double limit = (double)KARST_SAMPLING_MAX_CELLS_PER_SAMPLE * (double)S->sc->sampling.max_samples;
   int64_t nti = (hi[0] - lo[0]) / FILL_TILE + 1, ntj = (hi[1] - lo[1]) / FILL_TILE + 1;
-  tiles = malloc(sizeof(int64_t) * (size_t)(nti * ntj));
+  tiles = malloc(sizeof(ftile_t) * (size_t)(nti * ntj));
   if (!tiles) {
     err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells", S->stage);
     goto cleanup;
   }
-  for (int64_t t = 0; t < nti * ntj; t++)
-    tiles[t] = t;
-  shuffle(S->rng, tiles, (size_t)(nti * ntj));
   for (int64_t t = 0; t < nti * ntj; t++) {
     size_t first = out->n;
-    int64_t ti = lo[0] + tiles[t] % nti * FILL_TILE, tj = lo[1] + tiles[t] / nti * FILL_TILE;
+    int64_t ti = lo[0] + t % nti * FILL_TILE, tj = lo[1] + t / nti * FILL_TILE;
     for (int64_t j = tj; j < tj + FILL_TILE && j <= hi[1]; j++)
       for (int64_t i = ti; i < ti + FILL_TILE && i <= hi[0]; i++) {
         double x0 = fmax(S->lo[0], g->origin[0] + i * g->cell);
@@ -356,11 +389,22 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out)
           }
         }
       }
-    shuffle(S->rng, out->v + first, out->n - first);
+    if (out->n > first)
+      tiles[(*n_tiles)++] =
+          (ftile_t){first, out->n - first, (int)(t % nti % 2 + 2 * (t / nti % 2)), 0};
   }
 cleanup:
-  free(tiles);
+  if (err != KARST_SUCCESS) free(tiles), tiles = NULL, *n_tiles = 0;
+  *tiles_out = tiles;
   return err;
+}
+
+/* fmax / fmin for numbers that are never NaN, without a call into libm. */
+static inline double dmax(double a, double b) {
+  return a > b ? a : b;
+}
+static inline double dmin(double a, double b) {
+  return a < b ? a : b;
 }
 
 /* The part of cell (i, j, k) of a grid within [zlo, zhi] and the box, where
@@ -368,10 +412,10 @@ cleanup:
 static int cell_box(const sampler_t *S, const double origin[3], double cell, const int64_t c[3],
                     double zlo, double zhi, double lo[3], double hi[3]) {
   for (int a = 0; a < 3; a++) {
-    lo[a] = fmax(S->lo[a], origin[a] + c[a] * cell);
-    hi[a] = fmin(S->hi[a], origin[a] + (c[a] + 1) * cell);
+    lo[a] = dmax(S->lo[a], origin[a] + c[a] * cell);
+    hi[a] = dmin(S->hi[a], origin[a] + (c[a] + 1) * cell);
   }
-  lo[2] = fmax(lo[2], zlo), hi[2] = fmin(hi[2], zhi);
+  lo[2] = dmax(lo[2], zlo), hi[2] = dmin(hi[2], zhi);
   for (int a = 0; a < 3; a++)
     if (lo[a] > hi[a]) return 0;
   return 1;
@@ -401,46 +445,138 @@ static int box_covered(const double lo[3], const double hi[3], const double q[3]
   return 1;
 }
 
+/* Feature regions are sampled like the fill (see "Fill" below): tiles of
+ * FILL_TILE^2 columns coloured by the parities of their tile coordinates (4
+ * colours), the tiles of one colour concurrently. A dart reads the columns
+ * within 2 cells of its own (r_f spans less than 2 cells of r_f/√3) and
+ * writes its own column's chain; same-colour tiles are a tile apart. Each
+ * tile writes its samples into feature-grid slots reserved for it (one per
+ * cell of the tile: at most one sample per cell) and draws from its own
+ * stream, so the result does not depend on the thread count; the samples
+ * are appended to the sample set in tile order at the end. */
+typedef struct region_job {
+  sampler_t *S;
+  const region_t *R;
+  ftile_t *tiles;
+  int64_t *cells;
+  const size_t *group; /* the tiles to process now */
+  size_t n_group;
+  int32_t base; /* feature-grid slot of cell 0 of the list */
+  uint64_t seed;
+  int pass; /* -1: shuffle the cell lists */
+  int interrupted;
+} region_job_t;
+
+static void region_tile_pass(region_job_t *J, size_t t) {
+  sampler_t *S = J->S;
+  const region_t *R = J->R;
+  cgrid_t *g = &S->feat;
+  ftile_t *T = &J->tiles[t];
+  int64_t *cells = J->cells + T->first;
+  karst_rng_t rng;
+  karst_rng_derive(&rng, J->seed, (uint64_t)(J->pass + 1), (uint64_t)t);
+  if (J->pass < 0) {
+    shuffle(&rng, cells, T->n);
+    return;
+  }
+  size_t w = 0;
+  for (size_t q = 0; q < T->n; q++) {
+    int64_t key = cells[q];
+    int64_t c[3] = {key % g->dims[0], key / g->dims[0] % g->dims[1], key / g->dims[0] / g->dims[1]};
+    if (cgrid_occupied(g, c[0], c[1], c[2])) continue; /* at most one feature sample per cell */
+    double zlo = -INFINITY, zhi = INFINITY, p[3];
+    if (R->layer) {
+      double x0 = g->origin[0] + c[0] * g->cell, y0 = g->origin[1] + c[1] * g->cell;
+      layer_range(&R->plane, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
+      zlo -= R->band, zhi += R->band;
+    }
+    double blo[3], bhi[3];
+    if (!cell_box(S, g->origin, g->cell, c, zlo, zhi, blo, bhi)) continue;
+    cells[w++] = key;
+    for (int a = 0; a < 3; a++)
+      p[a] = karst_rng_uniform_range(&rng, blo[a], bhi[a]);
+    if (!region_contains(S, R, p) || !karst_cost_in_bedrock(S->sc, p)) continue;
+    const double *e = cgrid_conflict(g, p, S->rf);
+    if (e) {
+      if (box_covered(blo, bhi, e, S->rf)) w--; /* never again */
+      continue;
+    }
+    w--; /* taken */
+    cgrid_put(g, J->base + (int32_t)T->first + T->placed++, p);
+  }
+  T->n = w;
+}
+
+static void task_region(void *arg, int tid, int nth) {
+  region_job_t *J = arg;
+  for (size_t i = (size_t)tid; i < J->n_group; i += (size_t)nth) {
+    if ((i & 63) == 0 && karst_interrupted(J->S->ctx)) {
+      J->interrupted = 1;
+      return;
+    }
+    region_tile_pass(J, J->group[i]);
+  }
+}
+
 static karst_error_t sample_region(sampler_t *S, const region_t *R) {
   cells_t cells = {0};
-  karst_error_t err = region_cells(S, R, &cells);
-  if (err != KARST_SUCCESS) goto cleanup;
+  ftile_t *tiles = NULL;
+  size_t ntiles = 0, *group = NULL, gstart[5] = {0};
   cgrid_t *g = &S->feat;
-  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES && cells.n > 0; pass++) {
-    if (karst_interrupted(S->ctx)) {
-      err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
-      goto cleanup;
-    }
-    size_t w = 0;
-    for (size_t q = 0; q < cells.n; q++) {
-      int64_t key = cells.v[q];
-      int64_t c[3] = {key % g->dims[0], key / g->dims[0] % g->dims[1],
-                      key / g->dims[0] / g->dims[1]};
-      if (cgrid_occupied(g, c[0], c[1], c[2])) continue; /* at most one feature sample per cell */
-      double zlo = -INFINITY, zhi = INFINITY, p[3];
-      if (R->layer) {
-        double x0 = g->origin[0] + c[0] * g->cell, y0 = g->origin[1] + c[1] * g->cell;
-        layer_range(&R->plane, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
-        zlo -= R->band, zhi += R->band;
-      }
-      double blo[3], bhi[3];
-      if (!cell_box(S, g->origin, g->cell, c, zlo, zhi, blo, bhi)) continue;
-      cells.v[w++] = key;
-      for (int a = 0; a < 3; a++)
-        p[a] = karst_rng_uniform_range(S->rng, blo[a], bhi[a]);
-      if (!region_contains(S, R, p) || !karst_cost_in_bedrock(S->sc, p)) continue;
-      const double *q = cgrid_conflict(g, p, S->rf);
-      if (q) {
-        if (box_covered(blo, bhi, q, S->rf)) w--; /* never again */
-        continue;
-      }
-      w--; /* taken */
-      if ((err = add_sample(S, p, R->src)) != KARST_SUCCESS) goto cleanup;
-    }
-    cells.n = w;
+  int nth = S->ctx && S->ctx->nthreads > 0 ? S->ctx->nthreads : 1;
+  karst_error_t err = region_cells(S, R, &cells, &tiles, &ntiles);
+  if (err != KARST_SUCCESS || cells.n == 0) goto cleanup;
+  if ((double)g->n + (double)cells.n >= (double)INT32_MAX || !cgrid_reserve(g, cells.n) ||
+      !(group = malloc(sizeof(size_t) * ntiles))) {
+    err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells", S->stage);
+    goto cleanup;
   }
+  size_t ng = 0;
+  for (int col = 0; col < 4; col++) {
+    gstart[col] = ng;
+    for (size_t t = 0; t < ntiles; t++)
+      if (tiles[t].colour == col) group[ng++] = t;
+  }
+  gstart[4] = ng;
+  region_job_t J = {S,  R, tiles, cells.v, group, ntiles, (int32_t)g->n, karst_rng_u64(S->rng),
+                    -1, 0};
+  /* The reserved slots belong to the grid from now on (unused ones are
+   * never linked into a column). */
+  g->n += cells.n;
+  karst_i_parallel_run(nth, task_region, &J);
+  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES; pass++) {
+    int64_t order[4] = {0, 1, 2, 3};
+    shuffle(S->rng, order, 4);
+    for (int o = 0; o < 4; o++) {
+      J.group = group + gstart[order[o]], J.n_group = gstart[order[o] + 1] - gstart[order[o]];
+      J.pass = pass;
+      karst_i_parallel_run(nth, task_region, &J);
+      if (J.interrupted) {
+        err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
+        goto cleanup;
+      }
+      double placed = (double)S->s->n;
+      for (size_t t = 0; t < ntiles; t++)
+        placed += tiles[t].placed;
+      if (placed > (double)S->sc->sampling.max_samples) {
+        err = karst_set_error(S->ctx, KARST_ERANGE,
+                              "sampling needs more than sampling.max_samples = %lld samples "
+                              "(reached while placing %s samples); increase fill_radius or "
+                              "feature_radius, shrink the domain, or raise max_samples",
+                              (long long)S->sc->sampling.max_samples, S->stage);
+        goto cleanup;
+      }
+    }
+  }
+  for (size_t t = 0; t < ntiles; t++)
+    for (int32_t e = 0; e < tiles[t].placed; e++) {
+      const double *p = g->xyz + 3 * (J.base + (int64_t)tiles[t].first + e);
+      if ((err = record_sample(S, p, R->src)) != KARST_SUCCESS) goto cleanup;
+    }
 cleanup:
   free(cells.v);
+  free(tiles);
+  free(group);
   return err;
 }
 
