@@ -200,7 +200,7 @@ double karst_cost_horizon_term(const karst_scenario_t *sc, const double p[3]) {
 }
 
 static double fracture_term(const karst_scenario_t *sc, const double *normals, const double d[3]) {
-  double len = sqrt(dot3(d, d)), c = 0.0;
+  double len = sqrt(dot3(d, d)), inv = len > 0 ? 1.0 / len : 0.0, c = 0.0;
   for (int k = 0; k < sc->n_fractures; k++) {
     double n[3], w = sc->fractures[k].weight;
     if (normals) {
@@ -208,7 +208,7 @@ static double fracture_term(const karst_scenario_t *sc, const double *normals, c
     } else {
       karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, n);
     }
-    double nd = len > 0 ? dot3(n, d) / len : 1.0;
+    double nd = len > 0 ? dot3(n, d) * inv : 1.0;
     c += w * nd * nd;
   }
   return c;
@@ -426,8 +426,9 @@ static void perm_breaks(const karst_perm_node_t *n, const double a[3], const dou
  * the tree (a cheap test that spares perm_constant for most edges). */
 static int misses_perm_boxes(const karst_i_cost_model_t *m, const double a[3], const double b[3]) {
   if (m->n_perm_boxes < 0) return 0;
-  double lo[3] = {fmin(a[0], b[0]), fmin(a[1], b[1]), fmin(a[2], b[2])};
-  double hi[3] = {fmax(a[0], b[0]), fmax(a[1], b[1]), fmax(a[2], b[2])};
+  double lo[3], hi[3]; /* the edge's box (finite coordinates: no fmin/fmax calls) */
+  for (int i = 0; i < 3; i++)
+    lo[i] = a[i] < b[i] ? a[i] : b[i], hi[i] = a[i] < b[i] ? b[i] : a[i];
   for (int i = 0; i < m->n_perm_boxes; i++) {
     const double *B = m->perm_boxes + 6 * i;
     if (lo[0] <= B[3] && hi[0] >= B[0] && lo[1] <= B[4] && hi[1] >= B[1] && lo[2] <= B[5] &&
