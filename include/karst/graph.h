@@ -77,10 +77,11 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
 
 /**
  * The geometric graph of Paris et al. 2021, §4.1–4.2, ready for shortest
- * paths: exact k nearest neighbours (k = sampling.k) of every sample with
- * FLANN, made undirected (union), edge costs the line integral of c
- * (karst_cost_edge), edges leaving the bedrock removed. @p out must be
- * initialised; it borrows samples->xyz. Deterministic for any ctx->nthreads.
+ * paths: exact k nearest neighbours (k = sampling.k) of every sample, ties
+ * broken by the smaller index (grid search, src/graph/knn.c), made
+ * undirected (union), edge costs the line integral of c (karst_cost_edge),
+ * edges leaving the bedrock removed. @p out must be initialised; it borrows
+ * samples->xyz. Uses ctx->nthreads threads; identical for any thread count.
  */
 karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
                                 const karst_samples_t *samples, karst_graph_t *out);

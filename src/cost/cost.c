@@ -4,6 +4,7 @@
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "cost/cost_internal.h"
 
@@ -199,11 +200,13 @@ double karst_cost_horizon_term(const karst_scenario_t *sc, const double p[3]) {
 }
 
 static double fracture_term(const karst_scenario_t *sc, const double *normals, const double d[3]) {
-  double len = sqrt(dot3(d, d)), c = 0.0, wmax = 0.0;
+  double len = sqrt(dot3(d, d)), inv = len > 0 ? 1.0 / len : 0.0, c = 0.0, wmax = 0.0;
   const int use_min = sc->cost.fracture_combine == KARST_FRACTURE_MIN;
-  for (int k = 0; k < sc->n_fractures; k++)
-    wmax = fmax(wmax, sc->fractures[k].weight);
-  if (use_min) c = wmax;
+  if (use_min) {
+    for (int k = 0; k < sc->n_fractures; k++)
+      wmax = fmax(wmax, sc->fractures[k].weight);
+    c = wmax;
+  }
   for (int k = 0; k < sc->n_fractures; k++) {
     double n[3], w = sc->fractures[k].weight;
     if (normals) {
@@ -211,7 +214,7 @@ static double fracture_term(const karst_scenario_t *sc, const double *normals, c
     } else {
       karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, n);
     }
-    double nd = len > 0 ? dot3(n, d) / len : 1.0;
+    double nd = len > 0 ? dot3(n, d) * inv : 1.0;
     if (use_min)
       c = fmin(c, wmax - w * (1.0 - nd * nd));
     else
@@ -299,9 +302,20 @@ static const double GL2_X[2] = {0.21132486540518711775, 0.78867513459481288225};
 static const double GL3_X[3] = {0.11270166537925831148, 0.5, 0.88729833462074168852};
 static const double GL3_W[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
 
+/* karst_horizon_elevation of horizon h with the model's precomputed
+ * trigonometry (same operations on the same values). */
+static double plane_elevation(const karst_i_cost_model_t *m, int h, double x, double y) {
+  if (!m->horizon_plane) return karst_horizon_elevation(&m->sc->horizons[h], x, y);
+  const double *P = m->horizon_plane + 6 * h;
+  if (m->sc->horizons[h].dip == 0.0) return P[0];
+  double along = (x - P[1]) * P[3] + (y - P[2]) * P[4];
+  return P[0] - along * P[5];
+}
+
 /* ∫_0^1 cL(a + s(b − a)) ds. */
-static double horizon_integral(const karst_scenario_t *sc, const double a[3], const double b[3],
+static double horizon_integral(const karst_i_cost_model_t *m, const double a[3], const double b[3],
                                double len) {
+  const karst_scenario_t *sc = m->sc;
   double al[MAX_EXACT_HORIZONS], be[MAX_EXACT_HORIZONS], r[MAX_EXACT_HORIZONS];
   int n_active = 0;
   double rmin = INFINITY;
@@ -310,8 +324,8 @@ static double horizon_integral(const karst_scenario_t *sc, const double a[3], co
    * contribute g = 1 and can be ignored inside the minimum. */
   for (int h = 0; h < sc->n_horizons; h++) {
     const karst_horizon_t *H = &sc->horizons[h];
-    double ua = a[2] - karst_horizon_elevation(H, a[0], a[1]);
-    double ub = b[2] - karst_horizon_elevation(H, b[0], b[1]);
+    double ua = a[2] - plane_elevation(m, h, a[0], a[1]);
+    double ub = b[2] - plane_elevation(m, h, b[0], b[1]);
     int touches =
         (ua <= 0 && ub >= 0) || (ua >= 0 && ub <= 0) || fmin(fabs(ua), fabs(ub)) < H->radius;
     if (!touches) continue;
@@ -426,6 +440,23 @@ static void perm_breaks(const karst_perm_node_t *n, const double a[3], const dou
   }
 }
 
+/* Whether the bounding box of [a, b] misses every primitive's support box:
+ * then every primitive gives the background all along the edge, and so does
+ * the tree (a cheap test that spares perm_constant for most edges). */
+static int misses_perm_boxes(const karst_i_cost_model_t *m, const double a[3], const double b[3]) {
+  if (m->n_perm_boxes < 0) return 0;
+  double lo[3], hi[3]; /* the edge's box (finite coordinates: no fmin/fmax calls) */
+  for (int i = 0; i < 3; i++)
+    lo[i] = a[i] < b[i] ? a[i] : b[i], hi[i] = a[i] < b[i] ? b[i] : a[i];
+  for (int i = 0; i < m->n_perm_boxes; i++) {
+    const double *B = m->perm_boxes + 6 * i;
+    if (lo[0] <= B[3] && hi[0] >= B[0] && lo[1] <= B[4] && hi[1] >= B[1] && lo[2] <= B[5] &&
+        hi[2] >= B[2])
+      return 0;
+  }
+  return 1;
+}
+
 /* ∫_0^1 π(a + s(b − a)) ds: exact where π is constant along the edge; else
  * composite 3-point Gauss–Legendre on the pieces between the kinks and jumps
  * of the primitives (sphere radius and radius + falloff, stratum bounds), with
@@ -438,7 +469,9 @@ static void perm_breaks(const karst_perm_node_t *n, const double a[3], const dou
 static double perm_integral(const karst_i_cost_model_t *m, const double a[3], const double b[3],
                             double len) {
   const karst_permeability_t *perm = &m->sc->permeability;
-  if (!perm->root || perm_constant(perm->root, a, b)) return karst_permeability_eval(perm, a);
+  if (!perm->root) return perm->background;
+  if (misses_perm_boxes(m, a, b)) return m->perm_far;
+  if (perm_constant(perm->root, a, b)) return karst_permeability_eval(perm, a);
   double br[MAX_BREAKS + 1];
   int nb = 0;
   br[nb++] = 0.0;
@@ -490,20 +523,71 @@ static int on_prescribed_path(const karst_i_cost_model_t *m, const double a[3], 
   return 0;
 }
 
+/* The support boxes of the permeability primitives: a sphere returns the
+ * background from radius + falloff on (the smooth step is 1 there), a
+ * stratum outside [bottom, top]. Unknown node kinds or a tree deeper than
+ * the walk's stack leave n_perm_boxes = -1 (no shortcut). */
+static karst_error_t perm_support_boxes(karst_ctx_t *ctx, karst_i_cost_model_t *m) {
+  const karst_perm_node_t *root = m->sc->permeability.root;
+  if (!root) return KARST_SUCCESS;
+  const karst_perm_node_t *stack[64];
+  int top = 0, n = 0, cap = 0;
+  stack[top++] = root;
+  while (top > 0) {
+    const karst_perm_node_t *nd = stack[--top];
+    double B[6] = {-INFINITY, -INFINITY, -INFINITY, INFINITY, INFINITY, INFINITY};
+    if (nd->kind == KARST_PERM_SPHERE) {
+      double r = nd->radius + (nd->falloff > 0 ? nd->falloff : 0.0);
+      for (int a = 0; a < 3; a++)
+        B[a] = nd->center[a] - r, B[3 + a] = nd->center[a] + r;
+    } else if (nd->kind == KARST_PERM_STRATUM) {
+      B[2] = nd->bottom, B[5] = nd->top;
+    } else if (nd->kind == KARST_PERM_UNION || nd->kind == KARST_PERM_INTERSECTION ||
+               nd->kind == KARST_PERM_BLEND) {
+      for (int i = 0; i < nd->n_children; i++) {
+        if (top == 64) goto unknown;
+        stack[top++] = &nd->children[i];
+      }
+      continue;
+    } else {
+      goto unknown;
+    }
+    for (int a = 0; a < 6; a++)
+      if (isnan(B[a])) goto unknown;
+    if (n == cap) {
+      cap = cap ? 2 * cap : 8;
+      double *nb = realloc(m->perm_boxes, sizeof(double) * 6 * (size_t)cap);
+      if (!nb) return karst_set_error(ctx, KARST_ENOMEM, "no memory for the permeability boxes");
+      m->perm_boxes = nb;
+    }
+    memcpy(m->perm_boxes + 6 * n++, B, sizeof B);
+  }
+  /* Every box is bounded in z: above all of them each primitive returns the
+   * background, as it does all along an edge missing the boxes, and the
+   * tree combines the same values the same way there. */
+  double far[3] = {0.0, 0.0, -INFINITY};
+  for (int i = 0; i < n; i++)
+    far[2] = fmax(far[2], m->perm_boxes[6 * i + 5]);
+  far[2] = n > 0 ? far[2] + 1.0 + fabs(far[2]) : 0.0; /* strictly above */
+  if (!isfinite(far[2])) goto unknown;
+  m->perm_far = karst_permeability_eval(&m->sc->permeability, far);
+  m->n_perm_boxes = n;
+  return KARST_SUCCESS;
+unknown:
+  m->n_perm_boxes = -1;
+  return KARST_SUCCESS;
+}
+
 karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
                                       const karst_scenario_t *sc) {
+  karst_error_t err = KARST_SUCCESS;
   m->sc = sc;
   m->n_fractures = sc->n_fractures;
   m->normals = NULL;
+  m->horizon_plane = NULL;
+  m->perm_boxes = NULL;
+  m->n_perm_boxes = -1;
   m->prescribed_cos = cos(KARST_COST_PRESCRIBED_MAX_ANGLE * M_PI / 180.0);
-  if (sc->n_fractures > 0) {
-    m->normals = malloc(sizeof(double) * 3 * (size_t)sc->n_fractures);
-    if (!m->normals)
-      return karst_set_error(ctx, KARST_ENOMEM, "no memory for %d fracture normals",
-                             sc->n_fractures);
-    for (int k = 0; k < sc->n_fractures; k++)
-      karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, m->normals + 3 * k);
-  }
   /* Smallest permeability feature, for the quadrature step. */
   double fmin_size = INFINITY;
   const karst_perm_node_t *stack[64];
@@ -527,12 +611,46 @@ karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
   }
   m->perm_step = KARST_COST_STEP_FRACTION * fmin_size;
   if (!(m->perm_step > 0)) m->perm_step = INFINITY;
-  return KARST_SUCCESS;
+  /* What follows only saves time: on failure the model stays usable (the
+   * NULL tables are computed on the fly). */
+  if (sc->n_horizons > 0) {
+    m->horizon_plane = malloc(sizeof(double) * 6 * (size_t)sc->n_horizons);
+    if (!m->horizon_plane) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "no memory for %d horizons", sc->n_horizons);
+      goto cleanup;
+    }
+    const double d2r = M_PI / 180.0; /* as karst_horizon_elevation */
+    for (int h = 0; h < sc->n_horizons; h++) {
+      const karst_horizon_t *H = &sc->horizons[h];
+      double *P = m->horizon_plane + 6 * h, az = H->dip_direction * d2r;
+      P[0] = H->elevation, P[1] = H->origin[0], P[2] = H->origin[1];
+      P[3] = sin(az), P[4] = cos(az), P[5] = tan(H->dip * d2r);
+    }
+  }
+  if (sc->n_fractures > 0) {
+    m->normals = malloc(sizeof(double) * 3 * (size_t)sc->n_fractures);
+    if (!m->normals) {
+      err =
+          karst_set_error(ctx, KARST_ENOMEM, "no memory for %d fracture normals", sc->n_fractures);
+      goto cleanup;
+    }
+    for (int k = 0; k < sc->n_fractures; k++)
+      karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, m->normals + 3 * k);
+  }
+  err = perm_support_boxes(ctx, m);
+cleanup:
+  if (err != KARST_SUCCESS) karst_i_cost_model_destroy(m);
+  return err;
 }
 
 void karst_i_cost_model_destroy(karst_i_cost_model_t *m) {
   free(m->normals);
+  free(m->horizon_plane);
+  free(m->perm_boxes);
   m->normals = NULL;
+  m->horizon_plane = NULL;
+  m->perm_boxes = NULL;
+  m->n_perm_boxes = -1;
 }
 
 double karst_i_cost_edge(const karst_i_cost_model_t *m, const double a[3], const double b[3]) {
@@ -550,7 +668,7 @@ double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3]
   const karst_cost_weights_t *w = &sc->cost;
   double per_metre = w->w0;
   if (w->fracture != 0) per_metre += w->fracture * fracture_term(sc, m->normals, d);
-  if (w->horizon != 0) per_metre += w->horizon * horizon_integral(sc, a, b, len);
+  if (w->horizon != 0) per_metre += w->horizon * horizon_integral(m, a, b, len);
   if (w->permeability != 0) per_metre += w->permeability * perm_integral(m, a, b, len);
   double c = len * per_metre;
   if (sc->n_prescribed > 0 && on_prescribed_path(m, a, b, len)) c *= w->prescribed;
@@ -576,7 +694,7 @@ double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3]
  */
 double karst_cost_edge(const karst_scenario_t *sc, const double a[3], const double b[3]) {
   karst_i_cost_model_t m;
-  if (karst_i_cost_model_init(NULL, &m, sc) != KARST_SUCCESS) m.normals = NULL; /* on the fly */
+  (void)karst_i_cost_model_init(NULL, &m, sc); /* on failure, still usable: tables on the fly */
   double c = karst_i_cost_edge(&m, a, b);
   karst_i_cost_model_destroy(&m);
   return c;

@@ -12,6 +12,15 @@ typedef struct karst_i_cost_model {
   double *normals;       /**< 3 * n_fractures unit normals, or NULL (computed on the fly) */
   double perm_step;      /**< max quadrature sub-interval for cπ (m), INFINITY if π is constant */
   double prescribed_cos; /**< cos(KARST_COST_PRESCRIBED_MAX_ANGLE) */
+  /** Per horizon: elevation, origin x, y, sin and cos of the dip direction,
+   * tan of the dip (karst_horizon_elevation without its trigonometry), or NULL. */
+  double *horizon_plane;
+  /** Closed boxes (lo[3], hi[3]) outside which every permeability primitive
+   * returns the background, so that the tree is constant along an edge
+   * missing all of them; n_perm_boxes < 0 when not known (then no shortcut). */
+  double *perm_boxes;
+  int n_perm_boxes;
+  double perm_far; /**< π along any edge that misses every box (all primitives at background) */
 } karst_i_cost_model_t;
 
 /** Precompute what the scenario's edges share. Allocates the normals; ENOMEM on failure. */

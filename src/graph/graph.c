@@ -1,24 +1,15 @@
 /* The geometric graph on the samples (Paris et al. 2021, §4.1–4.2): exact k
- * nearest neighbours with FLANN, made undirected, stored in CSR form with the
+ * nearest neighbours (knn.c), made undirected, stored in CSR form with the
  * line-integral cost of every edge. */
 #include <math.h>
-#include <pthread.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include <flann/flann.h>
-
+#include "core/parallel_internal.h"
 #include "cost/cost_internal.h"
+#include "graph/graph_internal.h"
 #include "karst/graph.h"
-
-/* Queries per FLANN call: bounds the result buffers to KNN_BATCH * (k + 1)
- * indices and distances instead of n * (k + 1). */
-#define KNN_BATCH 65536
-/* Rows handed to a thread at a time (interleaved, so the split is static and
- * the result does not depend on scheduling). */
-#define ROW_BLOCK 512
-#define MAX_THREADS 256
 
 /** Make @p g an empty graph (no allocation). O(1). */
 void karst_graph_init(karst_graph_t *g) {
@@ -38,42 +29,9 @@ karst_int_t karst_graph_edge_count(const karst_graph_t *g) {
   return g->n_arcs / 2;
 }
 
-/* ------------------------------------------------------------------------ */
-/* A minimal static-partition thread pool                                    */
-/* ------------------------------------------------------------------------ */
-typedef void (*task_fn)(void *arg, int tid, int nthreads);
-typedef struct task {
-  task_fn fn;
-  void *arg;
-  int tid, nthreads;
-} task_t;
-
-static void *task_main(void *p) {
-  task_t *t = p;
-  t->fn(t->arg, t->tid, t->nthreads);
-  return NULL;
-}
-
-/* Run fn(arg, tid, nthreads) for tid = 0 .. nthreads-1; a thread that cannot
- * be created runs in the caller, so the work is the same either way. */
-static void run_parallel(int nthreads, task_fn fn, void *arg) {
-  if (nthreads < 1) nthreads = 1;
-  if (nthreads > MAX_THREADS) nthreads = MAX_THREADS;
-  pthread_t th[MAX_THREADS];
-  task_t tasks[MAX_THREADS];
-  int started[MAX_THREADS] = {0};
-  for (int t = 0; t < nthreads; t++)
-    tasks[t] = (task_t){fn, arg, t, nthreads};
-  for (int t = 1; t < nthreads; t++)
-    started[t] = pthread_create(&th[t], NULL, task_main, &tasks[t]) == 0;
-  fn(arg, 0, nthreads);
-  for (int t = 1; t < nthreads; t++) {
-    if (started[t])
-      pthread_join(th[t], NULL);
-    else
-      fn(arg, t, nthreads);
-  }
-}
+/* Rows handed to a thread at a time (interleaved, so the split is static and
+ * the result does not depend on scheduling). */
+#define ROW_BLOCK 512
 
 #define FOR_ROWS(v, n, tid, nth)                                                                   \
   for (karst_int_t blk_ = (tid); blk_ * ROW_BLOCK < (n); blk_ += (nth))                            \
@@ -176,95 +134,8 @@ cleanup:
 }
 
 /* ------------------------------------------------------------------------ */
-/* k nearest neighbours                                                      */
+/* The kNN graph                                                             */
 /* ------------------------------------------------------------------------ */
-static void sort_i32(int32_t *v, int n) {
-  for (int i = 1; i < n; i++) {
-    int32_t x = v[i];
-    int j = i - 1;
-    while (j >= 0 && v[j] > x)
-      v[j + 1] = v[j], j--;
-    v[j + 1] = x;
-  }
-}
-
-/* The k nearest other samples of every sample, each list sorted by index.
- * FLANN_INDEX_KDTREE_SINGLE is one exact k-d tree (the 3-D case needs no
- * approximation); its branch-and-bound search with eps = 0 is exact whatever
- * `checks` says. Each query is independent of the others, so the result does
- * not depend on FLANN's thread count. */
-static karst_error_t knn_lists(karst_ctx_t *ctx, const double *xyz, karst_int_t n, int k,
-                               int nthreads, int32_t *nbr, double *kd2) {
-  karst_error_t err = KARST_SUCCESS;
-  int *idx = NULL;
-  double *dist = NULL;
-  flann_log_verbosity(FLANN_LOG_NONE);
-  struct FLANNParameters fp = DEFAULT_FLANN_PARAMETERS;
-  fp.algorithm = FLANN_INDEX_KDTREE_SINGLE;
-  fp.checks = FLANN_CHECKS_UNLIMITED;
-  fp.eps = 0.0f;
-  fp.sorted = 1;
-  fp.cores = nthreads;
-  fp.leaf_max_size = 10;
-  fp.log_level = FLANN_LOG_NONE;
-  float speedup = 0;
-  /* FLANN's C API takes a non-const pointer but only reads the data set. */
-  flann_index_t index = flann_build_index_double((double *)xyz, (int)n, 3, &speedup, &fp);
-  if (!index)
-    return karst_set_error(ctx, KARST_EEXTERNAL, "FLANN could not build a k-d tree of %lld points",
-                           (long long)n);
-  size_t batch = (size_t)(n < KNN_BATCH ? n : KNN_BATCH);
-  idx = malloc(sizeof(int) * batch * (size_t)(k + 1));
-  dist = malloc(sizeof(double) * batch * (size_t)(k + 1));
-  if (!idx || !dist) {
-    err = karst_set_error(ctx, KARST_ENOMEM, "no memory for the neighbour search");
-    goto cleanup;
-  }
-  for (karst_int_t b0 = 0; b0 < n; b0 += (karst_int_t)batch) {
-    if (karst_interrupted(ctx)) {
-      err = karst_set_error(ctx, KARST_EINTERRUPTED, "neighbour search interrupted");
-      goto cleanup;
-    }
-    int rows = (int)(n - b0 < (karst_int_t)batch ? n - b0 : (karst_int_t)batch);
-    if (flann_find_nearest_neighbors_index_double(index, (double *)xyz + 3 * b0, rows, idx, dist,
-                                                  k + 1, &fp) != 0) {
-      err = karst_set_error(ctx, KARST_EEXTERNAL, "FLANN neighbour search failed");
-      goto cleanup;
-    }
-    for (int r = 0; r < rows; r++) {
-      karst_int_t v = b0 + r;
-      int32_t *out = nbr + (size_t)v * (size_t)k;
-      const int *ri = idx + (size_t)r * (size_t)(k + 1);
-      int c = 0;
-      /* Drop the query itself (with duplicate points it may not come first). */
-      for (int j = 0; j <= k && c < k; j++)
-        if (ri[j] != v && ri[j] >= 0) out[c++] = ri[j];
-      for (int j = 0; c < k && j <= k; j++)
-        out[c++] = ri[j];
-      kd2[v] = dist[(size_t)r * (size_t)(k + 1) + (size_t)k]; /* farthest of the k + 1 */
-      sort_i32(out, k);
-    }
-    karst_progress(ctx, "neighbours", (double)(b0 + rows), (double)n);
-  }
-cleanup:
-  flann_free_index_double(index, &fp);
-  free(idx);
-  free(dist);
-  return err;
-}
-
-static int contains_i32(const int32_t *v, int n, int32_t x) {
-  int lo = 0, hi = n;
-  while (lo < hi) {
-    int mid = (lo + hi) / 2;
-    if (v[mid] < x)
-      lo = mid + 1;
-    else
-      hi = mid;
-  }
-  return lo < n && v[lo] == x;
-}
-
 static karst_int_t find_arc(const karst_int_t *adj, karst_int_t b, karst_int_t e, karst_int_t x) {
   while (b < e) {
     karst_int_t mid = b + (e - b) / 2;
@@ -276,132 +147,204 @@ static karst_int_t find_arc(const karst_int_t *adj, karst_int_t b, karst_int_t e
   return b;
 }
 
+/* Sources are split into at most this many contiguous chunks for the
+ * scatter of the arcs into rows (one count array of n entries each). */
+#define SCATTER_MAX_CHUNKS 8
+
+/* First slot of the sorted run adj[b .. e) holding x or more. Usually few
+ * entries precede x (neighbours have nearby indices in the samples' Morton
+ * order): a short forward scan reads one cache line where a binary search
+ * misses four; long runs fall back to the search. */
+static karst_int_t first_at_least(const karst_int_t *adj, karst_int_t b, karst_int_t e,
+                                  karst_int_t x) {
+  for (karst_int_t i = b; i < e && i < b + 8; i++)
+    if (adj[i] >= x) return i;
+  return find_arc(adj, b, e, x);
+}
+
 typedef struct build {
   karst_ctx_t *ctx;
   karst_int_t n;
-  int k;
-  const int32_t *nbr;
+  int k, nchunks;
+  int32_t *nbr; /* n k; an arc u -> w whose reverse is not a kNN arc is stored as ~w */
+  const int32_t *kidx;
   const double *kd2;
-  unsigned char *mutual, *inside;
+  int32_t *cnt; /* nchunks n: arcs of chunk c into w, then their next slot in row w */
+  int32_t *own; /* per vertex: own arcs whose reverse is not a kNN arc */
+  unsigned char *inside;
   karst_graph_t *g;
   const karst_i_cost_model_t *model;
-  karst_int_t max_deg;
-  int failed[MAX_THREADS];
+  karst_int_t n_infinite[KARST_I_MAX_THREADS];
+  int failed[KARST_I_MAX_THREADS];
 } build_t;
 
-/* mutual[u k + j] = whether u is also among the neighbours of v = nbr[u k + j].
- * A point strictly closer to v than v's k-th neighbour is in v's list, one
- * strictly farther is not; only distances within MUTUAL_BAND (relative) of
- * the k-th distance, where FLANN's rounding or a tie could decide, are
- * looked up in the list. The band only chooses the exact path: no effect
- * on the result. */
-#define MUTUAL_BAND 1e-9
-static void task_mutual(void *p, int tid, int nth) {
+/* Contiguous source chunks per thread for the edge costs (see task_cost). */
+#define COST_CHUNKS_PER_THREAD 8
+/* Threads for the edge costs: each holds a cursor per vertex (4 n bytes). */
+#define COST_MAX_THREADS 16
+
+#define CHUNK_BEGIN(B, c) ((B)->n * (karst_int_t)(c) / (B)->nchunks)
+
+/* Whether u is among the k nearest of v: the neighbours of v are exactly
+ * the points (d², index) <= v's k-th in the search's total order, with d²
+ * computed by the same karst_i_dist2. */
+static int chosen_by(const build_t *B, karst_int_t u, int32_t v) {
+  double d = karst_i_dist2(B->g->xyz + 3 * u, B->g->xyz + 3 * (karst_int_t)v);
+  return !karst_i_knn_less(B->kd2[v], B->kidx[v], d, (int32_t)u);
+}
+
+/* The row of v is in(v) = {u : v among the k nearest of u} plus the own
+ * neighbours w of v that did not choose v. Count both, chunk by chunk. */
+static void task_count(void *p, int tid, int nth) {
   build_t *B = p;
   int k = B->k;
-  const double *x = B->g->xyz;
-  FOR_ROWS(u, B->n, tid, nth) {
-    for (int j = 0; j < k; j++) {
-      int32_t v = B->nbr[(size_t)u * k + j];
-      const double *a = x + 3 * u, *b = x + 3 * (karst_int_t)v;
-      double d2 = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                  (a[2] - b[2]) * (a[2] - b[2]);
-      double kd = B->kd2[v];
-      unsigned char m;
-      if (d2 < kd * (1 - MUTUAL_BAND))
-        m = 1;
-      else if (d2 > kd * (1 + MUTUAL_BAND))
-        m = 0;
-      else
-        m = (unsigned char)contains_i32(B->nbr + (size_t)v * k, k, (int32_t)u);
-      B->mutual[(size_t)u * k + j] = m;
+  for (int c = tid; c < B->nchunks; c += nth) {
+    int32_t *cnt = B->cnt + (size_t)c * (size_t)B->n;
+    for (karst_int_t u = CHUNK_BEGIN(B, c); u < CHUNK_BEGIN(B, c + 1); u++) {
+      B->inside[u] = (unsigned char)karst_cost_in_bedrock(B->model->sc, B->g->xyz + 3 * u);
+      int32_t *row = B->nbr + (size_t)u * k, own = 0;
+      for (int j = 0; j < k; j++) {
+        int32_t w = row[j];
+        cnt[w]++;
+        if (!chosen_by(B, u, w)) row[j] = ~w, own++;
+      }
+      B->own[u] = own;
     }
   }
 }
 
-/* ok[v] = whether vertex v is in the bedrock (edges at v are then excluded). */
-static void task_inside(void *p, int tid, int nth) {
+/* Sources in increasing order within a chunk, chunks in increasing order
+ * within a row: every in(v) run comes out sorted, whatever the threads. */
+static void task_scatter(void *p, int tid, int nth) {
   build_t *B = p;
-  FOR_ROWS(v, B->n, tid, nth)
-  B->inside[v] = (unsigned char)karst_cost_in_bedrock(B->model->sc, B->g->xyz + 3 * v);
+  int k = B->k;
+  karst_graph_t *g = B->g;
+  for (int c = tid; c < B->nchunks; c += nth) {
+    int32_t *cnt = B->cnt + (size_t)c * (size_t)B->n;
+    for (karst_int_t u = CHUNK_BEGIN(B, c); u < CHUNK_BEGIN(B, c + 1); u++) {
+      const int32_t *row = B->nbr + (size_t)u * k;
+      for (int j = 0; j < k; j++) {
+        int32_t w = row[j] < 0 ? ~row[j] : row[j];
+        g->adj[g->offsets[w] + cnt[w]++] = u;
+      }
+    }
+  }
 }
 
-/* Each row holds its own k neighbours then, in increasing order, the
- * vertices that chose it without being chosen: merge the two sorted runs. */
+static void sort_small_i64(karst_int_t *v, karst_int_t n) {
+  for (karst_int_t i = 1; i < n; i++) {
+    karst_int_t x = v[i], j = i - 1;
+    while (j >= 0 && v[j] > x)
+      v[j + 1] = v[j], j--;
+    v[j + 1] = x;
+  }
+}
+
+/* Merge the sorted in(v) run at the start of each row with the few own
+ * neighbours that did not choose v (sorted here), which fill the row. */
 static void task_merge(void *p, int tid, int nth) {
   build_t *B = p;
   karst_graph_t *g = B->g;
-  karst_int_t *tmp = malloc(sizeof(karst_int_t) * ((size_t)B->max_deg + 1));
+  int k = B->k;
+  karst_int_t *tmp = malloc(sizeof(karst_int_t) * (size_t)(k + 1));
   if (!tmp) {
     B->failed[tid] = 1;
     return;
   }
   FOR_ROWS(v, B->n, tid, nth) {
-    karst_int_t b = g->offsets[v], mid = b + B->k, e = g->offsets[v + 1];
-    if (mid >= e) continue;
-    karst_int_t i = b, j = mid, w = 0;
-    while (i < mid && j < e)
-      tmp[w++] = g->adj[i] < g->adj[j] ? g->adj[i++] : g->adj[j++];
-    while (i < mid)
-      tmp[w++] = g->adj[i++];
-    while (j < e)
-      tmp[w++] = g->adj[j++];
-    memcpy(g->adj + b, tmp, sizeof(karst_int_t) * (size_t)w);
+    int own = B->own[v];
+    if (own == 0) continue;
+    const int32_t *row = B->nbr + (size_t)v * k;
+    int m = 0;
+    for (int j = 0; j < k; j++)
+      if (row[j] < 0) tmp[m++] = ~row[j];
+    sort_small_i64(tmp, m);
+    /* Merge from the back: the free slots are at the end of the row. */
+    karst_int_t *adj = g->adj + g->offsets[v];
+    karst_int_t i = g->offsets[v + 1] - g->offsets[v] - own - 1, w = i + own;
+    int j = own - 1;
+    while (j >= 0) {
+      if (i >= 0 && adj[i] > tmp[j])
+        adj[w--] = adj[i--];
+      else
+        adj[w--] = tmp[j--];
+    }
   }
   free(tmp);
 }
 
-/* Cost of each undirected edge {u, v}, u < v, computed once by the thread
- * owning row u and written to both arcs: no two threads write the same
- * slot, and the value is a pure function of the two positions. */
+/* Cost of each undirected edge {u, v}, u < v, computed once and written to
+ * both arcs. Sources are taken in contiguous chunks, in increasing order:
+ * the sources u < v of one chunk that are neighbours of v then form one run
+ * of v's sorted row, met in the same order, so the reverse arc's slot is a
+ * per-row cursor (started at the chunk's first source by one binary search)
+ * instead of a search per edge. No two chunks write the same slot, and each
+ * value is a pure function of the two positions. */
 static void task_cost(void *p, int tid, int nth) {
   build_t *B = p;
   karst_graph_t *g = B->g;
-  FOR_ROWS(u, B->n, tid, nth) {
-    if ((u & 4095) == 0 && karst_interrupted(B->ctx)) {
-      B->failed[tid] = 2;
-      return;
-    }
-    for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++) {
-      karst_int_t v = g->adj[a];
-      if (v < u) continue;
-      double c = B->inside[u] && B->inside[v]
-                     ? karst_i_cost_edge_inside(B->model, g->xyz + 3 * u, g->xyz + 3 * v)
-                     : INFINITY;
-      g->cost[a] = c;
-      g->cost[find_arc(g->adj, g->offsets[v], g->offsets[v + 1], u)] = c;
-    }
+  karst_int_t n_inf = 0;
+  int32_t *cursor = malloc(sizeof(int32_t) * ((size_t)B->n + 1));
+  if (!cursor) {
+    B->failed[tid] = 1;
+    return;
   }
+  memset(cursor, 0xff, sizeof(int32_t) * ((size_t)B->n + 1)); /* -1: not started */
+  for (int c = tid; c < B->nchunks; c += nth) {
+    karst_int_t u0 = CHUNK_BEGIN(B, c), u1 = CHUNK_BEGIN(B, c + 1);
+    for (karst_int_t u = u0; u < u1; u++) {
+      if ((u & 4095) == 0 && karst_interrupted(B->ctx)) {
+        B->failed[tid] = 2;
+        goto cleanup;
+      }
+      for (karst_int_t a = g->offsets[u + 1] - 1; a >= g->offsets[u] && g->adj[a] > u; a--) {
+        karst_int_t v = g->adj[a], b = g->offsets[v];
+        double cst = B->inside[u] && B->inside[v]
+                         ? karst_i_cost_edge_inside(B->model, g->xyz + 3 * u, g->xyz + 3 * v)
+                         : INFINITY;
+        n_inf += !isfinite(cst);
+        g->cost[a] = cst;
+        if (cursor[v] < 0)
+          cursor[v] = (int32_t)(first_at_least(g->adj, b, g->offsets[v + 1], u0) - b);
+        g->cost[b + cursor[v]++] = cst;
+      }
+    }
+    for (karst_int_t u = u0; u < u1; u++) /* reset what this chunk started */
+      for (karst_int_t a = g->offsets[u + 1] - 1; a >= g->offsets[u] && g->adj[a] > u; a--)
+        cursor[g->adj[a]] = -1;
+  }
+cleanup:
+  B->n_infinite[tid] = n_inf;
+  free(cursor);
 }
 
 /**
  * The graph G of Paris et al. 2021, §4.1–4.2 on the samples: every sample is
- * joined to its k = sampling.k nearest other samples (exact search with
- * FLANN's single k-d tree; k is reduced to n − 1 when there are fewer
- * samples), the relation is made symmetric (union of u→v and v→u), each
- * edge gets the line integral of the cost c along its segment
- * (karst_cost_edge, including the prescribed-path factor) and edges leaving
- * the bedrock are removed. Neighbour lists are sorted by index.
- * The neighbour search (FLANN, OpenMP) and the costs (pthreads) use
- * ctx->nthreads threads; the result is identical for any thread count.
+ * joined to its k = sampling.k nearest other samples (exact search on a
+ * uniform grid, ties broken by the smaller index, see knn.c; k is reduced to
+ * n − 1 when there are fewer samples), the relation is made symmetric (union
+ * of u→v and v→u), each edge gets the line integral of the cost c along its
+ * segment (karst_cost_edge, including the prescribed-path factor) and edges
+ * leaving the bedrock are removed. Neighbour lists are sorted by index.
+ * Every stage uses ctx->nthreads threads; the result is identical for any
+ * thread count.
  * @param ctx context (threads, errors, progress, interrupt).
  * @param sc the scenario (k and the cost weights).
  * @param samples the vertices; the graph borrows samples->xyz.
  * @param out initialised graph, replaced on success, unchanged on failure.
  * @return KARST_SUCCESS, KARST_EINVAL (k < 1, non-finite sample, more than
- *         INT32_MAX samples), KARST_ENOMEM, KARST_EEXTERNAL (FLANN failed),
- *         KARST_EINTERRUPTED.
- * Time complexity: O(n k log n) for the search (k-d tree), O(n k log k) to
- * symmetrise, O(n k q) for the costs with q quadrature points per edge.
+ *         INT32_MAX samples), KARST_ENOMEM, KARST_EINTERRUPTED.
+ * Time complexity: O(n k log k) for nearly uniform samples (the search,
+ * knn.c), O(n k) to symmetrise, O(n k q) for the costs with q quadrature
+ * points per edge.
  */
 karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
                                 const karst_samples_t *samples, karst_graph_t *out) {
   karst_graph_t g;
   karst_graph_init(&g);
-  int32_t *nbr = NULL;
+  int32_t *nbr = NULL, *kidx = NULL, *cnt = NULL, *own = NULL;
   double *kd2 = NULL;
-  unsigned char *mutual = NULL, *inside = NULL;
-  karst_int_t *cursor = NULL;
+  unsigned char *inside = NULL;
   karst_i_cost_model_t model;
   memset(&model, 0, sizeof model);
   karst_error_t err = KARST_SUCCESS;
@@ -423,63 +366,70 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
   if (!g.offsets) goto nomem;
   int k = sc->sampling.k < n - 1 ? sc->sampling.k : (int)(n > 0 ? n - 1 : 0);
   if (k > 0) {
+    int nchunks = nth < SCATTER_MAX_CHUNKS ? nth : SCATTER_MAX_CHUNKS;
     nbr = malloc(sizeof(int32_t) * (size_t)n * (size_t)k);
+    kidx = malloc(sizeof(int32_t) * (size_t)n);
     kd2 = malloc(sizeof(double) * (size_t)n);
-    mutual = malloc((size_t)n * (size_t)k);
     inside = malloc((size_t)n);
-    cursor = malloc(sizeof(karst_int_t) * (size_t)n);
-    if (!nbr || !kd2 || !mutual || !inside || !cursor) goto nomem;
-    if ((err = knn_lists(ctx, samples->xyz, n, k, nth, nbr, kd2)) != KARST_SUCCESS) goto cleanup;
-    build_t B = {ctx, n, k, nbr, kd2, mutual, inside, &g, &model, 0, {0}};
-    run_parallel(nth, task_mutual, &B);
-    run_parallel(nth, task_inside, &B);
-    /* Degrees: k own neighbours plus the vertices that chose v alone. */
-    for (karst_int_t v = 0; v < n; v++)
-      g.offsets[v + 1] = k;
-    for (size_t a = 0; a < (size_t)n * (size_t)k; a++)
-      if (!mutual[a]) g.offsets[nbr[a] + 1]++;
+    own = malloc(sizeof(int32_t) * (size_t)n);
+    cnt = calloc((size_t)nchunks * (size_t)n, sizeof(int32_t));
+    if (!nbr || !kidx || !kd2 || !inside || !own || !cnt) goto nomem;
+    if ((err = karst_i_knn(ctx, samples->xyz, n, k, nth, nbr, kd2, kidx)) != KARST_SUCCESS)
+      goto cleanup;
+    build_t B = {ctx, n, k, nchunks, nbr, kidx, kd2, cnt, own, inside, &g, &model, {0}, {0}};
+    karst_i_parallel_run(nth, task_count, &B);
+    /* Row of v: in(v), then the own arcs not chosen back. Turn the chunk
+     * counts into each chunk's first slot within the row. */
     for (karst_int_t v = 0; v < n; v++) {
-      B.max_deg = g.offsets[v + 1] > B.max_deg ? g.offsets[v + 1] : B.max_deg;
-      g.offsets[v + 1] += g.offsets[v];
+      int32_t at = 0;
+      for (int c = 0; c < nchunks; c++) {
+        int32_t x = cnt[(size_t)c * (size_t)n + v];
+        cnt[(size_t)c * (size_t)n + v] = at;
+        at += x;
+      }
+      g.offsets[v + 1] = g.offsets[v] + at + own[v];
     }
     g.n_arcs = g.offsets[n];
     g.adj = malloc(sizeof(karst_int_t) * (size_t)g.n_arcs);
-    g.cost = malloc(sizeof(double) * (size_t)g.n_arcs);
-    if (!g.adj || !g.cost) goto nomem;
-    for (karst_int_t v = 0; v < n; v++) {
-      for (int j = 0; j < k; j++)
-        g.adj[g.offsets[v] + j] = nbr[(size_t)v * k + j];
-      cursor[v] = g.offsets[v] + k;
-    }
-    for (karst_int_t u = 0; u < n; u++)
-      for (int j = 0; j < k; j++)
-        if (!mutual[(size_t)u * k + j]) {
-          int32_t v = nbr[(size_t)u * k + j];
-          g.adj[cursor[v]++] = u;
-        }
-    free(nbr), free(mutual), free(cursor), free(kd2);
-    nbr = NULL, mutual = NULL, cursor = NULL, kd2 = NULL;
-    run_parallel(nth, task_merge, &B);
-    for (int t = 0; t < MAX_THREADS; t++)
+    if (!g.adj) goto nomem;
+    karst_i_parallel_run(nth, task_scatter, &B);
+    free(cnt), free(kidx), free(kd2);
+    cnt = NULL, kidx = NULL, kd2 = NULL;
+    karst_i_parallel_run(nth, task_merge, &B);
+    free(nbr), free(own);
+    nbr = NULL, own = NULL;
+    for (int t = 0; t < KARST_I_MAX_THREADS; t++)
       if (B.failed[t]) goto nomem;
+    g.cost = malloc(sizeof(double) * (size_t)g.n_arcs);
+    if (!g.cost) goto nomem;
     karst_progress(ctx, "edge costs", 0, 1);
-    run_parallel(nth, task_cost, &B);
-    for (int t = 0; t < MAX_THREADS; t++)
-      if (B.failed[t]) {
+    /* Several chunks per thread balance the costlier regions (near
+     * horizons and permeable bodies) between threads. */
+    int cth = nth < COST_MAX_THREADS ? nth : COST_MAX_THREADS;
+    B.nchunks = cth * COST_CHUNKS_PER_THREAD;
+    karst_i_parallel_run(cth, task_cost, &B);
+    karst_int_t n_inf = 0;
+    for (int t = 0; t < KARST_I_MAX_THREADS; t++) {
+      if (B.failed[t] == 1) goto nomem;
+      if (B.failed[t] == 2) {
         err = karst_set_error(ctx, KARST_EINTERRUPTED, "edge cost evaluation interrupted");
         goto cleanup;
       }
-    /* Remove the excluded (infinite) edges; costs are symmetric, so both
-     * arcs of an edge go together. */
-    karst_int_t w = 0;
-    for (karst_int_t v = 0; v < n; v++) {
-      karst_int_t b = g.offsets[v], e = g.offsets[v + 1];
-      g.offsets[v] = w;
-      for (karst_int_t a = b; a < e; a++)
-        if (isfinite(g.cost[a])) g.adj[w] = g.adj[a], g.cost[w++] = g.cost[a];
+      n_inf += B.n_infinite[t];
     }
-    g.offsets[n] = w;
-    g.n_arcs = w;
+    if (n_inf > 0) {
+      /* Remove the excluded (infinite) edges; costs are symmetric, so both
+       * arcs of an edge go together. */
+      karst_int_t w = 0;
+      for (karst_int_t v = 0; v < n; v++) {
+        karst_int_t b = g.offsets[v], e = g.offsets[v + 1];
+        g.offsets[v] = w;
+        for (karst_int_t a = b; a < e; a++)
+          if (isfinite(g.cost[a])) g.adj[w] = g.adj[a], g.cost[w++] = g.cost[a];
+      }
+      g.offsets[n] = w;
+      g.n_arcs = w;
+    }
     karst_progress(ctx, "edge costs", 1, 1);
   }
   karst_log(ctx, KARST_LOG_INFO, "graph: %lld vertices, %lld edges (k = %d)", (long long)n,
@@ -494,9 +444,10 @@ cleanup:
   karst_graph_destroy(&g);
   karst_i_cost_model_destroy(&model);
   free(nbr);
+  free(kidx);
   free(kd2);
-  free(mutual);
   free(inside);
-  free(cursor);
+  free(cnt);
+  free(own);
   return err;
 }

@@ -5,9 +5,12 @@
  * "Accurate multidimensional Poisson-disk sampling"): the background grid has
  * cells of size r/√3, whose diagonal is r, so a cell holds at most one sample
  * of radius r and a conflict can only come from the 117 cells whose distance
- * to the cell is below r. Cells are visited in one random order, for
+ * to the cell is below r. Cells are visited in a random order, for
  * KARST_SAMPLING_DART_PASSES passes, one dart per empty cell per pass, which
- * makes the whole sampling O(cells) = O(volume / r^3).
+ * makes the whole sampling O(cells) = O(volume / r^3); a cell leaves the
+ * passes once a sample's ball covers it. The fill, most of the work, runs
+ * on ctx->nthreads threads by tiles of cells with their own random streams
+ * (see "Fill" below), with a result independent of the thread count.
  *
  * Two radii: feature samples (key points, prescribed paths, horizons, water
  * table, permeable volumes) keep sampling.feature_radius r_f from one another
@@ -20,6 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/parallel_internal.h"
 #include "cost/cost_internal.h"
 #include "karst/sampling.h"
 
@@ -84,6 +88,28 @@ static int cgrid_insert(cgrid_t *g, const double p[3]) {
   return 1;
 }
 
+/* Room for `extra` more entries, so that entries can be written at
+ * reserved slots without reallocation (by several threads). */
+static int cgrid_reserve(cgrid_t *g, size_t extra) {
+  if (g->n + extra <= g->ncap) return 1;
+  size_t nc = g->n + extra;
+  double *xyz = realloc(g->xyz, sizeof(double) * 3 * nc);
+  if (!xyz) return 0;
+  g->xyz = xyz;
+  int32_t *next = realloc(g->next, sizeof(int32_t) * nc);
+  if (!next) return 0;
+  g->next = next, g->ncap = nc;
+  return 1;
+}
+
+/* Entry e (reserved, e < ncap) holds p, linked into p's column. */
+static void cgrid_put(cgrid_t *g, int32_t e, const double p[3]) {
+  int64_t col = cgrid_coord(g, p[0], 0) + g->dims[0] * cgrid_coord(g, p[1], 1);
+  memcpy(g->xyz + 3 * e, p, 3 * sizeof(double));
+  g->next[e] = g->head[col];
+  g->head[col] = e;
+}
+
 /* Whether cell (i, j, k) already holds a feature sample. */
 static int cgrid_occupied(const cgrid_t *g, int64_t i, int64_t j, int64_t k) {
   for (int32_t e = g->head[i + g->dims[0] * j]; e >= 0; e = g->next[e])
@@ -91,9 +117,9 @@ static int cgrid_occupied(const cgrid_t *g, int64_t i, int64_t j, int64_t k) {
   return 0;
 }
 
-/* Whether some entry lies closer than r to p. */
-static int cgrid_conflict(const cgrid_t *g, const double p[3], double r) {
-  if (g->n == 0) return 0;
+/* An entry closer than r to p, or NULL. */
+static const double *cgrid_conflict(const cgrid_t *g, const double p[3], double r) {
+  if (g->n == 0) return NULL;
   int64_t i0 = cgrid_coord(g, p[0] - r, 0), i1 = cgrid_coord(g, p[0] + r, 0);
   int64_t j0 = cgrid_coord(g, p[1] - r, 1), j1 = cgrid_coord(g, p[1] + r, 1);
   double r2 = r * r;
@@ -104,9 +130,9 @@ static int cgrid_conflict(const cgrid_t *g, const double p[3], double r) {
         double dz = q[2] - p[2];
         if (dz * dz >= r2) continue;
         double dx = q[0] - p[0], dy = q[1] - p[1];
-        if (dx * dx + dy * dy + dz * dz < r2) return 1;
+        if (dx * dx + dy * dy + dz * dz < r2) return q;
       }
-  return 0;
+  return NULL;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -124,10 +150,11 @@ typedef struct sampler {
    * neighbours are found by adding a precomputed linear offset */
   double cc;
   int64_t cd[3], pd[3]; /* cells per axis, without and with the border */
-  int32_t *fill;        /* sample index per cell; -1 empty, -2 empty and covered */
+  int32_t *fill;        /* per cell: -1 empty, else the sample's index in its tile's list */
   unsigned char *near;  /* 1 if a feature sample lies within rm of the cell */
   int n_off;
   int64_t delta[125]; /* linear offsets of the cells that can hold a conflicting fill sample */
+  int off[125][3];    /* the same as (di, dj, dk) */
   const char *stage;  /* for messages */
 } sampler_t;
 
@@ -136,7 +163,10 @@ static int64_t pidx(const sampler_t *S, int64_t i, int64_t j, int64_t k) {
   return (i + 2) + S->pd[0] * ((j + 2) + S->pd[1] * (k + 2));
 }
 
-static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
+/* Append p to the samples and, for a feature sample, mark the fill cells a
+ * later fill dart would have to check against it (p is already in the
+ * feature grid, or is put there by add_sample). */
+static karst_error_t record_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
   if (S->s->n >= S->sc->sampling.max_samples)
     return karst_set_error(S->ctx, KARST_ERANGE,
                            "sampling needs more than sampling.max_samples = %lld samples "
@@ -147,9 +177,6 @@ static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_so
     return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for %lld samples",
                            (long long)S->s->n + 1);
   if (src == KARST_SAMPLE_FILL) return KARST_SUCCESS;
-  if (!cgrid_insert(&S->feat, p))
-    return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the feature sample grid");
-  /* Mark the fill cells a later fill dart would have to check against p. */
   int64_t lo[3], hi[3];
   for (int a = 0; a < 3; a++) {
     double l = floor((p[a] - S->rm - S->lo[a]) / S->cc),
@@ -162,6 +189,12 @@ static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_so
       for (int64_t i = lo[0]; i <= hi[0]; i++)
         S->near[pidx(S, i, j, k)] = 1;
   return KARST_SUCCESS;
+}
+
+static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
+  if (src != KARST_SAMPLE_FILL && !cgrid_insert(&S->feat, p))
+    return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the feature sample grid");
+  return record_sample(S, p, src);
 }
 
 static void shuffle(karst_rng_t *rng, int64_t *v, size_t n) {
@@ -188,24 +221,45 @@ static int cells_push(cells_t *c, int64_t x) {
   return 1;
 }
 
+/* A horizon plane with the trigonometry of karst_horizon_elevation done
+ * once: the same operations on the same values, hence the same elevations. */
+typedef struct plane {
+  double elevation, ox, oy, sa, ca, t;
+  int flat;
+} plane_t;
+
+static plane_t plane_of(const karst_horizon_t *h) {
+  const double d2r = M_PI / 180.0, a = h->dip_direction * d2r;
+  plane_t P = {h->elevation, h->origin[0],      h->origin[1], sin(a),
+               cos(a),       tan(h->dip * d2r), h->dip == 0.0};
+  return P;
+}
+
+static double plane_elevation(const plane_t *P, double x, double y) {
+  if (P->flat) return P->elevation;
+  double along = (x - P->ox) * P->sa + (y - P->oy) * P->ca;
+  return P->elevation - along * P->t;
+}
+
 /* A region sampled at the feature radius: a layer |z − L(x, y)| <= band
  * around a horizon (or the water table), or the permeable volume. */
 typedef struct region {
   karst_sample_source_t src;
   const karst_horizon_t *layer; /* NULL for the permeable volume */
   double band;
+  plane_t plane; /* of the layer */
 } region_t;
 
 static int region_contains(const sampler_t *S, const region_t *R, const double p[3]) {
-  if (R->layer) return fabs(p[2] - karst_horizon_elevation(R->layer, p[0], p[1])) <= R->band;
+  if (R->layer) return fabs(p[2] - plane_elevation(&R->plane, p[0], p[1])) <= R->band;
   return karst_permeability_eval(&S->sc->permeability, p) < S->sc->sampling.permeable_threshold;
 }
 
 /* Layer elevation range over a column rectangle (a plane: extremes at corners). */
-static void layer_range(const karst_horizon_t *L, double x0, double x1, double y0, double y1,
-                        double *zlo, double *zhi) {
-  double z[4] = {karst_horizon_elevation(L, x0, y0), karst_horizon_elevation(L, x1, y0),
-                 karst_horizon_elevation(L, x0, y1), karst_horizon_elevation(L, x1, y1)};
+static void layer_range(const plane_t *L, double x0, double x1, double y0, double y1, double *zlo,
+                        double *zhi) {
+  double z[4] = {plane_elevation(L, x0, y0), plane_elevation(L, x1, y0), plane_elevation(L, x0, y1),
+                 plane_elevation(L, x1, y1)};
   *zlo = fmin(fmin(z[0], z[1]), fmin(z[2], z[3]));
   *zhi = fmax(fmax(z[0], z[1]), fmax(z[2], z[3]));
 }
@@ -263,15 +317,23 @@ static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
 }
 
 /* Feature-grid cells (i, j, k) overlapping the region's bounds, in the box
- * and not entirely above the terrain, as linear keys i + nx (j + ny k).
- * Columns are taken tile by tile (FILL_TILE^2 columns, tiles in a random
- * order, cells shuffled inside a tile) for memory locality, as for the fill. */
+ * and not entirely above the terrain, as linear keys i + nx (j + ny k),
+ * grouped by tiles of FILL_TILE^2 columns (in tile order; see
+ * sample_region). Each non-empty tile is recorded in *tiles. */
 #define FILL_TILE 8
-static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out) {
+typedef struct ftile {
+  size_t first, n; /* its remaining cells: cells[first .. first + n) */
+  int colour;      /* parities of its tile coordinates */
+  int32_t placed;  /* its samples, in feature-grid slots base + first .. */
+} ftile_t;
+
+static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out,
+                                  ftile_t **tiles_out, size_t *n_tiles) {
   const cgrid_t *g = &S->feat;
   aabb_t box = aabb_all();
-  int64_t *tiles = NULL;
+  ftile_t *tiles = NULL;
   karst_error_t err = KARST_SUCCESS;
+  *tiles_out = NULL, *n_tiles = 0;
   if (!R->layer) {
     const karst_permeability_t *pm = &S->sc->permeability;
     box = pm->root
@@ -287,17 +349,14 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out)
   }
   double limit = (double)KARST_SAMPLING_MAX_CELLS_PER_SAMPLE * (double)S->sc->sampling.max_samples;
   int64_t nti = (hi[0] - lo[0]) / FILL_TILE + 1, ntj = (hi[1] - lo[1]) / FILL_TILE + 1;
-  tiles = malloc(sizeof(int64_t) * (size_t)(nti * ntj));
+  tiles = malloc(sizeof(ftile_t) * (size_t)(nti * ntj));
   if (!tiles) {
     err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells", S->stage);
     goto cleanup;
   }
-  for (int64_t t = 0; t < nti * ntj; t++)
-    tiles[t] = t;
-  shuffle(S->rng, tiles, (size_t)(nti * ntj));
   for (int64_t t = 0; t < nti * ntj; t++) {
     size_t first = out->n;
-    int64_t ti = lo[0] + tiles[t] % nti * FILL_TILE, tj = lo[1] + tiles[t] / nti * FILL_TILE;
+    int64_t ti = lo[0] + t % nti * FILL_TILE, tj = lo[1] + t / nti * FILL_TILE;
     for (int64_t j = tj; j < tj + FILL_TILE && j <= hi[1]; j++)
       for (int64_t i = ti; i < ti + FILL_TILE && i <= hi[0]; i++) {
         double x0 = fmax(S->lo[0], g->origin[0] + i * g->cell);
@@ -308,7 +367,7 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out)
         double zlo = fmax(S->lo[2], box.lo[2]), zhi = fmin(fmin(S->hi[2], box.hi[2]), ztop);
         if (R->layer) {
           double llo, lhi;
-          layer_range(R->layer, x0, x1, y0, y1, &llo, &lhi);
+          layer_range(&R->plane, x0, x1, y0, y1, &llo, &lhi);
           zlo = fmax(zlo, llo - R->band), zhi = fmin(zhi, lhi + R->band);
         }
         if (zlo > zhi) continue;
@@ -330,77 +389,254 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out)
           }
         }
       }
-    shuffle(S->rng, out->v + first, out->n - first);
+    if (out->n > first)
+      tiles[(*n_tiles)++] =
+          (ftile_t){first, out->n - first, (int)(t % nti % 2 + 2 * (t / nti % 2)), 0};
   }
 cleanup:
-  free(tiles);
+  if (err != KARST_SUCCESS) free(tiles), tiles = NULL, *n_tiles = 0;
+  *tiles_out = tiles;
   return err;
 }
 
-/* Uniform point in cell (i, j, k) of a grid, clipped to [zlo, zhi] and to the box. */
-static int dart_in_cell(sampler_t *S, const double origin[3], double cell, const int64_t c[3],
-                        double zlo, double zhi, double p[3]) {
-  double lo[3], hi[3];
+/* fmax / fmin for numbers that are never NaN, without a call into libm. */
+static inline double dmax(double a, double b) {
+  return a > b ? a : b;
+}
+static inline double dmin(double a, double b) {
+  return a < b ? a : b;
+}
+
+/* The part of cell (i, j, k) of a grid within [zlo, zhi] and the box, where
+ * its darts fall; 0 when empty. */
+static int cell_box(const sampler_t *S, const double origin[3], double cell, const int64_t c[3],
+                    double zlo, double zhi, double lo[3], double hi[3]) {
   for (int a = 0; a < 3; a++) {
-    lo[a] = fmax(S->lo[a], origin[a] + c[a] * cell);
-    hi[a] = fmin(S->hi[a], origin[a] + (c[a] + 1) * cell);
+    lo[a] = dmax(S->lo[a], origin[a] + c[a] * cell);
+    hi[a] = dmin(S->hi[a], origin[a] + (c[a] + 1) * cell);
   }
-  lo[2] = fmax(lo[2], zlo), hi[2] = fmin(hi[2], zhi);
+  lo[2] = dmax(lo[2], zlo), hi[2] = dmin(hi[2], zhi);
   for (int a = 0; a < 3; a++)
     if (lo[a] > hi[a]) return 0;
-  for (int a = 0; a < 3; a++)
-    p[a] = karst_rng_uniform_range(S->rng, lo[a], hi[a]);
   return 1;
+}
+
+/* Uniform point in cell (i, j, k) of a grid, clipped to [zlo, zhi] and to the box. */
+static int dart_in_cell(const sampler_t *S, karst_rng_t *rng, const double origin[3], double cell,
+                        const int64_t c[3], double zlo, double zhi, double p[3]) {
+  double lo[3], hi[3];
+  if (!cell_box(S, origin, cell, c, zlo, zhi, lo, hi)) return 0;
+  for (int a = 0; a < 3; a++)
+    p[a] = karst_rng_uniform_range(rng, lo[a], hi[a]);
+  return 1;
+}
+
+/* Whether every corner of the box [lo, hi] is closer than r to q (the ball
+ * is convex: then every later dart in the box conflicts with q). */
+static int box_covered(const double lo[3], const double hi[3], const double q[3], double r) {
+  for (int m = 0; m < 8; m++) {
+    double d2 = 0;
+    for (int a = 0; a < 3; a++) {
+      double x = ((m >> a) & 1 ? hi[a] : lo[a]) - q[a];
+      d2 += x * x;
+    }
+    if (!(d2 < r * r)) return 0;
+  }
+  return 1;
+}
+
+/* Feature regions are sampled like the fill (see "Fill" below): tiles of
+ * FILL_TILE^2 columns coloured by the parities of their tile coordinates (4
+ * colours), the tiles of one colour concurrently. A dart reads the columns
+ * within 2 cells of its own (r_f spans less than 2 cells of r_f/√3) and
+ * writes its own column's chain; same-colour tiles are a tile apart. Each
+ * tile writes its samples into feature-grid slots reserved for it (one per
+ * cell of the tile: at most one sample per cell) and draws from its own
+ * stream, so the result does not depend on the thread count; the samples
+ * are appended to the sample set in tile order at the end. */
+typedef struct region_job {
+  sampler_t *S;
+  const region_t *R;
+  ftile_t *tiles;
+  int64_t *cells;
+  const size_t *group; /* the tiles to process now */
+  size_t n_group;
+  int32_t base; /* feature-grid slot of cell 0 of the list */
+  uint64_t seed;
+  int pass; /* -1: shuffle the cell lists */
+  int interrupted;
+} region_job_t;
+
+static void region_tile_pass(region_job_t *J, size_t t) {
+  sampler_t *S = J->S;
+  const region_t *R = J->R;
+  cgrid_t *g = &S->feat;
+  ftile_t *T = &J->tiles[t];
+  int64_t *cells = J->cells + T->first;
+  karst_rng_t rng;
+  karst_rng_derive(&rng, J->seed, (uint64_t)(J->pass + 1), (uint64_t)t);
+  if (J->pass < 0) {
+    shuffle(&rng, cells, T->n);
+    return;
+  }
+  size_t w = 0;
+  for (size_t q = 0; q < T->n; q++) {
+    int64_t key = cells[q];
+    int64_t c[3] = {key % g->dims[0], key / g->dims[0] % g->dims[1], key / g->dims[0] / g->dims[1]};
+    if (cgrid_occupied(g, c[0], c[1], c[2])) continue; /* at most one feature sample per cell */
+    double zlo = -INFINITY, zhi = INFINITY, p[3];
+    if (R->layer) {
+      double x0 = g->origin[0] + c[0] * g->cell, y0 = g->origin[1] + c[1] * g->cell;
+      layer_range(&R->plane, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
+      zlo -= R->band, zhi += R->band;
+    }
+    double blo[3], bhi[3];
+    if (!cell_box(S, g->origin, g->cell, c, zlo, zhi, blo, bhi)) continue;
+    cells[w++] = key;
+    for (int a = 0; a < 3; a++)
+      p[a] = karst_rng_uniform_range(&rng, blo[a], bhi[a]);
+    if (!region_contains(S, R, p) || !karst_cost_in_bedrock(S->sc, p)) continue;
+    const double *e = cgrid_conflict(g, p, S->rf);
+    if (e) {
+      if (box_covered(blo, bhi, e, S->rf)) w--; /* never again */
+      continue;
+    }
+    w--; /* taken */
+    cgrid_put(g, J->base + (int32_t)T->first + T->placed++, p);
+  }
+  T->n = w;
+}
+
+static void task_region(void *arg, int tid, int nth) {
+  region_job_t *J = arg;
+  for (size_t i = (size_t)tid; i < J->n_group; i += (size_t)nth) {
+    if ((i & 63) == 0 && karst_interrupted(J->S->ctx)) {
+      J->interrupted = 1;
+      return;
+    }
+    region_tile_pass(J, J->group[i]);
+  }
 }
 
 static karst_error_t sample_region(sampler_t *S, const region_t *R) {
   cells_t cells = {0};
-  karst_error_t err = region_cells(S, R, &cells);
-  if (err != KARST_SUCCESS) goto cleanup;
+  ftile_t *tiles = NULL;
+  size_t ntiles = 0, *group = NULL, gstart[5] = {0};
   cgrid_t *g = &S->feat;
-  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES && cells.n > 0; pass++) {
-    if (karst_interrupted(S->ctx)) {
-      err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
-      goto cleanup;
-    }
-    size_t w = 0;
-    for (size_t q = 0; q < cells.n; q++) {
-      int64_t key = cells.v[q];
-      int64_t c[3] = {key % g->dims[0], key / g->dims[0] % g->dims[1],
-                      key / g->dims[0] / g->dims[1]};
-      if (cgrid_occupied(g, c[0], c[1], c[2])) continue; /* at most one feature sample per cell */
-      double zlo = -INFINITY, zhi = INFINITY, p[3];
-      if (R->layer) {
-        double x0 = g->origin[0] + c[0] * g->cell, y0 = g->origin[1] + c[1] * g->cell;
-        layer_range(R->layer, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
-        zlo -= R->band, zhi += R->band;
-      }
-      cells.v[w++] = key;
-      if (!dart_in_cell(S, g->origin, g->cell, c, zlo, zhi, p)) continue;
-      if (!region_contains(S, R, p) || !karst_cost_in_bedrock(S->sc, p)) continue;
-      if (cgrid_conflict(g, p, S->rf)) continue;
-      if ((err = add_sample(S, p, R->src)) != KARST_SUCCESS) goto cleanup;
-    }
-    cells.n = w;
+  int nth = S->ctx && S->ctx->nthreads > 0 ? S->ctx->nthreads : 1;
+  karst_error_t err = region_cells(S, R, &cells, &tiles, &ntiles);
+  if (err != KARST_SUCCESS || cells.n == 0) goto cleanup;
+  if ((double)g->n + (double)cells.n >= (double)INT32_MAX || !cgrid_reserve(g, cells.n) ||
+      !(group = malloc(sizeof(size_t) * ntiles))) {
+    err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the %s sampling cells", S->stage);
+    goto cleanup;
   }
+  size_t ng = 0;
+  for (int col = 0; col < 4; col++) {
+    gstart[col] = ng;
+    for (size_t t = 0; t < ntiles; t++)
+      if (tiles[t].colour == col) group[ng++] = t;
+  }
+  gstart[4] = ng;
+  region_job_t J = {S,  R, tiles, cells.v, group, ntiles, (int32_t)g->n, karst_rng_u64(S->rng),
+                    -1, 0};
+  /* The reserved slots belong to the grid from now on (unused ones are
+   * never linked into a column). */
+  g->n += cells.n;
+  karst_i_parallel_run(nth, task_region, &J);
+  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES; pass++) {
+    int64_t order[4] = {0, 1, 2, 3};
+    shuffle(S->rng, order, 4);
+    for (int o = 0; o < 4; o++) {
+      J.group = group + gstart[order[o]], J.n_group = gstart[order[o] + 1] - gstart[order[o]];
+      J.pass = pass;
+      karst_i_parallel_run(nth, task_region, &J);
+      if (J.interrupted) {
+        err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
+        goto cleanup;
+      }
+      double placed = (double)S->s->n;
+      for (size_t t = 0; t < ntiles; t++)
+        placed += tiles[t].placed;
+      if (placed > (double)S->sc->sampling.max_samples) {
+        err = karst_set_error(S->ctx, KARST_ERANGE,
+                              "sampling needs more than sampling.max_samples = %lld samples "
+                              "(reached while placing %s samples); increase fill_radius or "
+                              "feature_radius, shrink the domain, or raise max_samples",
+                              (long long)S->sc->sampling.max_samples, S->stage);
+        goto cleanup;
+      }
+    }
+  }
+  for (size_t t = 0; t < ntiles; t++)
+    for (int32_t e = 0; e < tiles[t].placed; e++) {
+      const double *p = g->xyz + 3 * (J.base + (int64_t)tiles[t].first + e);
+      if ((err = record_sample(S, p, R->src)) != KARST_SUCCESS) goto cleanup;
+    }
 cleanup:
   free(cells.v);
+  free(tiles);
+  free(group);
   return err;
 }
 
-/* Conflict of a fill dart p in bordered cell `id`: returns -1 when p is
- * free, else the index of the conflicting fill sample, or -2 for a feature. */
-static int64_t fill_conflict(const sampler_t *S, const double p[3], int64_t id) {
-  const double *xyz = S->s->xyz;
+/* ------------------------------------------------------------------------ */
+/* Fill: parallel dart throwing by tiles of cells                            */
+/* ------------------------------------------------------------------------ */
+/* The fill grid is cut into tiles of FILL_TILE^3 cells, coloured by the
+ * parities of their tile coordinates (8 colours). A dart reads the cells
+ * within 2 cells of its own and writes only its own cell, so two tiles of
+ * one colour, a whole tile apart, never see each other's samples: the tiles
+ * of a colour are processed concurrently, the colours one after the other,
+ * in a random order drawn anew for each pass (the phase groups of Wei 2008,
+ * "Parallel Poisson disk sampling", with tiles for memory locality). Each
+ * tile draws from its own stream derived from (seed, pass, tile), so the
+ * samples do not depend on the thread count. Each tile keeps its samples in
+ * its own list (fill cells hold the index in that list) and the lists are
+ * appended in tile order at the end. */
+typedef struct tile {
+  size_t first, n; /* its remaining cells: fill_cells[first .. first + n) */
+  double *xyz;     /* its samples */
+  int32_t ns, cap;
+  int failed;
+} tile_t;
+
+typedef struct fill_job {
+  sampler_t *S;
+  tile_t *tiles;
+  double **txyz;        /* tiles[t].xyz, in a compact array for the conflict lookups */
+  int64_t *cells;       /* bordered cell ids of all tiles, grouped by tile */
+  int64_t nt[3];        /* tiles per axis */
+  const int64_t *group; /* the tiles to process now */
+  size_t n_group;
+  uint64_t seed;
+  int pass; /* -1: shuffle the cell lists */
+  int interrupted;
+} fill_job_t;
+
+static const double *fill_sample(const fill_job_t *J, const int64_t c[3], int32_t e) {
+  int64_t t = c[0] / FILL_TILE + J->nt[0] * (c[1] / FILL_TILE + J->nt[1] * (c[2] / FILL_TILE));
+  return J->txyz[t] + 3 * (int64_t)e;
+}
+
+/* Conflict of a fill dart p in cell c (bordered id `id`): NULL and *feat = 0
+ * when p is free; else the conflicting fill sample, or NULL and *feat = 1
+ * for a feature sample. */
+static const double *fill_conflict(const fill_job_t *J, const double p[3], const int64_t c[3],
+                                   int64_t id, int *feat) {
+  const sampler_t *S = J->S;
   double r2 = S->rc * S->rc;
+  *feat = 0;
   for (int o = 0; o < S->n_off; o++) {
     int32_t e = S->fill[id + S->delta[o]];
     if (e < 0) continue;
-    const double *q = xyz + 3 * (int64_t)e;
+    int64_t nc[3] = {c[0] + S->off[o][0], c[1] + S->off[o][1], c[2] + S->off[o][2]};
+    const double *q = fill_sample(J, nc, e);
     double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
-    if (dx * dx + dy * dy + dz * dz < r2) return e;
+    if (dx * dx + dy * dy + dz * dz < r2) return q;
   }
-  return S->near[id] && cgrid_conflict(&S->feat, p, S->rm) ? -2 : -1;
+  *feat = S->near[id] && cgrid_conflict(&S->feat, p, S->rm) != NULL;
+  return NULL;
 }
 
 /* Whether the ball of radius rc around q covers cell c entirely (every
@@ -424,26 +660,80 @@ static int cmp_off(const void *a, const void *b) {
   return (dx > dy) - (dx < dy);
 }
 
-/* Fill cells are visited tile by tile (tiles of FILL_TILE^3 cells in a random
- * order, cells in a random order inside each tile): every dart still sees
- * all samples placed before it, as in plain dart throwing, but consecutive
- * darts touch the same few kilobytes of the grid instead of random memory. */
+/* One pass over one tile: a dart in each of its remaining cells, in the
+ * tile's (shuffled) order; cells that can no longer take a sample leave. */
+static void fill_tile_pass(fill_job_t *J, int64_t t) {
+  sampler_t *S = J->S;
+  tile_t *T = &J->tiles[t];
+  karst_rng_t rng;
+  karst_rng_derive(&rng, J->seed, (uint64_t)(J->pass + 1), (uint64_t)t);
+  int64_t *cells = J->cells + T->first;
+  if (J->pass < 0) {
+    shuffle(&rng, cells, T->n);
+    return;
+  }
+  size_t w = 0;
+  for (size_t q = 0; q < T->n; q++) {
+    int64_t id = cells[q];
+    int64_t c[3] = {id % S->pd[0] - 2, id / S->pd[0] % S->pd[1] - 2, id / S->pd[0] / S->pd[1] - 2};
+    double p[3];
+    if (!dart_in_cell(S, &rng, S->lo, S->cc, c, -INFINITY, INFINITY, p)) continue;
+    if (!(p[2] < karst_terrain_height(&S->sc->terrain, p[0], p[1]))) {
+      cells[w++] = id;
+      continue;
+    }
+    int feat;
+    const double *e = fill_conflict(J, p, c, id, &feat);
+    if (e && cell_covered(S, c, e)) continue; /* never again */
+    if (e || feat) {
+      cells[w++] = id;
+      continue;
+    }
+    if (T->ns == T->cap) {
+      int32_t nc = T->cap ? 2 * T->cap : 16;
+      double *x = realloc(T->xyz, sizeof(double) * 3 * (size_t)nc);
+      if (!x) {
+        T->failed = 1;
+        return;
+      }
+      T->xyz = x, T->cap = nc, J->txyz[t] = x;
+    }
+    memcpy(T->xyz + 3 * T->ns, p, sizeof p);
+    S->fill[id] = T->ns++;
+  }
+  T->n = w; /* keep the cells that may still take a sample, in the same order */
+}
+
+static void task_fill(void *arg, int tid, int nth) {
+  fill_job_t *J = arg;
+  for (size_t i = (size_t)tid; i < J->n_group; i += (size_t)nth) {
+    if ((i & 63) == 0 && karst_interrupted(J->S->ctx)) {
+      J->interrupted = 1;
+      return;
+    }
+    fill_tile_pass(J, J->group[i]);
+  }
+}
 
 static karst_error_t sample_fill(sampler_t *S) {
-  cells_t cells = {0};
-  int64_t *tiles = NULL, *ktop = NULL;
+  fill_job_t J;
+  memset(&J, 0, sizeof J);
+  J.S = S;
+  int64_t *ktop = NULL, *group = NULL;
+  size_t *gstart = NULL;
   karst_error_t err = KARST_SUCCESS;
   double limit = (double)KARST_SAMPLING_MAX_CELLS_PER_SAMPLE * (double)S->sc->sampling.max_samples;
+  int nth = S->ctx && S->ctx->nthreads > 0 ? S->ctx->nthreads : 1;
   /* Active cells of each column: those starting below the highest terrain point. */
   ktop = malloc(sizeof(int64_t) * (size_t)(S->cd[0] * S->cd[1]));
-  int64_t nt[3];
   for (int a = 0; a < 3; a++)
-    nt[a] = (S->cd[a] + FILL_TILE - 1) / FILL_TILE;
-  tiles = malloc(sizeof(int64_t) * (size_t)(nt[0] * nt[1] * nt[2]));
-  if (!ktop || !tiles) {
-    err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
-    goto cleanup;
-  }
+    J.nt[a] = (S->cd[a] + FILL_TILE - 1) / FILL_TILE;
+  size_t ntiles = (size_t)(J.nt[0] * J.nt[1] * J.nt[2]);
+  J.tiles = calloc(ntiles, sizeof(tile_t));
+  J.txyz = calloc(ntiles, sizeof(double *));
+  group = malloc(sizeof(int64_t) * ntiles);
+  gstart = malloc(sizeof(size_t) * 9);
+  if (!ktop || !J.tiles || !J.txyz || !group || !gstart) goto nomem;
   double total = 0;
   for (int64_t j = 0; j < S->cd[1]; j++)
     for (int64_t i = 0; i < S->cd[0]; i++) {
@@ -465,53 +755,74 @@ static karst_error_t sample_fill(sampler_t *S) {
                           (long long)S->sc->sampling.max_samples);
     goto cleanup;
   }
-  size_t ntiles = (size_t)(nt[0] * nt[1] * nt[2]);
-  for (size_t t = 0; t < ntiles; t++)
-    tiles[t] = (int64_t)t;
-  shuffle(S->rng, tiles, ntiles);
-  for (size_t t = 0; t < ntiles; t++) {
-    int64_t ti = tiles[t] % nt[0], tj = tiles[t] / nt[0] % nt[1], tk = tiles[t] / nt[0] / nt[1];
-    size_t first = cells.n;
-    for (int64_t k = tk * FILL_TILE; k < (tk + 1) * FILL_TILE && k < S->cd[2]; k++)
-      for (int64_t j = tj * FILL_TILE; j < (tj + 1) * FILL_TILE && j < S->cd[1]; j++)
-        for (int64_t i = ti * FILL_TILE; i < (ti + 1) * FILL_TILE && i < S->cd[0]; i++)
-          if (k < ktop[i + S->cd[0] * j] && !cells_push(&cells, pidx(S, i, j, k))) {
-            err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
-            goto cleanup;
-          }
-    shuffle(S->rng, cells.v + first, cells.n - first);
-  }
-  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES && cells.n > 0; pass++) {
-    if (karst_interrupted(S->ctx)) {
-      err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
-      goto cleanup;
+  J.cells = malloc(sizeof(int64_t) * ((size_t)total + 1));
+  if (!J.cells) goto nomem;
+  /* Cell lists by tile; tiles grouped by colour (in tile order within one). */
+  size_t nc = 0, ng = 0;
+  for (int col = 0; col < 8; col++) {
+    gstart[col] = ng;
+    for (size_t t = 0; t < ntiles; t++) {
+      int64_t ti = (int64_t)t % J.nt[0], tj = (int64_t)t / J.nt[0] % J.nt[1],
+              tk = (int64_t)t / J.nt[0] / J.nt[1];
+      if ((ti & 1) + 2 * (tj & 1) + 4 * (tk & 1) != col) continue;
+      J.tiles[t].first = nc;
+      for (int64_t k = tk * FILL_TILE; k < (tk + 1) * FILL_TILE && k < S->cd[2]; k++)
+        for (int64_t j = tj * FILL_TILE; j < (tj + 1) * FILL_TILE && j < S->cd[1]; j++)
+          for (int64_t i = ti * FILL_TILE; i < (ti + 1) * FILL_TILE && i < S->cd[0]; i++)
+            if (k < ktop[i + S->cd[0] * j]) J.cells[nc++] = pidx(S, i, j, k);
+      J.tiles[t].n = nc - J.tiles[t].first;
+      if (J.tiles[t].n > 0) group[ng++] = (int64_t)t;
     }
+  }
+  gstart[8] = ng;
+  /* One draw from the stage's stream seeds every tile's stream. */
+  J.seed = karst_rng_u64(S->rng);
+  J.group = group, J.n_group = ng, J.pass = -1;
+  karst_i_parallel_run(nth, task_fill, &J);
+  for (int pass = 0; pass < KARST_SAMPLING_DART_PASSES; pass++) {
     karst_progress(S->ctx, "sampling", pass, KARST_SAMPLING_DART_PASSES);
-    size_t w = 0;
-    for (size_t q = 0; q < cells.n; q++) {
-      int64_t id = cells.v[q];
-      int64_t c[3] = {id % S->pd[0] - 2, id / S->pd[0] % S->pd[1] - 2,
-                      id / S->pd[0] / S->pd[1] - 2};
-      double p[3];
-      if (!dart_in_cell(S, S->lo, S->cc, c, -INFINITY, INFINITY, p)) continue;
-      if (!(p[2] < karst_terrain_height(&S->sc->terrain, p[0], p[1]))) {
-        cells.v[w++] = id;
-        continue;
+    int64_t order[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+    shuffle(S->rng, order, 8);
+    for (int o = 0; o < 8; o++) {
+      int col = (int)order[o];
+      J.group = group + gstart[col], J.n_group = gstart[col + 1] - gstart[col], J.pass = pass;
+      karst_i_parallel_run(nth, task_fill, &J);
+      if (J.interrupted) {
+        err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
+        goto cleanup;
       }
-      int64_t e = fill_conflict(S, p, id);
-      if (e >= 0 && cell_covered(S, c, S->s->xyz + 3 * e)) continue; /* never again */
-      if (e != -1) {
-        cells.v[w++] = id;
-        continue;
+      double placed = (double)S->s->n;
+      for (size_t i = 0; i < J.n_group; i++) {
+        if (J.tiles[J.group[i]].failed) goto nomem;
       }
-      if ((err = add_sample(S, p, KARST_SAMPLE_FILL)) != KARST_SUCCESS) goto cleanup;
-      S->fill[id] = (int32_t)(S->s->n - 1);
+      for (size_t t = 0; t < ntiles; t++)
+        placed += J.tiles[t].ns;
+      if (placed > (double)S->sc->sampling.max_samples) {
+        err = karst_set_error(S->ctx, KARST_ERANGE,
+                              "sampling needs more than sampling.max_samples = %lld samples "
+                              "(reached while placing %s samples); increase fill_radius or "
+                              "feature_radius, shrink the domain, or raise max_samples",
+                              (long long)S->sc->sampling.max_samples, S->stage);
+        goto cleanup;
+      }
     }
-    cells.n = w; /* keep the cells that may still take a sample, in the same order */
   }
+  for (size_t t = 0; t < ntiles; t++)
+    for (int32_t e = 0; e < J.tiles[t].ns; e++)
+      if ((err = add_sample(S, J.tiles[t].xyz + 3 * e, KARST_SAMPLE_FILL)) != KARST_SUCCESS)
+        goto cleanup;
+  goto cleanup;
+nomem:
+  err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
 cleanup:
-  free(cells.v);
-  free(tiles);
+  if (J.tiles)
+    for (size_t t = 0; t < ntiles; t++)
+      free(J.tiles[t].xyz);
+  free(J.tiles);
+  free(J.txyz);
+  free(J.cells);
+  free(group);
+  free(gstart);
   free(ktop);
   return err;
 }
@@ -664,7 +975,8 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
  * Within each source the samples are then ordered along a Morton curve
  * (cache locality for the graph and path stages).
  * Only points inside the domain box and strictly below the terrain are kept.
- * Every random draw comes from @p rng (same stream => same samples).
+ * Every random draw comes from @p rng or from streams derived from one draw
+ * of it (same stream => same samples, for any ctx->nthreads).
  * @param ctx context (errors, progress, interrupt).
  * @param sc the scenario (validated here: radii, domain, key points).
  * @param rng the random stream of this stage.
@@ -675,7 +987,7 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
  *         KARST_ENOMEM; KARST_EINTERRUPTED.
  * Time complexity: O(V / r_c^3 + feature volume / r_f^3) with
  * KARST_SAMPLING_DART_PASSES darts per background cell, each checking O(1)
- * neighbouring cells.
+ * neighbouring cells; the fill is divided among ctx->nthreads threads.
  */
 karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_rng_t *rng,
                                  karst_samples_t *out) {
@@ -739,8 +1051,10 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
         off[S.n_off][0] = i, off[S.n_off][1] = j, off[S.n_off][2] = k, S.n_off++;
       }
   qsort(off, (size_t)S.n_off, sizeof off[0], cmp_off);
-  for (int o = 0; o < S.n_off; o++)
+  for (int o = 0; o < S.n_off; o++) {
     S.delta[o] = off[o][0] + S.pd[0] * (off[o][1] + S.pd[1] * off[o][2]);
+    memcpy(S.off[o], off[o], sizeof off[o]);
+  }
 
   S.stage = "key point";
   for (int i = 0; i < sc->n_key_points; i++)
@@ -772,7 +1086,8 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
 
   S.stage = "horizon";
   for (int h = 0; h < sc->n_horizons; h++) {
-    region_t R = {KARST_SAMPLE_HORIZON, &sc->horizons[h], sc->sampling.feature_band};
+    region_t R = {KARST_SAMPLE_HORIZON, &sc->horizons[h], sc->sampling.feature_band,
+                  plane_of(&sc->horizons[h])};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
   S.stage = "water table";
@@ -781,12 +1096,12 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
   wt.elevation = sc->water_table;
   wt.radius = 1.0;
   if (isfinite(sc->water_table)) {
-    region_t R = {KARST_SAMPLE_WATER_TABLE, &wt, sc->sampling.feature_band};
+    region_t R = {KARST_SAMPLE_WATER_TABLE, &wt, sc->sampling.feature_band, plane_of(&wt)};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
   S.stage = "permeability";
   {
-    region_t R = {KARST_SAMPLE_PERMEABILITY, NULL, 0.0};
+    region_t R = {KARST_SAMPLE_PERMEABILITY, NULL, 0.0, {0, 0, 0, 0, 0, 0, 1}};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
   S.stage = "fill";

@@ -50,7 +50,7 @@ static int cmp_di(const void *a, const void *b) {
 }
 
 /* Brute-force reference: adjacency matrix of the union of the k nearest
- * neighbour relations (O(n² log n), independent of FLANN). */
+ * neighbour relations (O(n² log n), independent of the grid search). */
 static unsigned char *brute_knn_union(const karst_samples_t *s, int k) {
   int n = (int)s->n;
   unsigned char *A = calloc((size_t)n * n, 1);
@@ -132,7 +132,7 @@ static void test_knn_exact(void **state) {
   karst_scenario_destroy(&sc);
 }
 
-/* Collinear points (degenerate geometry for the k-d tree). */
+/* Collinear points (degenerate geometry for the grid search). */
 static void test_knn_collinear(void **state) {
   (void)state;
   karst_scenario_t sc;
@@ -314,11 +314,91 @@ static void test_pipeline(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* A scenario with every cost term: a dipping horizon, three fracture
+ * families, a blend of a permeable sphere and a stratum (exercising the
+ * shortcut for edges far from every primitive), under a flat terrain.
+ * Expected values: each arc's cost is karst_cost_edge of its ends (the
+ * public single-edge function, from the smaller index), both arcs carry it, and it agrees with an
+ * independent 4000-point midpoint rule of karst_cost_point along the edge
+ * (tolerance: the rule's error bound for the stratum's jumps, see below).
+ * 1, 2 and 5 threads give identical graphs. */
+static void test_costs_all_terms(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  open_scenario(&sc, 10);
+  sc.cost.horizon = 1, sc.cost.fracture = 0.7, sc.cost.permeability = 2;
+  sc.n_horizons = 1;
+  sc.horizons = calloc(1, sizeof(karst_horizon_t));
+  sc.horizons[0].elevation = 40, sc.horizons[0].radius = 6, sc.horizons[0].dip = 10;
+  sc.horizons[0].dip_direction = 30, sc.horizons[0].origin[0] = 50, sc.horizons[0].origin[1] = 50;
+  sc.n_fractures = 3;
+  sc.fractures = calloc(3, sizeof(karst_fracture_t));
+  const double F[3][3] = {{0, 90, 0.5}, {90, 90, 0.5}, {30, 70, 0.3}};
+  for (int i = 0; i < 3; i++)
+    sc.fractures[i].dip_direction = F[i][0], sc.fractures[i].dip = F[i][1],
+    sc.fractures[i].weight = F[i][2];
+  sc.permeability.background = 0.9;
+  karst_perm_node_t *root = calloc(1, sizeof(karst_perm_node_t));
+  sc.permeability.root = root;
+  root->kind = KARST_PERM_BLEND, root->n_children = 2;
+  root->children = calloc(2, sizeof(karst_perm_node_t));
+  karst_perm_node_t *sp = &root->children[0], *st = &root->children[1];
+  sp->kind = KARST_PERM_SPHERE, sp->center[0] = 30, sp->center[1] = 60, sp->center[2] = 50;
+  sp->radius = 8, sp->falloff = 6, sp->resistance = 0.1, sp->weight = 2;
+  st->kind = KARST_PERM_STRATUM, st->bottom = 70, st->top = 74, st->resistance = 0.3;
+  st->weight = 1;
+  karst_samples_t s;
+  random_samples(&s, 1500, 17, 0);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_graph_t g[3];
+  const int threads[3] = {1, 2, 5};
+  for (int t = 0; t < 3; t++) {
+    karst_graph_init(&g[t]);
+    ctx.nthreads = threads[t];
+    assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g[t]), KARST_SUCCESS);
+  }
+  check_symmetric(&g[0]);
+  check_against_brute(&s, &g[0], 10);
+  for (int t = 1; t < 3; t++) {
+    assert_int_equal(g[0].n_arcs, g[t].n_arcs);
+    assert_memory_equal(g[0].adj, g[t].adj, sizeof(karst_int_t) * (size_t)g[0].n_arcs);
+    assert_memory_equal(g[0].cost, g[t].cost, sizeof(double) * (size_t)g[0].n_arcs);
+  }
+  for (karst_int_t v = 0; v < g[0].n; v++)
+    for (karst_int_t a = g[0].offsets[v]; a < g[0].offsets[v + 1]; a++) {
+      karst_int_t w = g[0].adj[a];
+      const double *p = s.xyz + 3 * v, *q = s.xyz + 3 * w;
+      /* computed once, from the smaller index to the larger */
+      assert_true(g[0].cost[a] ==
+                  (v < w ? karst_cost_edge(&sc, p, q) : karst_cost_edge(&sc, q, p)));
+      if (v % 37 != 0) continue;
+      double d[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, sum = 0;
+      const int m = 4000;
+      for (int i = 0; i < m; i++) {
+        double x[3], t = (i + 0.5) / m;
+        for (int c = 0; c < 3; c++)
+          x[c] = p[c] + t * d[c];
+        sum += karst_cost_point(&sc, x, d);
+      }
+      /* The stratum makes π jump (by at most 1) where the edge crosses its
+       * two faces; a midpoint rule errs by at most |jump| h / 2 per jump,
+       * h = len / m, on top of the O(h²) smooth part. */
+      double len = sqrt(d2(p, q)), ref = sum / m * len;
+      assert_close(g[0].cost[a], ref, sc.cost.permeability * len / m + 1e-6 * ref);
+    }
+  for (int t = 0; t < 3; t++)
+    karst_graph_destroy(&g[t]);
+  karst_samples_destroy(&s);
+  karst_scenario_destroy(&sc);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_knn_exact),         cmocka_unit_test(test_knn_collinear),
       cmocka_unit_test(test_graph_small_cases), cmocka_unit_test(test_graph_excludes_air),
       cmocka_unit_test(test_from_edges),        cmocka_unit_test(test_pipeline),
+      cmocka_unit_test(test_costs_all_terms),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -170,6 +170,37 @@ static void test_sampling_determinism(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* The fill runs in parallel by tiles with their own derived streams: 1, 2
+ * and 4 threads give byte-identical samples (here about 240 tiles of the
+ * fill grid), which still satisfy every distance rule. */
+static void test_sampling_threads(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  scenario(&sc);
+  sc.sampling.fill_radius = 3;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_samples_t s[3];
+  const int threads[3] = {1, 2, 4};
+  for (int t = 0; t < 3; t++) {
+    karst_rng_t rng;
+    karst_rng_init(&rng, 11, 0);
+    karst_samples_init(&s[t]);
+    ctx.nthreads = threads[t];
+    assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s[t]), KARST_SUCCESS);
+  }
+  for (int t = 1; t < 3; t++) {
+    assert_int_equal(s[0].n, s[t].n);
+    assert_memory_equal(s[0].xyz, s[t].xyz, sizeof(double) * 3 * (size_t)s[0].n);
+    assert_memory_equal(s[0].source, s[t].source, (size_t)s[0].n);
+  }
+  assert_true(s[0].n > 5000);
+  check_poisson(&sc, &s[0]);
+  for (int t = 0; t < 3; t++)
+    karst_samples_destroy(&s[t]);
+  karst_scenario_destroy(&sc);
+}
+
 /* Dipping horizon under a tilted grid terrain; no key points; water table
  * below the box (no water-table samples); prescribed path samples. */
 static void test_sampling_dip_grid_prescribed(void **state) {
@@ -294,6 +325,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_sampling_rules),
       cmocka_unit_test(test_sampling_determinism),
+      cmocka_unit_test(test_sampling_threads),
       cmocka_unit_test(test_sampling_dip_grid_prescribed),
       cmocka_unit_test(test_sampling_degenerate),
   };

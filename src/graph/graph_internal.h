@@ -1,0 +1,44 @@
+/* Shared by the files of the graph module: the exact k-nearest-neighbour
+ * search on a uniform grid (knn.c) and the squared distance both it and the
+ * symmetrisation in graph.c must compute identically. */
+#ifndef KARST_GRAPH_INTERNAL_H
+#define KARST_GRAPH_INTERNAL_H
+
+#include <stdint.h>
+
+#include "karst/common.h"
+
+/**
+ * Squared Euclidean distance, always evaluated as ((dx² + dy²) + dz²) with
+ * d = a − b. The neighbour search orders points by this exact double and the
+ * symmetrisation decides "is u among v's neighbours" by comparing it with v's
+ * k-th value, so both must use this one function (rounding is symmetric:
+ * (a − b)² = (b − a)² exactly in IEEE arithmetic).
+ */
+static inline double karst_i_dist2(const double *a, const double *b) {
+  double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+  return (dx * dx + dy * dy) + dz * dz;
+}
+
+/** (d, i) < (e, j) in the lexicographic order that breaks distance ties by index. */
+static inline int karst_i_knn_less(double d, int32_t i, double e, int32_t j) {
+  return d < e || (d == e && i < j);
+}
+
+/**
+ * The k nearest other points of every point, ties broken by the smaller
+ * index, so that the result is one well-defined set (no "up to ties").
+ * @param ctx context (errors, interrupt, progress "neighbours").
+ * @param xyz 3 n coordinates, all finite; @param n points, 2 <= n < INT32_MAX.
+ * @param k neighbours per point, 1 <= k <= n − 1.
+ * @param nthreads worker threads (the result does not depend on them).
+ * @param nbr out, n k indices: the neighbours of v are nbr[v k .. v k + k − 1], in
+ *        an unspecified (but deterministic) order.
+ * @param kd2 out, n: the k-th smallest squared distance (karst_i_dist2) of v.
+ * @param kidx out, n: the index of that k-th neighbour.
+ * @return KARST_SUCCESS, KARST_ENOMEM, KARST_EINTERRUPTED.
+ */
+karst_error_t karst_i_knn(karst_ctx_t *ctx, const double *xyz, karst_int_t n, int k, int nthreads,
+                          int32_t *nbr, double *kd2, int32_t *kidx);
+
+#endif
