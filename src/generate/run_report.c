@@ -166,7 +166,8 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   fputs(", \"feature_radius\": ", fp), json_num(fp, sc->sampling.feature_radius);
   fputs(", \"permeable_threshold\": ", fp), json_num(fp, sc->sampling.permeable_threshold);
   fputs(", \"feature_band\": ", fp), json_num(fp, sc->sampling.feature_band);
-  fprintf(fp, ", \"k\": %d, \"max_samples\": %lld},\n", sc->sampling.k,
+  fprintf(fp, ", \"k\": %d, \"knn\": \"%s\", \"max_samples\": %lld},\n", sc->sampling.k,
+          sc->sampling.knn == KARST_KNN_FLANN ? "flann" : "grid",
           (long long)sc->sampling.max_samples);
   kv_num(fp, I, "gamma", sc->gamma, 0);
   kv_num(fp, I, "reuse", sc->reuse, 0);

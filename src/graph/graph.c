@@ -374,8 +374,10 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
     own = malloc(sizeof(int32_t) * (size_t)n);
     cnt = calloc((size_t)nchunks * (size_t)n, sizeof(int32_t));
     if (!nbr || !kidx || !kd2 || !inside || !own || !cnt) goto nomem;
-    if ((err = karst_i_knn(ctx, samples->xyz, n, k, nth, nbr, kd2, kidx)) != KARST_SUCCESS)
-      goto cleanup;
+    err = sc->sampling.knn == KARST_KNN_FLANN
+              ? karst_i_knn_flann(ctx, samples->xyz, n, k, nth, nbr, kd2, kidx)
+              : karst_i_knn(ctx, samples->xyz, n, k, nth, nbr, kd2, kidx);
+    if (err != KARST_SUCCESS) goto cleanup;
     build_t B = {ctx, n, k, nchunks, nbr, kidx, kd2, cnt, own, inside, &g, &model, {0}, {0}};
     karst_i_parallel_run(nth, task_count, &B);
     /* Row of v: in(v), then the own arcs not chosen back. Turn the chunk

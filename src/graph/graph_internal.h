@@ -41,4 +41,8 @@ static inline int karst_i_knn_less(double d, int32_t i, double e, int32_t j) {
 karst_error_t karst_i_knn(karst_ctx_t *ctx, const double *xyz, karst_int_t n, int k, int nthreads,
                           int32_t *nbr, double *kd2, int32_t *kidx);
 
+/** The same through FLANN's exact single k-d tree (knn_flann.c, sampling.knn = flann). */
+karst_error_t karst_i_knn_flann(karst_ctx_t *ctx, const double *xyz, karst_int_t n, int k,
+                                int nthreads, int32_t *nbr, double *kd2, int32_t *kidx);
+
 #endif

@@ -1041,6 +1041,9 @@ static const field_t cost_fields[] = {
 };
 static const schema_t cost_schema = {cost_fields, 6};
 
+/* Indexed by karst_knn_method_t. */
+static const char *const knn_method_names[] = {"grid", "flann"};
+
 static const field_t sampling_fields[] = {
     {.key = "fill_radius",
      .type = T_NUM,
@@ -1063,8 +1066,13 @@ static const field_t sampling_fields[] = {
      .type = T_I64,
      .off = offsetof(karst_sampling_t, max_samples),
      .range = RANGE_GE(1, "")},
+    {.key = "knn",
+     .type = T_ENUM,
+     .off = offsetof(karst_sampling_t, knn),
+     .names = knn_method_names,
+     .n_names = 2},
 };
-static const schema_t sampling_schema = {sampling_fields, 6};
+static const schema_t sampling_schema = {sampling_fields, 7};
 
 static const field_t skeleton_fields[] = {
     {.key = "gamma",

@@ -81,6 +81,15 @@ for f in network.vtp network_nodes.dat network_links.dat samples.vtp; do
   cmp -s "$TMP/a/$f" "$TMP/b/$f" || fail "$f differs between two runs with seed 5"
 done
 
+# FLANN's exact k-d tree (sampling.knn: flann) builds the same graph, hence the same network.
+sed 's/^sampling:/sampling:\n  knn: flann/' "$TMP/small.yaml" > "$TMP/flann.yaml"
+grep -q "knn: flann" "$TMP/flann.yaml" || fail "could not write the FLANN scenario"
+"$KARST" generate "$TMP/flann.yaml" -o "$TMP/f" --seed 5 --quiet || fail "FLANN run failed"
+grep -q '"knn": "flann"' "$TMP/f/run.json" || fail "run.json does not record knn: flann"
+for f in network.vtp network_nodes.dat network_links.dat; do
+  cmp -s "$TMP/a/$f" "$TMP/f/$f" || fail "$f differs between the grid and FLANN searches"
+done
+
 # Another seed: another network.
 "$KARST" generate "$TMP/small.yaml" -o "$TMP/c" --seed 6 --quiet || fail "seed 6 run failed"
 cmp -s "$TMP/a/network_nodes.dat" "$TMP/c/network_nodes.dat" && fail "seeds 5 and 6 gave the same network"

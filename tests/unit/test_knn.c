@@ -2,7 +2,8 @@
  * against brute force: the k smallest (squared distance, index) pairs,
  * computed by sorting all n − 1 others (an independent O(n² log n) method).
  * Covers ties on a lattice, clustered points, identical points, collinear and
- * coplanar points, n = 2, and independence of the thread count. */
+ * coplanar points, n = 2, and independence of the thread count; and FLANN's
+ * exact k-d tree (knn_flann.c) against the grid search. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -127,11 +128,39 @@ static void test_knn_degenerate(void **state) {
   free(xyz);
 }
 
+/* FLANN's exact single k-d tree (sampling.knn = flann) and the grid search give the same
+ * neighbour lists, k-th distances and k-th indices on 20 000 random points (no exact ties),
+ * k = 40 as in Paris et al. 2021: two independent implementations of one definition. */
+static void test_knn_flann_agrees(void **state) {
+  (void)state;
+  const int n = 20000, k = 40;
+  double *xyz = malloc(sizeof(double) * 3 * (size_t)n);
+  karst_rng_t r;
+  karst_rng_init(&r, 17, 0);
+  for (int i = 0; i < 3 * n; i++) xyz[i] = karst_rng_uniform_range(&r, 0, 500);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  int32_t *a = malloc(sizeof(int32_t) * (size_t)n * k), *b = malloc(sizeof(int32_t) * (size_t)n * k);
+  int32_t *ka = malloc(4 * (size_t)n), *kb = malloc(4 * (size_t)n);
+  double *da = malloc(8 * (size_t)n), *db = malloc(8 * (size_t)n);
+  assert_int_equal(karst_i_knn(&ctx, xyz, n, k, 2, a, da, ka), KARST_SUCCESS);
+  assert_int_equal(karst_i_knn_flann(&ctx, xyz, n, k, 2, b, db, kb), KARST_SUCCESS);
+  for (int v = 0; v < n; v++) {
+    qsort(a + (size_t)v * k, k, sizeof(int32_t), cmp_i32);
+    qsort(b + (size_t)v * k, k, sizeof(int32_t), cmp_i32);
+    assert_memory_equal(a + (size_t)v * k, b + (size_t)v * k, sizeof(int32_t) * k);
+    assert_true(da[v] == db[v]);
+    assert_int_equal(ka[v], kb[v]);
+  }
+  free(xyz), free(a), free(b), free(ka), free(kb), free(da), free(db);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_knn_lattice_ties),
       cmocka_unit_test(test_knn_clustered),
       cmocka_unit_test(test_knn_degenerate),
+      cmocka_unit_test(test_knn_flann_agrees),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
