@@ -36,6 +36,9 @@ char *karst_temp_name(const char *path);
 /** Rename @p tmp onto @p path, removing @p tmp on failure. */
 karst_error_t karst_rename_into_place(karst_ctx_t *ctx, const char *tmp, const char *path);
 
+/** Write @p s as a JSON string literal with the escapes JSON requires (NULL: null). */
+void karst_json_string(FILE *fp, const char *s);
+
 /** Create directory @p dir and its parents (like mkdir -p). */
 karst_error_t karst_mkdir_p(karst_ctx_t *ctx, const char *dir);
 

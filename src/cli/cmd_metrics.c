@@ -46,19 +46,6 @@ static int find_published_table(char *out, size_t n) {
   return -1;
 }
 
-static void json_string(FILE *fp, const char *s) {
-  fputc('"', fp);
-  for (; *s; s++) {
-    unsigned char c = (unsigned char)*s;
-    if (c == '"' || c == '\\')
-      fprintf(fp, "\\%c", c);
-    else if (c < 0x20)
-      fprintf(fp, "\\u%04x", c);
-    else
-      fputc(c, fp);
-  }
-  fputc('"', fp);
-}
 
 static void csv_string(FILE *fp, const char *s) {
   if (!strpbrk(s, ",\"\n\r")) {
@@ -94,7 +81,7 @@ static void write_json(FILE *fp, const row_t *rows, int nrows, const karst_metri
   fputs("[\n", fp);
   for (int r = 0; r < nrows; r++) {
     fputs("{\"file\": ", fp);
-    json_string(fp, rows[r].file);
+    karst_json_string(fp, rows[r].file);
     for (int k = 0; k < nf; k++) {
       fprintf(fp, ", \"%s\": ", f[k].key);
       put_value(fp, &f[k], karst_metric_value(&rows[r].m, &f[k]), "null");

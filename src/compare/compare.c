@@ -1,4 +1,5 @@
 /* Comparison of field surveys with an ensemble (include/karst/compare.h). */
+#include "karst/io.h"
 #include "karst/compare.h"
 
 #include <errno.h>
@@ -449,18 +450,6 @@ static void json_num(FILE *fp, const char *key, double v, int comma) {
     fputs("null", fp);
   if (comma) fputs(", ", fp);
 }
-static void json_str(FILE *fp, const char *s) {
-  fputc('"', fp);
-  for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-    if (*p == '"' || *p == '\\')
-      fprintf(fp, "\\%c", *p);
-    else if (*p < 0x20)
-      fprintf(fp, "\\u%04x", *p);
-    else
-      fputc(*p, fp);
-  }
-  fputc('"', fp);
-}
 static void csv_str(FILE *fp, const char *s) {
   if (!strpbrk(s, ",\"\n\r")) {
     fputs(s, fp);
@@ -518,14 +507,14 @@ karst_error_t karst_compare_write(karst_ctx_t *ctx, FILE *fp, karst_compare_form
     for (int s = 0; s < n; s++) {
       fputs(s ? ",\n {\"survey\": " : "\n {\"survey\": ", fp);
       if (results[s].label)
-        json_str(fp, results[s].label);
+        karst_json_string(fp, results[s].label);
       else
         fputs("null", fp);
       fputs(", \"metrics\": {", fp);
       for (int k = 0; k < results[s].n_rows; k++) {
         const karst_compare_row_t *r = &results[s].rows[k];
         fputs(k ? ",\n   " : "\n   ", fp);
-        json_str(fp, r->metric);
+        karst_json_string(fp, r->metric);
         fputs(": {", fp);
         json_num(fp, "survey", r->survey, 1);
         json_num(fp, "percentile", r->percentile, 1);

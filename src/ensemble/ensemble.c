@@ -438,20 +438,6 @@ static karst_int_t mpi_sum(int ranks, karst_int_t local) {
 /* ------------------------------------------------------------------------ */
 /* Collection files                                                         */
 /* ------------------------------------------------------------------------ */
-static void json_string(FILE *fp, const char *s) {
-  fputc('"', fp);
-  for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-    if (*p == '"' || *p == '\\')
-      fprintf(fp, "\\%c", *p);
-    else if (*p == '\n')
-      fputs("\\n", fp);
-    else if (*p < 0x20)
-      fprintf(fp, "\\u%04x", *p);
-    else
-      fputc(*p, fp);
-  }
-  fputc('"', fp);
-}
 
 /* Read the data row of a member's metrics.csv (after checking its header). */
 static karst_error_t read_member_row(karst_ctx_t *ctx, const char *path, const char *header,
@@ -545,15 +531,15 @@ static karst_error_t write_collection_files(karst_ctx_t *ctx, const char *dir,
   err = karst_atomic_open(ctx, &f, path, "wb");
   if (err) goto cleanup;
   fprintf(f.fp, "{\n  \"karst_version\": ");
-  json_string(f.fp, karst_version());
+  karst_json_string(f.fp, karst_version());
   fprintf(f.fp, ",\n  \"scenario\": ");
   if (opt->scenario_path)
-    json_string(f.fp, opt->scenario_path);
+    karst_json_string(f.fp, opt->scenario_path);
   else
     fputs("null", f.fp);
   fprintf(f.fp, ",\n  \"scenario_hash\": ");
   if (opt->scenario_hash)
-    json_string(f.fp, opt->scenario_hash);
+    karst_json_string(f.fp, opt->scenario_hash);
   else
     fputs("null", f.fp);
   fprintf(f.fp, ",\n  \"seed\": %" PRIu64 ",\n  \"realisations\": %" PRId64 ",\n", opt->seed, n);
@@ -561,7 +547,7 @@ static karst_error_t write_collection_files(karst_ctx_t *ctx, const char *dir,
   fprintf(f.fp, "  \"metrics\": [");
   for (int k = 0; k < h->n_metrics; k++) {
     if (k) fputs(", ", f.fp);
-    json_string(f.fp, h->metric_names[k]);
+    karst_json_string(f.fp, h->metric_names[k]);
   }
   fprintf(f.fp, "],\n  \"parameters\": {\n");
   if (opt->parameters_json) fputs(opt->parameters_json, f.fp);

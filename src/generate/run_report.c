@@ -8,18 +8,6 @@
 #include "karst/generate.h"
 #include "karst/io.h"
 
-static void json_string(FILE *fp, const char *s) {
-  fputc('"', fp);
-  for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p; p++) {
-    if (*p == '"' || *p == '\\')
-      fprintf(fp, "\\%c", *p);
-    else if (*p < 0x20)
-      fprintf(fp, "\\u%04x", *p);
-    else
-      fputc(*p, fp);
-  }
-  fputc('"', fp);
-}
 
 /* A JSON number (shortest round-trip form), or null for NaN / infinities. */
 static void json_num(FILE *fp, double v) {
@@ -94,12 +82,12 @@ static const char *keypoint_type(karst_keypoint_type_t t) {
 void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   const char *I = "    ";
   fputs("    \"name\": ", fp);
-  json_string(fp, sc->name);
+  karst_json_string(fp, sc->name);
   fputs(",\n    \"domain_min\": ", fp), vec3(fp, sc->domain_min);
   fputs(",\n    \"domain_max\": ", fp), vec3(fp, sc->domain_max);
   fputs(",\n    \"terrain\": {", fp);
   if (sc->terrain.is_grid) {
-    fputs("\"grid\": ", fp), json_string(fp, sc->terrain.path);
+    fputs("\"grid\": ", fp), karst_json_string(fp, sc->terrain.path);
     fprintf(fp, ", \"ncols\": %lld, \"nrows\": %lld, \"cellsize\": ", (long long)sc->terrain.ncols,
             (long long)sc->terrain.nrows);
     json_num(fp, sc->terrain.cellsize);
@@ -140,7 +128,7 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   for (int i = 0; i < sc->n_key_points; i++) {
     const karst_keypoint_t *k = &sc->key_points[i];
     fputs(i ? ",\n      {\"name\": " : "\n      {\"name\": ", fp);
-    json_string(fp, k->name);
+    karst_json_string(fp, k->name);
     fprintf(fp, ", \"type\": \"%s\", \"position\": ", keypoint_type(k->type));
     vec3(fp, k->p);
     fputc('}', fp);
@@ -148,9 +136,9 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   fputs("],\n    \"prescribed_paths\": [", fp);
   for (int i = 0; i < sc->n_prescribed; i++) {
     fputs(i ? ", [" : "[", fp);
-    json_string(fp, sc->key_points[sc->prescribed[i].a].name);
+    karst_json_string(fp, sc->key_points[sc->prescribed[i].a].name);
     fputs(", ", fp);
-    json_string(fp, sc->key_points[sc->prescribed[i].b].name);
+    karst_json_string(fp, sc->key_points[sc->prescribed[i].b].name);
     fputc(']', fp);
   }
   fputs("],\n    \"cost\": {\"w0\": ", fp);
@@ -223,15 +211,15 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   FILE *fp = f.fp;
   const char *I = "    ";
   fputs("{\n  \"karst_version\": ", fp);
-  json_string(fp, karst_version());
+  karst_json_string(fp, karst_version());
   fputs(",\n  \"scenario\": ", fp);
   if (sc->path)
-    json_string(fp, sc->path);
+    karst_json_string(fp, sc->path);
   else
     fputs("null", fp);
   fputs(",\n  \"scenario_hash\": ", fp);
   if (sc->path)
-    json_string(fp, hash);
+    karst_json_string(fp, hash);
   else
     fputs("null", fp);
   fprintf(fp, ",\n  \"seed\": %llu,\n  \"realisation\": %llu,\n", (unsigned long long)seed,
