@@ -82,13 +82,16 @@ echo "interrupted run exited with $rc; $(ls "$T/k/realisations" | wc -l) entries
 [ -z "$(find "$T/k" -name '.*.tmp.*')" ] || { echo "FAIL: temporary files left after SIGTERM"; find "$T/k" -name '.*.tmp.*'; fail=1; }
 check 0 "re-run after kill" "$KARST" ensemble "$SCEN" -n 12 -o "$T/k" -j 1 --seed 5 --quiet
 same_tree "$T/ref" "$T/k" && echo "ok: killed + re-run = uninterrupted" || { echo "FAIL: killed + re-run differs"; fail=1; }
-# MPI with 3 processes writes the same files.
-if command -v mpirun >/dev/null 2>&1; then
-  if mpirun --allow-run-as-root --oversubscribe -np 3 "$KARST" ensemble "$SCEN" -n 12 -o "$T/mpi" -j 1 --seed 5 --quiet >"$T/mpi.log" 2>&1; then
-    same_tree "$T/ref" "$T/mpi" && echo "ok: mpirun -np 3 = single process" || { echo "FAIL: MPI output differs"; fail=1; }
-  else
-    echo "FAIL: mpirun"; cat "$T/mpi.log"; fail=1
-  fi
+# MPI with 3 processes writes the same files. In sanitizer builds LeakSanitizer reports Open MPI's
+# own allocations at exit (its plugins, ompi_op_base_op_select), not karst's: leak detection is
+# off for this one run (karst's leaks are checked by every other run of this script).
+if ! command -v mpirun >/dev/null 2>&1; then
+  echo "FAIL: mpirun not found (scripts/install-deps installs Open MPI)"; fail=1
+elif mpirun --allow-run-as-root --oversubscribe -np 3 -x ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" \
+    "$KARST" ensemble "$SCEN" -n 12 -o "$T/mpi" -j 1 --seed 5 --quiet >"$T/mpi.log" 2>&1; then
+  same_tree "$T/ref" "$T/mpi" && echo "ok: mpirun -np 3 = single process" || { echo "FAIL: MPI output differs"; fail=1; }
+else
+  echo "FAIL: mpirun"; cat "$T/mpi.log"; fail=1
 fi
 # Compare and report on the real ensemble with a real survey.
 check 0 "compare with Sakany" "$KARST" compare "$T/ref" --survey "$SRC/datasets/surveys/karstnet/Sakany_nodes.dat"
