@@ -69,8 +69,8 @@ karst_error_t karst_published_read(karst_ctx_t *ctx, const char *path, karst_pub
 const karst_published_range_t *karst_published_find(const karst_published_t *p, const char *key);
 /**
  * Find datasets/published_metrics.csv: $KARST_DATA_DIR, then beside the
- * running program (../datasets, ../../datasets, ../share/karst/datasets), then
- * ./datasets. Writes the path into @p out. KARST_ENOTFOUND names the places tried.
+ * running program (../datasets, ../../datasets: a build tree; ../share/karst: an
+ * installed prefix), then the installed data directory, then ./datasets. Writes the path into @p out. KARST_ENOTFOUND names the places tried.
  */
 karst_error_t karst_published_locate(karst_ctx_t *ctx, char *out, size_t size);
 

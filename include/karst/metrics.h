@@ -75,6 +75,7 @@ double karst_metric_value(const karst_metrics_t *m, const karst_metric_field_t *
  */
 typedef struct karst_metrics_observed {
   int n_caves;
+  int n[KARST_METRIC_FIELDS_MAX]; /**< caves with a value of each field (2-D caves lack some) */
   double min[KARST_METRIC_FIELDS_MAX];
   double max[KARST_METRIC_FIELDS_MAX];
   /** Half a unit in the last printed digit of min / max: the table is rounded. */

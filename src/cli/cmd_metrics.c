@@ -20,31 +20,6 @@ typedef struct {
   double convergence; /* degrees, NAN when not applied */
 } row_t;
 
-/* The published table: --observed-table FILE, else $KARST_DATA_DIR, ./datasets,
- * or datasets/ beside the program (build tree or installed share/karst). */
-static int find_published_table(char *out, size_t n) {
-  const char *env = getenv("KARST_DATA_DIR");
-  char exe[PATH_MAX];
-  ssize_t k = readlink("/proc/self/exe", exe, sizeof exe - 1);
-  if (k > 0) {
-    exe[k] = '\0';
-    char *slash = strrchr(exe, '/');
-    if (slash) *slash = '\0';
-  } else {
-    exe[0] = '\0';
-  }
-  const char *fmt[][2] = {{env, "%s/published_metrics.csv"},
-                          {"", "%sdatasets/published_metrics.csv"},
-                          {exe, "%s/../datasets/published_metrics.csv"},
-                          {exe, "%s/../../datasets/published_metrics.csv"},
-                          {exe, "%s/../share/karst/published_metrics.csv"}};
-  for (size_t i = 0; i < sizeof fmt / sizeof fmt[0]; i++) {
-    if (!fmt[i][0] || (i >= 2 && !exe[0])) continue;
-    snprintf(out, n, fmt[i][1], fmt[i][0]);
-    if (access(out, R_OK) == 0) return 0;
-  }
-  return -1;
-}
 
 
 static void csv_string(FILE *fp, const char *s) {
@@ -265,9 +240,9 @@ static int run(int argc, char **argv) {
   if (observed) {
     char found[PATH_MAX];
     if (!table_path) {
-      if (find_published_table(found, sizeof found)) {
-        fprintf(stderr, "karst metrics: --observed: cannot find published_metrics.csv (set "
-                        "KARST_DATA_DIR or use --observed-table FILE)\n");
+      if (karst_published_locate(&ctx, found, sizeof found)) {
+        fprintf(stderr, "karst metrics: --observed: %s (or use --observed-table FILE)\n",
+                ctx.errmsg);
         status = CLI_ERROR;
         goto done;
       }
@@ -365,7 +340,8 @@ const cli_command_t cli_cmd_metrics = {
     "  -o OUT            write to OUT (atomically) instead of standard output\n"
     "  --observed        add the min / max of each metric over the 34 caves of Collon et\n"
     "                    al. 2017 (datasets/published_metrics.csv, found through\n"
-    "                    $KARST_DATA_DIR, ./datasets or beside the program) and mark values\n"
+    "                    $KARST_DATA_DIR, the source tree, the installed share/karst or\n"
+    "                    ./datasets) and mark values\n"
     "                    outside that range\n"
     "  --observed-table CSV   the same with another table\n"
     "  --true-north      rotate azimuths by the meridian convergence of the file's coordinate\n"

@@ -124,170 +124,36 @@ void karst_published_destroy(karst_published_t *p) {
   memset(p, 0, sizeof *p);
 }
 
-/* Columns of published_metrics.csv and our keys (scale converts units). */
-static const struct {
-  const char *key, *column;
-  double scale;
-} published_map[] = {
-    {"total_length", "L_km", 1000.0},
-    {"vertical_extent", "dZ_m", 1.0},
-    {"nodes", "n_stations", 1.0},
-    {"edges", "s_shots", 1.0},
-    {"mean_length", "mean_branch_len_m", 1.0},
-    {"cv_length", "CV_len", 1.0},
-    {"length_entropy", "H_len", 1.0},
-    {"tortuosity", "tortuosity", 1.0},
-    {"orientation_entropy", "H_orient", 1.0},
-    {"aspl", "ASPL", 1.0},
-    {"cpd", "CPD", 1.0},
-    {"mean_degree", "mean_degree_k", 1.0},
-    {"cv_degree", "CV_degree", 1.0},
-    {"correlation_vertex_degree", "r_k_assortativity", 1.0},
-    {"reduced_nodes", "N_reduced", 1.0},
-    {"reduced_edges", "S_reduced", 1.0},
-    {"components", "p_components", 1.0},
-    {"cycles", "N_cycles", 1.0},
-    {"howard_alpha", "howard_alpha", 1.0},
-    {"howard_beta", "howard_beta", 1.0},
-    {"howard_gamma", "howard_gamma", 1.0},
-};
-enum { N_PUBLISHED_MAP = (int)(sizeof published_map / sizeof published_map[0]) };
-
-/* Split one CSV line (RFC 4180 quoting, "" inside quotes) in place; returns the
- * number of fields, or -1 on an unterminated quote. */
-static int csv_split(char *line, char **fields, int max) {
-  int n = 0;
-  char *r = line, *w = line;
-  for (;;) {
-    char *start = w;
-    if (*r == '"') {
-      r++;
-      for (;;) {
-        if (*r == '\0') return -1;
-        if (*r == '"') {
-          if (r[1] == '"') {
-            *w++ = '"';
-            r += 2;
-            continue;
-          }
-          r++;
-          break;
-        }
-        *w++ = *r++;
-      }
-      while (*r && *r != ',')
-        *w++ = *r++;
-    } else {
-      while (*r && *r != ',')
-        *w++ = *r++;
-    }
-    int last = *r == '\0';
-    r++;
-    *w++ = '\0';
-    if (n < max) fields[n] = start;
-    n++;
-    if (last) break;
-  }
-  return n;
-}
-
 /**
- * Read the published ranges (see compare.h). Only rows whose "source" column
- * starts with "Collon" count: the 34 caves of Collon et al. 2017 (corrected
- * 2021); the file's other rows are later Karstnet data sets. Empty cells (2-D
- * caves have no geometric metrics) are skipped, so n may be below 34.
- * Time complexity: O(size of the file).
+ * Read the published ranges (see compare.h) through the metrics module's
+ * reader of the same table (karst_metrics_observed_load: one CSV parser and
+ * one column mapping for `karst metrics --observed`, compare and report).
+ * Only the rows of Collon et al. 2017 (corrected 2021) count, the 34 caves;
+ * empty cells (2-D caves have no geometric metrics) are skipped, so n may be
+ * below 34. Time complexity: O(size of the file).
  */
 karst_error_t karst_published_read(karst_ctx_t *ctx, const char *path, karst_published_t *p) {
-  enum { MAXF = 64 };
-  karst_error_t err = KARST_SUCCESS;
-  char *line = NULL, *fields[MAXF];
-  size_t cap = 0;
-  int lineno = 0, have_header = 0, col[N_PUBLISHED_MAP], src_col = -1, nh = 0;
+  karst_metrics_observed_t obs;
+  karst_error_t err = karst_metrics_observed_load(ctx, path, &obs);
+  if (err) return err;
+  int nf;
+  const karst_metric_field_t *fields = karst_metric_fields(&nf);
   karst_published_t r;
   karst_published_init(&r);
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot read: %s", path, strerror(errno));
-  r.ranges = calloc(N_PUBLISHED_MAP, sizeof *r.ranges);
-  if (!r.ranges) {
-    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
-    goto cleanup;
+  r.ranges = calloc((size_t)nf, sizeof *r.ranges);
+  if (!r.ranges) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+  for (int k = 0; k < nf; k++) {
+    if (obs.n[k] == 0) continue;
+    karst_published_range_t *g = &r.ranges[r.n_ranges++];
+    snprintf(g->key, sizeof g->key, "%s", fields[k].key);
+    g->n = obs.n[k];
+    g->min = obs.min[k];
+    g->max = obs.max[k];
   }
-  r.n_ranges = N_PUBLISHED_MAP;
-  for (int k = 0; k < N_PUBLISHED_MAP; k++) {
-    snprintf(r.ranges[k].key, sizeof r.ranges[k].key, "%s", published_map[k].key);
-    r.ranges[k].min = INFINITY;
-    r.ranges[k].max = -INFINITY;
-  }
-  while (getline(&line, &cap, fp) > 0) {
-    lineno++;
-    line[strcspn(line, "\r\n")] = '\0';
-    if (line[0] == '#' || line[0] == '\0') continue;
-    int nf = csv_split(line, fields, MAXF);
-    if (nf < 0) {
-      err = karst_set_error(ctx, KARST_EPARSE, "%s:%d: unterminated quoted field", path, lineno);
-      goto cleanup;
-    }
-    if (nf > MAXF) nf = MAXF;
-    if (!have_header) {
-      have_header = 1;
-      nh = nf;
-      for (int k = 0; k < N_PUBLISHED_MAP; k++) {
-        col[k] = -1;
-        for (int f = 0; f < nf; f++)
-          if (strcmp(fields[f], published_map[k].column) == 0) col[k] = f;
-        if (col[k] < 0) {
-          err = karst_set_error(ctx, KARST_EPARSE, "%s:%d: no column '%s' in the header", path,
-                                lineno, published_map[k].column);
-          goto cleanup;
-        }
-      }
-      for (int f = 0; f < nf; f++)
-        if (strcmp(fields[f], "source") == 0) src_col = f;
-      if (src_col < 0) {
-        err = karst_set_error(ctx, KARST_EPARSE, "%s:%d: no column 'source' in the header", path,
-                              lineno);
-        goto cleanup;
-      }
-      continue;
-    }
-    if (nf != nh) {
-      err = karst_set_error(ctx, KARST_EPARSE, "%s:%d: %d fields, the header has %d", path, lineno,
-                            nf, nh);
-      goto cleanup;
-    }
-    if (strncmp(fields[src_col], "Collon", 6) != 0) continue;
-    r.n_caves++;
-    for (int k = 0; k < N_PUBLISHED_MAP; k++) {
-      const char *c = fields[col[k]];
-      if (!*c) continue;
-      char *end;
-      double v = strtod(c, &end);
-      if (*end || !isfinite(v)) {
-        err = karst_set_error(ctx, KARST_EPARSE, "%s:%d: column '%s' must be a number, got \"%s\"",
-                              path, lineno, published_map[k].column, c);
-        goto cleanup;
-      }
-      v *= published_map[k].scale;
-      karst_published_range_t *g = &r.ranges[k];
-      g->n++;
-      if (v < g->min) g->min = v;
-      if (v > g->max) g->max = v;
-    }
-  }
-  if (!have_header) {
-    err = karst_set_error(ctx, KARST_EPARSE, "%s:%d: no header line", path, lineno);
-    goto cleanup;
-  }
-  for (int k = 0; k < N_PUBLISHED_MAP; k++)
-    if (r.ranges[k].n == 0) r.ranges[k].min = r.ranges[k].max = NAN;
+  r.n_caves = obs.n_caves;
+  karst_published_destroy(p);
   *p = r;
-  karst_published_init(&r);
-cleanup:
-  karst_published_destroy(&r);
-  free(line);
-  fclose(fp);
-  return err;
+  return KARST_SUCCESS;
 }
 
 const karst_published_range_t *karst_published_find(const karst_published_t *p, const char *key) {
@@ -317,14 +183,18 @@ karst_error_t karst_published_locate(karst_ctx_t *ctx, char *out, size_t size) {
     exe[len] = '\0';
     char *slash = strrchr(exe, '/');
     if (slash) *slash = '\0';
-    static const char *const rel[] = {"../datasets", "../../datasets", "../share/karst/datasets",
-                                      "../../share/karst/datasets"};
+    static const char *const rel[] = {"../datasets", "../../datasets", "../share/karst"};
     for (size_t i = 0; i < sizeof rel / sizeof rel[0]; i++) {
       snprintf(out, size, "%s/%s/%s", exe, rel[i], name);
       if (is_file(out)) return KARST_SUCCESS;
       snprintf(tried + strlen(tried), sizeof tried - strlen(tried), " %s", out);
     }
   }
+#ifdef KARST_DATADIR
+  snprintf(out, size, "%s/%s", KARST_DATADIR, name); /* the installed copy */
+  if (is_file(out)) return KARST_SUCCESS;
+  snprintf(tried + strlen(tried), sizeof tried - strlen(tried), " %s", out);
+#endif
   snprintf(out, size, "datasets/%s", name);
   if (is_file(out)) return KARST_SUCCESS;
   snprintf(tried + strlen(tried), sizeof tried - strlen(tried), " %s", out);

@@ -125,6 +125,7 @@ karst_error_t karst_metrics_observed_load(karst_ctx_t *ctx, const char *path,
   for (int k = 0; k < KARST_METRIC_FIELDS_MAX; k++) {
     obs->min[k] = obs->max[k] = NAN;
     obs->min_rounding[k] = obs->max_rounding[k] = 0.0;
+    obs->n[k] = 0;
   }
   obs->n_caves = 0;
   FILE *fp = fopen(path, "rb");
@@ -201,6 +202,7 @@ karst_error_t karst_metrics_observed_load(karst_ctx_t *ctx, const char *path,
       v *= scale[c];
       double half = printed_half_unit(f[c]) * scale[c];
       int j = target[c];
+      obs->n[j]++;
       if (isnan(obs->min[j]) || v < obs->min[j]) {
         obs->min[j] = v;
         obs->min_rounding[j] = half;
