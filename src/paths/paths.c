@@ -9,18 +9,17 @@
 #include <string.h>
 
 /*
- * Per-vertex search state in one 32-byte record, so that relaxing an arc
- * touches one cache line of the target vertex instead of four arrays
- * (distance, predecessor, stamp, heap slot). Fields other than the stamps
- * are valid only when stamp == the current generation.
+ * Per-vertex search state. What every arc relaxation reads (g and whether
+ * this search has reached the vertex) is one 16-byte record, so relaxing an
+ * arc touches one cache line of the target and the records of a 50 000-vertex
+ * graph fit in a core's L2; what only an improving relaxation or a pop needs
+ * (heuristic, predecessor, settled stamp) lives in side arrays. Fields other
+ * than the stamps are valid only when their stamp == the current generation.
  */
 typedef struct {
-  double dist;      /* tentative or final distance (g) */
-  double h;         /* heuristic of the current search, computed once per vertex and search */
-  int32_t pred;     /* predecessor on the search tree, -1 at a source */
-  int32_t pos;      /* slot in the heap, -1 when not queued */
-  uint32_t stamp;   /* generation in which this record was written */
-  uint32_t settled; /* generation in which v was settled (popped with its final key) */
+  double dist;    /* tentative or final distance (g) */
+  uint32_t stamp; /* generation in which this record (and h, pred) was written */
+  int32_t pos;    /* slot in the heap, -1 when not queued */
 } node_t;
 
 /* A heap entry: priority, then vertex index to break ties deterministically. */
@@ -37,6 +36,9 @@ typedef struct {
 struct karst_search {
   const karst_graph_t *g;
   node_t *node;
+  double *h;         /* heuristic of the current search, computed once per vertex and search */
+  int32_t *pred;     /* predecessor on the search tree, -1 at a source */
+  uint32_t *settled; /* generation in which v was settled (popped with its final key) */
   uint32_t cur;
   void *heap_mem;     /* allocation behind heap */
   heap_entry_t *heap; /* slots 0 .. hn-1; children of i are D i + 1 .. D i + D */
@@ -131,7 +133,10 @@ karst_error_t karst_search_create(karst_ctx_t *ctx, const karst_graph_t *g, kars
   size_t n = (size_t)(g->n > 0 ? g->n : 1);
   s->g = g;
   s->node = calloc(n, sizeof *s->node);
-  if (!s->node || heap_alloc(s, n)) {
+  s->h = malloc(n * sizeof *s->h);
+  s->pred = malloc(n * sizeof *s->pred);
+  s->settled = calloc(n, sizeof *s->settled);
+  if (!s->node || !s->h || !s->pred || !s->settled || heap_alloc(s, n)) {
     karst_search_free(s);
     return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory for %lld vertices",
                            (long long)g->n);
@@ -143,6 +148,9 @@ karst_error_t karst_search_create(karst_ctx_t *ctx, const karst_graph_t *g, kars
 void karst_search_free(karst_search_t *s) {
   if (!s) return;
   free(s->node);
+  free(s->h);
+  free(s->pred);
+  free(s->settled);
   free(s->heap_mem);
   free(s);
 }
@@ -153,7 +161,7 @@ static void search_begin(karst_search_t *s) {
   s->n_settled = 0;
   if (++s->cur == 0) { /* wrapped after 2^32 searches: clear the stamps once */
     for (karst_int_t v = 0; v < s->g->n; v++)
-      s->node[v].stamp = s->node[v].settled = 0;
+      s->node[v].stamp = s->settled[v] = 0;
     s->cur = 1;
   }
 }
@@ -170,7 +178,7 @@ static inline node_t *touch(karst_search_t *s, karst_int_t v) {
 }
 
 static inline int is_settled(const karst_search_t *s, karst_int_t v) {
-  return s->node[v].settled == s->cur;
+  return s->settled[v] == s->cur;
 }
 
 double karst_search_dist(const karst_search_t *s, karst_int_t v) {
@@ -202,7 +210,7 @@ karst_error_t karst_search_path_to(karst_ctx_t *ctx, const karst_search_t *s, ka
     return karst_set_error(ctx, KARST_EUNREACHABLE, "vertex %lld was not reached by the search",
                            (long long)v);
   karst_int_t len = 0;
-  for (karst_int_t u = v; u >= 0; u = s->node[u].pred)
+  for (karst_int_t u = v; u >= 0; u = s->pred[u])
     len++;
   if (len > path->cap) {
     karst_int_t *nv = realloc(path->v, (size_t)len * sizeof *nv);
@@ -212,7 +220,7 @@ karst_error_t karst_search_path_to(karst_ctx_t *ctx, const karst_search_t *s, ka
   }
   path->n = len;
   karst_int_t i = len;
-  for (karst_int_t u = v; u >= 0; u = s->node[u].pred)
+  for (karst_int_t u = v; u >= 0; u = s->pred[u])
     path->v[--i] = u;
   path->cost = s->node[v].dist;
   return KARST_SUCCESS;
@@ -249,6 +257,9 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
   const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
   const double *restrict cost = g->cost;
   node_t *restrict node = s->node;
+  double *restrict hh = s->h;
+  int32_t *restrict pred = s->pred;
+  uint32_t *restrict settled = s->settled;
   karst_int_t found = 0;
   if (last_target) *last_target = -1;
   search_begin(s);
@@ -260,16 +271,15 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
     if (node[v].stamp == s->cur) continue;
     node_t *nv = touch(s, v);
     nv->dist = 0.0;
-    nv->pred = -1;
-    nv->h = astar ? lb * euclid(g->xyz, v, target) : 0.0;
-    heap_update(s, nv, nv->h, v);
+    pred[v] = -1;
+    hh[v] = astar ? lb * euclid(g->xyz, v, target) : 0.0;
+    heap_update(s, nv, hh[v], v);
   }
   while (s->hn > 0) {
     karst_int_t v = heap_pop(s).v;
-    node_t *nv = &node[v];
-    const double gv = nv->dist;
-    if (nv->settled != s->cur) {
-      nv->settled = s->cur;
+    const double gv = node[v].dist;
+    if (settled[v] != s->cur) {
+      settled[v] = s->cur;
       s->n_settled++;
     }
     if (v == target) {
@@ -286,16 +296,17 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
       if (!(c < INFINITY) || (blocked && blocked[w])) continue;
       double nd = gv + c;
       node_t *nw = &node[w];
-      if (nw->stamp != s->cur) {
+      if (nw->stamp != s->cur) { /* first reached: g was ∞ */
+        if (!(nd < INFINITY)) continue;
         nw->stamp = s->cur;
         nw->pos = -1;
-        nw->dist = INFINITY;
-        nw->h = astar ? lb * euclid(g->xyz, w, target) : 0.0;
+        hh[w] = astar ? lb * euclid(g->xyz, w, target) : 0.0;
+      } else if (!(nd < nw->dist)) {
+        continue;
       }
-      if (!(nd < nw->dist)) continue;
       nw->dist = nd;
-      nw->pred = (int32_t)v;
-      heap_update(s, nw, nd + nw->h, w);
+      pred[w] = (int32_t)v;
+      heap_update(s, nw, nd + hh[w], w);
     }
   }
   return KARST_SUCCESS;
@@ -457,18 +468,20 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
   const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
   const double *restrict cost = g->cost;
   node_t *restrict node = s->node;
+  double *restrict hh = s->h;
+  int32_t *restrict pred = s->pred;
+  uint32_t *restrict settled = s->settled;
   search_begin(s);
   node_t *ns = touch(s, source);
   ns->dist = 0.0;
-  ns->pred = -1;
-  ns->h = reuse_h(g, source, target, rlb, target_bound, reuse);
-  heap_update(s, ns, ns->h, source);
+  pred[source] = -1;
+  hh[source] = reuse_h(g, source, target, rlb, target_bound, reuse);
+  heap_update(s, ns, hh[source], source);
   while (s->hn > 0) {
     karst_int_t v = heap_pop(s).v;
-    node_t *nv = &node[v];
-    const double gv = nv->dist;
-    if (nv->settled != s->cur) {
-      nv->settled = s->cur;
+    const double gv = node[v].dist;
+    if (settled[v] != s->cur) {
+      settled[v] = s->cur;
       s->n_settled++;
     }
     if (v == target) break;
@@ -479,16 +492,17 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
       if (flag && flag[a]) c *= r;
       double nd = gv + c;
       node_t *nw = &node[w];
-      if (nw->stamp != s->cur) {
+      if (nw->stamp != s->cur) { /* first reached: g was ∞ */
+        if (!(nd < INFINITY)) continue;
         nw->stamp = s->cur;
         nw->pos = -1;
-        nw->dist = INFINITY;
-        nw->h = reuse_h(g, w, target, rlb, target_bound, reuse);
+        hh[w] = reuse_h(g, w, target, rlb, target_bound, reuse);
+      } else if (!(nd < nw->dist)) {
+        continue;
       }
-      if (!(nd < nw->dist)) continue;
       nw->dist = nd;
-      nw->pred = (int32_t)v;
-      heap_update(s, nw, nd + nw->h, w);
+      pred[w] = (int32_t)v;
+      heap_update(s, nw, nd + hh[w], w);
     }
   }
   if (!is_settled(s, target))
@@ -594,7 +608,7 @@ static void *rows_worker(void *arg) {
       if (t->pred) {
         int32_t *row = t->pred + (size_t)i * (size_t)t->g->n;
         for (karst_int_t v = 0; v < t->g->n; v++)
-          row[v] = is_settled(s, v) ? s->node[v].pred : -2;
+          row[v] = is_settled(s, v) ? s->pred[v] : -2;
       }
       if (t->bound) {
         /* Dijkstra settles in nondecreasing distance, so a vertex it did not settle is at
