@@ -2,7 +2,7 @@
  * karst_generate on the shipped presets and on a 1.5-million-sample domain
  * with k = 100, and the measurement behind the choice of method for the
  * key-point distance matrix (multi-target Dijkstra rows vs A* pairs).
- * Usage: bench_generate [--threads N] [--skip-large] [--presets-only] */
+ * Usage: bench_generate [--threads N] [--skip-large] [--presets-only] [--large-only] */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -127,12 +127,15 @@ static void run_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc, const cha
 }
 
 /* A 1.5-million-sample block with k = 100 (the size on which the most complete published
- * generator takes 417 s single-threaded): 1000 × 1000 × 300 m with fill radius 5.2 m
- * (≈ V / (1.41 r³) samples), 20 key points. */
+ * generator takes 417 s single-threaded): LARGE_SIDE × LARGE_SIDE × 300 m with fill radius
+ * 5.2 m, 20 key points. 1000 × 1000 × 300 m gave 1 316 588 samples (seed 2021), i.e. one sample
+ * per 0.228 m³ (≈ 1.62 r³, a little denser than V / (1.41 r³)); 1070 m per side scales that by
+ * 1.145 to ≈ 1.51 M. */
+#define LARGE_SIDE 1070.0
 static void large_scenario(karst_scenario_t *sc) {
   karst_scenario_init(sc);
   sc->name = strdup("large_1p5M");
-  sc->domain_max[0] = sc->domain_max[1] = 1000;
+  sc->domain_max[0] = sc->domain_max[1] = LARGE_SIDE;
   sc->domain_max[2] = 300;
   sc->terrain.elevation = 300;
   sc->water_table = 80;
@@ -153,24 +156,25 @@ static void large_scenario(karst_scenario_t *sc) {
     k->type =
         i == 0 ? KARST_KEYPOINT_SPRING : (i < 12 ? KARST_KEYPOINT_SINK : KARST_KEYPOINT_WAYPOINT);
     snprintf(k->name, sizeof k->name, "k%d", i);
-    k->p[0] = 50 + 900 * karst_rng_uniform(&r);
-    k->p[1] = 50 + 900 * karst_rng_uniform(&r);
+    k->p[0] = 50 + (LARGE_SIDE - 100) * karst_rng_uniform(&r);
+    k->p[1] = 50 + (LARGE_SIDE - 100) * karst_rng_uniform(&r);
     k->p[2] = i == 0 ? 80 : (i < 12 ? 295 : 100 + 150 * karst_rng_uniform(&r));
   }
 }
 
 int main(int argc, char **argv) {
-  int threads = 2, skip_large = 0, presets_only = 0;
+  int threads = 2, skip_large = 0, presets_only = 0, large_only = 0;
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) threads = atoi(argv[++i]);
     if (strcmp(argv[i], "--skip-large") == 0) skip_large = 1;
     if (strcmp(argv[i], "--presets-only") == 0) presets_only = skip_large = 1;
+    if (strcmp(argv[i], "--large-only") == 0) large_only = presets_only = 1;
   }
   printf("bench_generate: %d thread(s)\n", threads);
   if (!presets_only)
     bench_keypoint_methods(60, 60, 20, 47); /* 72 000 vertices: the presets' size */
   const char *presets[] = {"branchwork", "looping_cave", "rectilinear_maze", "superimposed"};
-  for (int p = 0; p < 4; p++) {
+  for (int p = 0; p < (large_only ? 0 : 4); p++) {
     char path[1024];
     snprintf(path, sizeof path, "%s/datasets/scenarios/%s.yaml", KARST_SOURCE_DIR, presets[p]);
     karst_ctx_t ctx;
@@ -184,7 +188,7 @@ int main(int argc, char **argv) {
       run_scenario(&ctx, &sc, presets[p]);
     karst_scenario_destroy(&sc);
   }
-  if (!skip_large) {
+  if (!skip_large || large_only) {
     karst_ctx_t ctx;
     karst_ctx_init(&ctx);
     ctx.nthreads = threads;

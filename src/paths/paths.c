@@ -8,88 +8,135 @@
 #include <stdlib.h>
 #include <string.h>
 
+/*
+ * Per-vertex search state. What every arc relaxation reads (g and whether
+ * this search has reached the vertex) is one 16-byte record, so relaxing an
+ * arc touches one cache line of the target and the records of a 50 000-vertex
+ * graph fit in a core's L2; what only an improving relaxation or a pop needs
+ * (heuristic, predecessor, settled stamp) lives in side arrays. Fields other
+ * than the stamps are valid only when their stamp == the current generation.
+ */
+typedef struct {
+  double dist;    /* tentative or final distance (g) */
+  uint32_t stamp; /* generation in which this record (and h, pred) was written */
+  int32_t pos;    /* slot in the heap, -1 when not queued */
+} node_t;
+
 /* A heap entry: priority, then vertex index to break ties deterministically. */
 typedef struct {
   double key;
-  karst_int_t v;
+  int32_t v;
+  int32_t pad;
 } heap_entry_t;
+
+/* Heap arity: the 4 children of a slot are 64 contiguous bytes (one cache line, see
+ * heap_alloc), and the tree is half as deep as a binary one. */
+#define HEAP_D 4
 
 struct karst_search {
   const karst_graph_t *g;
-  double *dist;      /* tentative or final distance, valid when stamp[v] == cur */
-  karst_int_t *pred; /* predecessor on the search tree, -1 at a source */
-  uint32_t *stamp;   /* generation in which dist/pred were written */
+  node_t *node;
+  double *h;         /* heuristic of the current search, computed once per vertex and search */
+  int32_t *pred;     /* predecessor on the search tree, -1 at a source */
   uint32_t *settled; /* generation in which v was settled (popped with its final key) */
   uint32_t cur;
-  heap_entry_t *heap;
-  karst_int_t hn, hcap;
+  void *heap_mem;     /* allocation behind heap */
+  heap_entry_t *heap; /* slots 0 .. hn-1; children of i are D i + 1 .. D i + D */
+  karst_int_t hn;
   karst_int_t n_settled;
 };
 
 /* ------------------------------------------------------------------------ */
-/* Binary heap with lazy deletion: a vertex is pushed again when its        */
-/* distance drops and stale entries are skipped when popped. No decrease-key */
-/* index to maintain; the heap holds at most one entry per relaxation.      */
+/* Indexed 4-ary min-heap on (key, vertex) with decrease-key: every vertex  */
+/* is queued at most once (node.pos), so the heap never exceeds n entries   */
+/* and pops need no stale-entry check. It pops the same (key, vertex)       */
+/* sequence as a heap with lazy deletion ordered the same way: that one     */
+/* holds, besides the live entry of each queued vertex, only stale entries  */
+/* whose key is not below the live one (a vertex is re-pushed only when its */
+/* g drops, and adding h is monotone), and those were skipped when popped.  */
 /* ------------------------------------------------------------------------ */
-static int heap_less(const heap_entry_t *a, const heap_entry_t *b) {
+static inline int heap_less(const heap_entry_t *a, const heap_entry_t *b) {
   return a->key < b->key || (a->key == b->key && a->v < b->v);
 }
 
-static karst_error_t heap_push(karst_search_t *s, double key, karst_int_t v) {
-  if (s->hn == s->hcap) {
-    karst_int_t cap = s->hcap ? 2 * s->hcap : 1024;
-    heap_entry_t *h = realloc(s->heap, (size_t)cap * sizeof *h);
-    if (!h) return KARST_ENOMEM;
-    s->heap = h;
-    s->hcap = cap;
-  }
-  karst_int_t i = s->hn++;
-  heap_entry_t e = {key, v};
+static inline void heap_sift_up(karst_search_t *s, karst_int_t i, heap_entry_t e) {
+  heap_entry_t *h = s->heap;
   while (i > 0) {
-    karst_int_t p = (i - 1) / 2;
-    if (!heap_less(&e, &s->heap[p])) break;
-    s->heap[i] = s->heap[p];
+    karst_int_t p = (i - 1) / HEAP_D;
+    if (!heap_less(&e, &h[p])) break;
+    h[i] = h[p];
+    s->node[h[i].v].pos = (int32_t)i;
     i = p;
   }
-  s->heap[i] = e;
-  return KARST_SUCCESS;
+  h[i] = e;
+  s->node[e.v].pos = (int32_t)i;
 }
 
-static heap_entry_t heap_pop(karst_search_t *s) {
-  heap_entry_t top = s->heap[0];
-  heap_entry_t last = s->heap[--s->hn];
-  karst_int_t i = 0, n = s->hn;
+/* Queue v with @p key, or lower its key if it is queued (key never rises: g only drops). */
+static inline void heap_update(karst_search_t *s, node_t *nv, double key, karst_int_t v) {
+  heap_entry_t e = {key, (int32_t)v, 0};
+  karst_int_t i = nv->pos >= 0 ? nv->pos : s->hn++;
+  heap_sift_up(s, i, e);
+}
+
+static inline heap_entry_t heap_pop(karst_search_t *s) {
+  heap_entry_t *h = s->heap;
+  heap_entry_t top = h[0];
+  s->node[top.v].pos = -1;
+  karst_int_t n = --s->hn;
+  if (n == 0) return top;
+  heap_entry_t last = h[n];
+  karst_int_t i = 0;
   for (;;) {
-    karst_int_t c = 2 * i + 1;
+    karst_int_t c = HEAP_D * i + 1;
     if (c >= n) break;
-    if (c + 1 < n && heap_less(&s->heap[c + 1], &s->heap[c])) c++;
-    if (!heap_less(&s->heap[c], &last)) break;
-    s->heap[i] = s->heap[c];
-    i = c;
+    karst_int_t m = c, end = c + HEAP_D < n ? c + HEAP_D : n;
+    for (karst_int_t k = c + 1; k < end; k++)
+      if (heap_less(&h[k], &h[m])) m = k;
+    if (!heap_less(&h[m], &last)) break;
+    h[i] = h[m];
+    s->node[h[i].v].pos = (int32_t)i;
+    i = m;
   }
-  if (n > 0) s->heap[i] = last;
+  h[i] = last;
+  s->node[last.v].pos = (int32_t)i;
   return top;
+}
+
+/* Room for n heap entries with slots 1, 5, 9, ... (the first child of each parent) on 64-byte
+ * boundaries: entries are 16 bytes, so slot 0 sits 48 bytes into an aligned block. */
+static int heap_alloc(karst_search_t *s, size_t n) {
+  size_t bytes = ((n + 4) * sizeof(heap_entry_t) + 63) / 64 * 64;
+  s->heap_mem = aligned_alloc(64, bytes);
+  if (!s->heap_mem) return -1;
+  s->heap = (heap_entry_t *)s->heap_mem + 3;
+  return 0;
 }
 
 /**
  * Create a search workspace for graph @p g (borrowed: it must outlive the
- * workspace). O(n) memory and time, once; each later search costs what it
- * visits.
+ * workspace). O(n) memory (48 bytes per vertex) and time, once; each later
+ * search costs what it visits.
+ * @return KARST_SUCCESS, KARST_EINVAL, KARST_ENOMEM; KARST_ERANGE for a graph
+ *         of 2^31 − 1 vertices or more (vertex indices are stored in 32 bits).
  */
 karst_error_t karst_search_create(karst_ctx_t *ctx, const karst_graph_t *g, karst_search_t **out) {
   *out = NULL;
   if (!g || g->n < 0)
     return karst_set_error(ctx, KARST_EINVAL, "search: graph missing or with %lld vertices",
                            g ? (long long)g->n : -1LL);
+  if (g->n >= INT32_MAX)
+    return karst_set_error(ctx, KARST_ERANGE, "search: %lld vertices exceed 2^31 - 1",
+                           (long long)g->n);
   karst_search_t *s = calloc(1, sizeof *s);
   if (!s) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
   size_t n = (size_t)(g->n > 0 ? g->n : 1);
   s->g = g;
-  s->dist = malloc(n * sizeof *s->dist);
+  s->node = calloc(n, sizeof *s->node);
+  s->h = malloc(n * sizeof *s->h);
   s->pred = malloc(n * sizeof *s->pred);
-  s->stamp = calloc(n, sizeof *s->stamp);
   s->settled = calloc(n, sizeof *s->settled);
-  if (!s->dist || !s->pred || !s->stamp || !s->settled) {
+  if (!s->node || !s->h || !s->pred || !s->settled || heap_alloc(s, n)) {
     karst_search_free(s);
     return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory for %lld vertices",
                            (long long)g->n);
@@ -100,11 +147,11 @@ karst_error_t karst_search_create(karst_ctx_t *ctx, const karst_graph_t *g, kars
 
 void karst_search_free(karst_search_t *s) {
   if (!s) return;
-  free(s->dist);
+  free(s->node);
+  free(s->h);
   free(s->pred);
-  free(s->stamp);
   free(s->settled);
-  free(s->heap);
+  free(s->heap_mem);
   free(s);
 }
 
@@ -113,19 +160,30 @@ static void search_begin(karst_search_t *s) {
   s->hn = 0;
   s->n_settled = 0;
   if (++s->cur == 0) { /* wrapped after 2^32 searches: clear the stamps once */
-    memset(s->stamp, 0, (size_t)s->g->n * sizeof *s->stamp);
-    memset(s->settled, 0, (size_t)s->g->n * sizeof *s->settled);
+    for (karst_int_t v = 0; v < s->g->n; v++)
+      s->node[v].stamp = s->settled[v] = 0;
     s->cur = 1;
   }
 }
 
-static double get_dist(const karst_search_t *s, karst_int_t v) {
-  return s->stamp[v] == s->cur ? s->dist[v] : INFINITY;
+/* The record of v, reset to "unreached" (g = ∞, not queued) if this search has not written it. */
+static inline node_t *touch(karst_search_t *s, karst_int_t v) {
+  node_t *nv = &s->node[v];
+  if (nv->stamp != s->cur) {
+    nv->stamp = s->cur;
+    nv->dist = INFINITY;
+    nv->pos = -1;
+  }
+  return nv;
+}
+
+static inline int is_settled(const karst_search_t *s, karst_int_t v) {
+  return s->settled[v] == s->cur;
 }
 
 double karst_search_dist(const karst_search_t *s, karst_int_t v) {
-  if (!s || v < 0 || v >= s->g->n || s->settled[v] != s->cur) return INFINITY;
-  return s->dist[v];
+  if (!s || v < 0 || v >= s->g->n || !is_settled(s, v)) return INFINITY;
+  return s->node[v].dist;
 }
 
 karst_int_t karst_search_settled(const karst_search_t *s) {
@@ -148,7 +206,7 @@ void karst_path_destroy(karst_path_t *p) {
  */
 karst_error_t karst_search_path_to(karst_ctx_t *ctx, const karst_search_t *s, karst_int_t v,
                                    karst_path_t *path) {
-  if (v < 0 || v >= s->g->n || s->settled[v] != s->cur)
+  if (v < 0 || v >= s->g->n || !is_settled(s, v))
     return karst_set_error(ctx, KARST_EUNREACHABLE, "vertex %lld was not reached by the search",
                            (long long)v);
   karst_int_t len = 0;
@@ -164,7 +222,7 @@ karst_error_t karst_search_path_to(karst_ctx_t *ctx, const karst_search_t *s, ka
   karst_int_t i = len;
   for (karst_int_t u = v; u >= 0; u = s->pred[u])
     path->v[--i] = u;
-  path->cost = s->dist[v];
+  path->cost = s->node[v].dist;
   return KARST_SUCCESS;
 }
 
@@ -183,13 +241,12 @@ static float float_below(double x) {
 
 /*
  * The one search loop behind A* and Dijkstra. Priority = g(v) + h(v) with
- * h(v) = lb · |v − target| (A*; h = 0 when target < 0 or lb = 0). A popped
- * entry whose key no longer equals g(v) + h(v) is stale and skipped. Vertices
- * are never closed for good: a shorter g found later re-opens them, so the
- * result stays exact even if rounding made h inconsistent by an ulp (with a
- * consistent h, as ours is in exact arithmetic, nothing is ever re-opened).
- * Stops when @p target is settled, or when @p stop_after vertices marked in
- * @p is_target are settled.
+ * h(v) = lb · |v − target| (A*; h = 0 when target < 0 or lb = 0), computed
+ * once per vertex and search. Vertices are never closed for good: a shorter g
+ * found later re-opens them, so the result stays exact even if rounding made h
+ * inconsistent by an ulp (with a consistent h, as ours is in exact
+ * arithmetic, nothing is ever re-opened). Stops when @p target is settled, or
+ * when @p stop_after vertices marked in @p is_target are settled.
  */
 static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
                                 const karst_int_t *sources, karst_int_t target, double lb,
@@ -197,6 +254,12 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
                                 karst_int_t stop_after, karst_int_t *last_target) {
   const karst_graph_t *g = s->g;
   const int astar = target >= 0 && lb > 0 && g->xyz;
+  const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
+  const double *restrict cost = g->cost;
+  node_t *restrict node = s->node;
+  double *restrict hh = s->h;
+  int32_t *restrict pred = s->pred;
+  uint32_t *restrict settled = s->settled;
   karst_int_t found = 0;
   if (last_target) *last_target = -1;
   search_begin(s);
@@ -205,21 +268,18 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
     if (v < 0 || v >= g->n)
       return karst_set_error(ctx, KARST_EINVAL, "search: source %lld is not a vertex (n = %lld)",
                              (long long)v, (long long)g->n);
-    if (s->stamp[v] == s->cur) continue;
-    s->stamp[v] = s->cur;
-    s->dist[v] = 0.0;
-    s->pred[v] = -1;
-    double h = astar ? lb * euclid(g->xyz, v, target) : 0.0;
-    if (heap_push(s, h, v)) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+    if (node[v].stamp == s->cur) continue;
+    node_t *nv = touch(s, v);
+    nv->dist = 0.0;
+    pred[v] = -1;
+    hh[v] = astar ? lb * euclid(g->xyz, v, target) : 0.0;
+    heap_update(s, nv, hh[v], v);
   }
   while (s->hn > 0) {
-    heap_entry_t e = heap_pop(s);
-    karst_int_t v = e.v;
-    double gv = s->dist[v];
-    double hv = astar ? lb * euclid(g->xyz, v, target) : 0.0;
-    if (e.key != gv + hv) continue; /* stale */
-    if (s->settled[v] != s->cur) {
-      s->settled[v] = s->cur;
+    karst_int_t v = heap_pop(s).v;
+    const double gv = node[v].dist;
+    if (settled[v] != s->cur) {
+      settled[v] = s->cur;
       s->n_settled++;
     }
     if (v == target) {
@@ -230,19 +290,23 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
       if (last_target) *last_target = v;
       if (stop_after > 0 && ++found >= stop_after) break;
     }
-    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      karst_int_t w = g->adj[a];
-      double c = g->cost[a];
+    for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
+      karst_int_t w = adj[a];
+      double c = cost[a];
       if (!(c < INFINITY) || (blocked && blocked[w])) continue;
       double nd = gv + c;
-      if (nd < get_dist(s, w)) {
-        s->stamp[w] = s->cur;
-        s->dist[w] = nd;
-        s->pred[w] = v;
-        double hw = astar ? lb * euclid(g->xyz, w, target) : 0.0;
-        if (heap_push(s, nd + hw, w))
-          return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+      node_t *nw = &node[w];
+      if (nw->stamp != s->cur) { /* first reached: g was ∞ */
+        if (!(nd < INFINITY)) continue;
+        nw->stamp = s->cur;
+        nw->pos = -1;
+        hh[w] = astar ? lb * euclid(g->xyz, w, target) : 0.0;
+      } else if (!(nd < nw->dist)) {
+        continue;
       }
+      nw->dist = nd;
+      pred[w] = (int32_t)v;
+      heap_update(s, nw, nd + hh[w], w);
     }
   }
   return KARST_SUCCESS;
@@ -282,7 +346,7 @@ karst_error_t karst_paths_astar(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
                            lb_per_metre);
   karst_error_t err = run_search(ctx, s, 1, &source, target, lb_per_metre, NULL, NULL, 0, NULL);
   if (err) return err;
-  if (s->settled[target] != s->cur)
+  if (!is_settled(s, target))
     return karst_set_error(ctx, KARST_EUNREACHABLE,
                            "no finite-cost path from vertex %lld to vertex %lld", (long long)source,
                            (long long)target);
@@ -401,38 +465,47 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
                            reuse ? reuse->factor : NAN);
   const double r = reuse->factor, rlb = g->xyz ? r * lb_per_metre : 0.0;
   const unsigned char *flag = reuse->reused;
+  const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
+  const double *restrict cost = g->cost;
+  node_t *restrict node = s->node;
+  double *restrict hh = s->h;
+  int32_t *restrict pred = s->pred;
+  uint32_t *restrict settled = s->settled;
   search_begin(s);
-  s->stamp[source] = s->cur;
-  s->dist[source] = 0.0;
-  s->pred[source] = -1;
-  if (heap_push(s, reuse_h(g, source, target, rlb, target_bound, reuse), source))
-    return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+  node_t *ns = touch(s, source);
+  ns->dist = 0.0;
+  pred[source] = -1;
+  hh[source] = reuse_h(g, source, target, rlb, target_bound, reuse);
+  heap_update(s, ns, hh[source], source);
   while (s->hn > 0) {
-    heap_entry_t e = heap_pop(s);
-    karst_int_t v = e.v;
-    double gv = s->dist[v];
-    if (e.key != gv + reuse_h(g, v, target, rlb, target_bound, reuse)) continue; /* stale */
-    if (s->settled[v] != s->cur) {
-      s->settled[v] = s->cur;
+    karst_int_t v = heap_pop(s).v;
+    const double gv = node[v].dist;
+    if (settled[v] != s->cur) {
+      settled[v] = s->cur;
       s->n_settled++;
     }
     if (v == target) break;
-    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      karst_int_t w = g->adj[a];
-      double c = g->cost[a];
+    for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
+      karst_int_t w = adj[a];
+      double c = cost[a];
       if (!(c < INFINITY)) continue;
       if (flag && flag[a]) c *= r;
       double nd = gv + c;
-      if (nd < get_dist(s, w)) {
-        s->stamp[w] = s->cur;
-        s->dist[w] = nd;
-        s->pred[w] = v;
-        if (heap_push(s, nd + reuse_h(g, w, target, rlb, target_bound, reuse), w))
-          return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+      node_t *nw = &node[w];
+      if (nw->stamp != s->cur) { /* first reached: g was ∞ */
+        if (!(nd < INFINITY)) continue;
+        nw->stamp = s->cur;
+        nw->pos = -1;
+        hh[w] = reuse_h(g, w, target, rlb, target_bound, reuse);
+      } else if (!(nd < nw->dist)) {
+        continue;
       }
+      nw->dist = nd;
+      pred[w] = (int32_t)v;
+      heap_update(s, nw, nd + hh[w], w);
     }
   }
-  if (s->settled[target] != s->cur)
+  if (!is_settled(s, target))
     return karst_set_error(ctx, KARST_EUNREACHABLE,
                            "no finite-cost path from vertex %lld to vertex %lld", (long long)source,
                            (long long)target);
@@ -465,19 +538,17 @@ karst_error_t karst_paths_lower_distances(karst_ctx_t *ctx, karst_search_t *s,
                              (long long)v, (long long)g->n);
     if (dist[v] > 0.0) {
       dist[v] = 0.0;
-      if (heap_push(s, 0.0, v)) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+      heap_update(s, touch(s, v), 0.0, v);
     }
   }
   while (s->hn > 0) {
     heap_entry_t e = heap_pop(s);
-    karst_int_t v = e.v;
-    if (e.key != dist[v]) continue; /* stale */
-    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
+    for (karst_int_t a = g->offsets[e.v]; a < g->offsets[e.v + 1]; a++) {
       karst_int_t w = g->adj[a];
       double nd = e.key + g->cost[a];
       if (nd < dist[w]) {
         dist[w] = nd;
-        if (heap_push(s, nd, w)) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
+        heap_update(s, touch(s, w), nd, w);
       }
     }
   }
@@ -537,7 +608,7 @@ static void *rows_worker(void *arg) {
       if (t->pred) {
         int32_t *row = t->pred + (size_t)i * (size_t)t->g->n;
         for (karst_int_t v = 0; v < t->g->n; v++)
-          row[v] = s->settled[v] == s->cur ? (int32_t)s->pred[v] : -2;
+          row[v] = is_settled(s, v) ? s->pred[v] : -2;
       }
       if (t->bound) {
         /* Dijkstra settles in nondecreasing distance, so a vertex it did not settle is at
@@ -546,9 +617,9 @@ static void *rows_worker(void *arg) {
         float *row = t->bound + (size_t)i * (size_t)t->g->n;
         double R = 0.0;
         for (karst_int_t v = 0; v < t->g->n; v++)
-          if (s->settled[v] == s->cur && s->dist[v] > R) R = s->dist[v];
+          if (is_settled(s, v) && s->node[v].dist > R) R = s->node[v].dist;
         for (karst_int_t v = 0; v < t->g->n; v++)
-          row[v] = float_below(s->settled[v] == s->cur ? s->dist[v] : R);
+          row[v] = float_below(is_settled(s, v) ? s->node[v].dist : R);
       }
     } else {
       for (karst_int_t j = i + 1; j < t->n_keys; j++) {
