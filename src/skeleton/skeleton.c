@@ -289,11 +289,10 @@ static void reverse_path(karst_path_t *p) {
  * distance it needs is kept up to date with karst_paths_lower_distances after
  * each path. Measured on the looping-cave preset (47 key points, γ = 0.8 so all
  * 1081 pairs are kept, 51 k vertices, 1.1 M edges, one thread, shared 2-core
- * machine), for the 1081 searches: at reuse = 0.8 (the preset) 1.26 s; 1.55 s
- * without the network term (N = 0, h = r·D); 13.5 s with the Euclidean bound
- * r·lb·|v − t| alone. At reuse = 0.5 (with equal fracture weights): 0.82 s,
- * 1.46 s, 3.38 s. The same network each time, as it must be (the searches are
- * exact and break ties by vertex index).
+ * machine, first binary-heap version), for the 1081 searches: at reuse = 0.8 (the preset) 1.26
+ * s; 1.55 s without the network term (N = 0, h = r·D); 13.5 s with the Euclidean bound r·lb·|v − t|
+ * alone. At reuse = 0.5 (with equal fracture weights): 0.82 s, 1.46 s, 3.38 s. The same network
+ * each time, as it must be (the searches are exact and break ties by vertex index).
  *
  * @param g             the sample graph.
  * @param n_keys, keys  key points as vertices.
