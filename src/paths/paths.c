@@ -198,6 +198,16 @@ void karst_path_destroy(karst_path_t *p) {
   memset(p, 0, sizeof *p);
 }
 
+/* Make room for @p len vertices in @p path (its storage is reused between calls). */
+static karst_error_t path_reserve(karst_ctx_t *ctx, karst_path_t *path, karst_int_t len) {
+  if (len <= path->cap) return KARST_SUCCESS;
+  karst_int_t *nv = realloc(path->v, (size_t)len * sizeof *nv);
+  if (!nv) return karst_set_error(ctx, KARST_ENOMEM, "path: out of memory");
+  path->v = nv;
+  path->cap = len;
+  return KARST_SUCCESS;
+}
+
 /**
  * The path from the source of the last search to @p v, following the
  * predecessors. @p v must have been settled by that search.
@@ -212,12 +222,8 @@ karst_error_t karst_search_path_to(karst_ctx_t *ctx, const karst_search_t *s, ka
   karst_int_t len = 0;
   for (karst_int_t u = v; u >= 0; u = s->pred[u])
     len++;
-  if (len > path->cap) {
-    karst_int_t *nv = realloc(path->v, (size_t)len * sizeof *nv);
-    if (!nv) return karst_set_error(ctx, KARST_ENOMEM, "path: out of memory");
-    path->v = nv;
-    path->cap = len;
-  }
+  karst_error_t err = path_reserve(ctx, path, len);
+  if (err) return err;
   path->n = len;
   karst_int_t i = len;
   for (karst_int_t u = v; u >= 0; u = s->pred[u])
@@ -745,12 +751,8 @@ karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
       return karst_set_error(ctx, KARST_EINVAL, "key-point tree of vertex %lld has a cycle",
                              (long long)source);
   }
-  if (len > path->cap) {
-    karst_int_t *nv = realloc(path->v, (size_t)len * sizeof *nv);
-    if (!nv) return karst_set_error(ctx, KARST_ENOMEM, "path: out of memory");
-    path->v = nv;
-    path->cap = len;
-  }
+  karst_error_t err = path_reserve(ctx, path, len);
+  if (err) return err;
   path->n = len;
   karst_int_t i = len;
   double cost = 0;

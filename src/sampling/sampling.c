@@ -163,16 +163,20 @@ static int64_t pidx(const sampler_t *S, int64_t i, int64_t j, int64_t k) {
   return (i + 2) + S->pd[0] * ((j + 2) + S->pd[1] * (k + 2));
 }
 
+/* The error when the samples would exceed sampling.max_samples. */
+static karst_error_t too_many_samples(const sampler_t *S) {
+  return karst_set_error(S->ctx, KARST_ERANGE,
+                         "sampling needs more than sampling.max_samples = %lld samples "
+                         "(reached while placing %s samples); increase fill_radius or "
+                         "feature_radius, shrink the domain, or raise max_samples",
+                         (long long)S->sc->sampling.max_samples, S->stage);
+}
+
 /* Append p to the samples and, for a feature sample, mark the fill cells a
  * later fill dart would have to check against it (p is already in the
  * feature grid, or is put there by add_sample). */
 static karst_error_t record_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
-  if (S->s->n >= S->sc->sampling.max_samples)
-    return karst_set_error(S->ctx, KARST_ERANGE,
-                           "sampling needs more than sampling.max_samples = %lld samples "
-                           "(reached while placing %s samples); increase fill_radius or "
-                           "feature_radius, shrink the domain, or raise max_samples",
-                           (long long)S->sc->sampling.max_samples, S->stage);
+  if (S->s->n >= S->sc->sampling.max_samples) return too_many_samples(S);
   if (karst_samples_add(S->s, p, src) != KARST_SUCCESS)
     return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for %lld samples",
                            (long long)S->s->n + 1);
@@ -559,11 +563,7 @@ static karst_error_t sample_region(sampler_t *S, const region_t *R) {
       for (size_t t = 0; t < ntiles; t++)
         placed += tiles[t].placed;
       if (placed > (double)S->sc->sampling.max_samples) {
-        err = karst_set_error(S->ctx, KARST_ERANGE,
-                              "sampling needs more than sampling.max_samples = %lld samples "
-                              "(reached while placing %s samples); increase fill_radius or "
-                              "feature_radius, shrink the domain, or raise max_samples",
-                              (long long)S->sc->sampling.max_samples, S->stage);
+        err = too_many_samples(S);
         goto cleanup;
       }
     }
@@ -798,11 +798,7 @@ static karst_error_t sample_fill(sampler_t *S) {
       for (size_t t = 0; t < ntiles; t++)
         placed += J.tiles[t].ns;
       if (placed > (double)S->sc->sampling.max_samples) {
-        err = karst_set_error(S->ctx, KARST_ERANGE,
-                              "sampling needs more than sampling.max_samples = %lld samples "
-                              "(reached while placing %s samples); increase fill_radius or "
-                              "feature_radius, shrink the domain, or raise max_samples",
-                              (long long)S->sc->sampling.max_samples, S->stage);
+        err = too_many_samples(S);
         goto cleanup;
       }
     }
