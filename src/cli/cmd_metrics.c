@@ -18,6 +18,7 @@ typedef struct {
   karst_metrics_t m;
   int true_north;     /* rotation applied */
   double convergence; /* degrees, NAN when not applied */
+  char *crs;          /* the file's coordinate system (e.g. the .3d CS string), or NULL */
 } row_t;
 
 
@@ -57,6 +58,8 @@ static void write_json(FILE *fp, const row_t *rows, int nrows, const karst_metri
   for (int r = 0; r < nrows; r++) {
     fputs("{\"file\": ", fp);
     karst_json_string(fp, rows[r].file);
+    fputs(", \"crs\": ", fp);
+    karst_json_string(fp, rows[r].crs);
     for (int k = 0; k < nf; k++) {
       fprintf(fp, ", \"%s\": ", f[k].key);
       put_value(fp, &f[k], karst_metric_value(&rows[r].m, &f[k]), "null");
@@ -90,7 +93,7 @@ static void write_csv(FILE *fp, const row_t *rows, int nrows, const karst_metric
                       int true_north) {
   int nf;
   const karst_metric_field_t *f = karst_metric_fields(&nf);
-  fputs("file", fp);
+  fputs("file,crs", fp);
   for (int k = 0; k < nf; k++)
     fprintf(fp, ",%s", f[k].key);
   if (true_north) fputs(",true_north,meridian_convergence", fp);
@@ -101,6 +104,8 @@ static void write_csv(FILE *fp, const row_t *rows, int nrows, const karst_metric
   fputc('\n', fp);
   for (int r = 0; r < nrows; r++) {
     csv_string(fp, rows[r].file);
+    fputc(',', fp);
+    if (rows[r].crs) csv_string(fp, rows[r].crs);
     for (int k = 0; k < nf; k++) {
       fputc(',', fp);
       put_value(fp, &f[k], karst_metric_value(&rows[r].m, &f[k]), "");
@@ -124,6 +129,7 @@ static void write_table(FILE *fp, const row_t *rows, int nrows, const karst_metr
   const karst_metric_field_t *f = karst_metric_fields(&nf);
   for (int r = 0; r < nrows; r++) {
     fprintf(fp, "%s%s\n", r ? "\n" : "", rows[r].file);
+    if (rows[r].crs) fprintf(fp, "  coordinate system: %s\n", rows[r].crs);
     if (true_north) {
       if (rows[r].true_north)
         fprintf(fp, "  azimuths rotated to true north by %.6f degrees\n", rows[r].convergence);
@@ -283,6 +289,7 @@ static int run(int argc, char **argv) {
       }
     }
     if (!err) err = karst_metrics_compute(&ctx, &net, &opt, &row->m);
+    if (!err && net.crs && !(row->crs = strdup(net.crs))) err = KARST_ENOMEM;
     karst_network_destroy(&net);
     if (err) {
       cli_fail("metrics", &ctx, err);
@@ -318,6 +325,7 @@ static int run(int argc, char **argv) {
     }
   }
 done:
+  for (int i = 0; rows && i < nrows; i++) free(rows[i].crs);
   free(files);
   free(rows);
   return status;

@@ -88,6 +88,13 @@ check 0 "--true-north without CRS" "$KARST" metrics --format json --true-north "
 grep -q "no coordinate system" "$TMP/err" && ok "true-north reported" || bad "true-north not reported"
 "$PY" -c "import json,sys; r=json.load(open(sys.argv[1]))[0]; assert r['true_north'] is False and abs(r['orientation_entropy']-0.9837612087146957)<1e-12" "$TMP/out" && ok "grid north kept" || bad "grid north kept"
 
+# The .3d CS string is reported (DowProv: EPSG:7405, SOURCE.txt); --true-north rotates by the
+# meridian convergence of the British National Grid at the survey (about -0.014 degrees).
+check 0 "--true-north with a CRS" "$KARST" metrics --format json --true-north "$SRC/datasets/surveys/dowprov/DowProv.3d"
+"$PY" -c "import json,sys; r=json.load(open(sys.argv[1]))[0]; assert r['crs']=='EPSG:7405' and r['true_north'] is True and -0.05<r['meridian_convergence']<0" "$TMP/out" && ok "CS string and convergence" || bad "CS string and convergence"
+check 0 "table shows the CS" "$KARST" metrics "$SRC/datasets/surveys/dowprov/DowProv.3d"
+grep -q "coordinate system: EPSG:7405" "$TMP/out" && ok "table CS line" || bad "table CS line"
+
 # One bad file among good ones: the others are still measured, exit 1.
 check 1 "mixed good and bad" "$KARST" metrics --format csv "$DATA/Monachou.pl" /nonexistent/y.pl
 [ "$(wc -l <"$TMP/out")" = 2 ] && ok "good file still measured" || bad "good file not measured"
