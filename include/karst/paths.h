@@ -69,6 +69,9 @@ typedef struct karst_reuse {
   const unsigned char *reused; /**< n_arcs flags, set on both arcs of each network edge, or NULL */
   const double *dist_to_net;   /**< n least original costs to the nearest network vertex, INFINITY
                                     while the network is empty; NULL: taken as 0 (always safe) */
+  int (*cancelled)(void *arg); /**< polled every 256 settled vertices: non-zero abandons the search
+                                    with KARST_EINTERRUPTED; NULL: never */
+  void *cancel_arg;            /**< passed to @c cancelled */
 } karst_reuse_t;
 
 karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst_int_t source,

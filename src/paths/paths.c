@@ -450,7 +450,7 @@ static double reuse_h(const karst_graph_t *g, karst_int_t v, karst_int_t target,
  *                      which is always safe: h_N = r·D).
  * @param path          receives source .. target; path->cost is the discounted cost.
  * @return KARST_SUCCESS; KARST_EUNREACHABLE; KARST_EINVAL for bad indices,
- *         bound or factor; KARST_ENOMEM.
+ *         bound or factor; KARST_ENOMEM; KARST_EINTERRUPTED when reuse->cancelled said so.
  * Time complexity: O((m + n) log n) in the worst case; in practice the shell
  * described above.
  */
@@ -488,7 +488,9 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
     const double gv = node[v].dist;
     if (settled[v] != s->cur) {
       settled[v] = s->cur;
-      s->n_settled++;
+      if ((++s->n_settled & 255) == 0 && reuse->cancelled && reuse->cancelled(reuse->cancel_arg))
+        return karst_set_error(ctx, KARST_EINTERRUPTED, "A*: search from vertex %lld cancelled",
+                               (long long)source);
     }
     if (v == target) break;
     for (karst_int_t a = off[v]; a < off[v + 1]; a++) {

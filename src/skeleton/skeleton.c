@@ -3,8 +3,13 @@
 #include "karst/skeleton.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "core/parallel_internal.h"
 
 /**
  * Initialise @p sk as an empty network on graph @p g (which must outlive
@@ -269,6 +274,206 @@ static void reverse_path(karst_path_t *p) {
   }
 }
 
+/* ------------------------------------------------------------------------ */
+/* Laying the pairs on several threads without changing a single result.   */
+/*                                                                          */
+/* Each pair's search depends on the network laid by the pairs before it,   */
+/* so the pairs are committed strictly in order. But most pairs add         */
+/* nothing: on the looping-cave preset (1081 pairs) 857 least-cost paths    */
+/* run entirely along conduits already laid, and the network — the only     */
+/* state a search reads besides the graph — is then unchanged. So the       */
+/* threads search the next pairs ahead of the commit point on the current   */
+/* network (speculation); results are committed in pair order, and when a   */
+/* committed path adds an edge, the searches started on the old network are */
+/* cancelled and discarded, the network is updated with no search running, */
+/* and the search resumes at the next pair. Every committed path was thus   */
+/* computed on exactly the network the one-thread loop would have had, and  */
+/* the searches are exact with deterministic ties: the skeleton is the same */
+/* for any thread count (tests/unit/test_skeleton.c checks it).             */
+/* ------------------------------------------------------------------------ */
+
+/* Pairs searched ahead of the commit point, per thread. */
+#define SPEC_WINDOW_PER_THREAD 4
+
+typedef struct {
+  karst_path_t path;
+  karst_error_t err;
+  char msg[KARST_ERRMSG_MAX];
+  int ready;
+} spec_slot_t;
+
+typedef struct {
+  karst_ctx_t *ctx;
+  const karst_graph_t *g;
+  const karst_int_t *keys;
+  const pair_t *pairs;
+  karst_int_t n_pairs;
+  const float *bound;
+  double lb, reuse;
+  unsigned char *flag;
+  double *to_net;
+  karst_skeleton_t *sk;
+  karst_search_t **ws; /* one workspace per thread */
+  spec_slot_t *slot;   /* pair k lives in slot k % window until committed */
+  karst_int_t window;
+  pthread_mutex_t mu;
+  pthread_cond_t cv;
+  /* under mu: */
+  karst_int_t next;   /* next pair to hand out */
+  karst_int_t commit; /* next pair to commit */
+  unsigned epoch;     /* bumped each time the network changes */
+  int in_flight, mutating, stop;
+  karst_error_t err;
+  karst_int_t kept;
+  atomic_int cancel; /* read by the searches without the lock */
+} spec_t;
+
+static int spec_cancelled(void *arg) {
+  return atomic_load_explicit(&((spec_t *)arg)->cancel, memory_order_relaxed);
+}
+
+/* Commit pair sp->commit from its slot. Called with sp->mu held by thread @p tid. */
+static void spec_commit_one(spec_t *sp, int tid) {
+  spec_slot_t *sl = &sp->slot[sp->commit % sp->window];
+  karst_error_t err = KARST_SUCCESS;
+  sl->ready = 0;
+  if (karst_interrupted(sp->ctx))
+    err = karst_set_error(sp->ctx, KARST_EINTERRUPTED, "skeleton interrupted");
+  else if (sl->err)
+    err = karst_set_error(sp->ctx, sl->err, "%s", sl->msg);
+  karst_int_t e0 = sp->sk->net.n_edges;
+  if (!err) {
+    reverse_path(&sl->path);
+    err = karst_skeleton_add_path(sp->ctx, sp->sk, sp->g, &sl->path, 0);
+  }
+  if (err) {
+    sp->err = err;
+    sp->stop = 1;
+    atomic_store(&sp->cancel, 1);
+    return;
+  }
+  sp->kept++;
+  sp->commit++;
+  karst_progress(sp->ctx, "skeleton", (double)sp->commit, (double)sp->n_pairs);
+  if (sp->sk->net.n_edges == e0) return; /* nothing new: every speculative search stays valid */
+  /* The network changed: stop the searches under way and wait for them to leave. */
+  sp->epoch++;
+  sp->mutating = 1;
+  atomic_store(&sp->cancel, 1);
+  while (sp->in_flight > 0)
+    pthread_cond_wait(&sp->cv, &sp->mu);
+  flag_path_arcs(sp->g, &sl->path, sp->flag);
+  err = karst_paths_lower_distances(sp->ctx, sp->ws[tid], sl->path.n, sl->path.v, sp->to_net);
+  for (karst_int_t i = 0; i < sp->window; i++)
+    sp->slot[i].ready = 0;
+  sp->next = sp->commit;
+  sp->mutating = 0;
+  if (err) {
+    sp->err = err;
+    sp->stop = 1;
+  } else {
+    atomic_store(&sp->cancel, 0);
+  }
+}
+
+static void spec_worker(void *arg, int tid, int nthreads) {
+  (void)nthreads;
+  spec_t *sp = arg;
+  karst_ctx_t wctx;
+  karst_ctx_init(&wctx);
+  karst_path_t local;
+  karst_path_init(&local);
+  const karst_reuse_t ru = {sp->reuse, sp->flag, sp->to_net, spec_cancelled, sp};
+  pthread_mutex_lock(&sp->mu);
+  while (!sp->stop && sp->commit < sp->n_pairs) {
+    if (sp->mutating || sp->next >= sp->n_pairs || sp->next >= sp->commit + sp->window) {
+      pthread_cond_wait(&sp->cv, &sp->mu);
+      continue;
+    }
+    const karst_int_t k = sp->next++;
+    const unsigned epoch = sp->epoch;
+    sp->in_flight++;
+    pthread_mutex_unlock(&sp->mu);
+    const karst_int_t a = sp->pairs[k].a, b = sp->pairs[k].b;
+    const float *row = sp->bound ? sp->bound + (size_t)a * (size_t)sp->g->n : NULL;
+    karst_error_t err = karst_paths_astar_reuse(&wctx, sp->ws[tid], sp->keys[b], sp->keys[a],
+                                                sp->lb, row, &ru, &local);
+    pthread_mutex_lock(&sp->mu);
+    sp->in_flight--;
+    if (epoch == sp->epoch && !sp->stop) {
+      spec_slot_t *sl = &sp->slot[k % sp->window];
+      karst_path_t t = sl->path;
+      sl->path = local;
+      local = t;
+      sl->err = err;
+      if (err) snprintf(sl->msg, sizeof sl->msg, "%s", wctx.errmsg);
+      sl->ready = 1;
+      while (!sp->stop && sp->commit < sp->n_pairs && sp->slot[sp->commit % sp->window].ready)
+        spec_commit_one(sp, tid);
+    }
+    pthread_cond_broadcast(&sp->cv);
+  }
+  pthread_cond_broadcast(&sp->cv);
+  pthread_mutex_unlock(&sp->mu);
+  karst_path_destroy(&local);
+}
+
+/* Lay the sorted pairs with path sharing on @p T >= 2 threads (see above). */
+static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const karst_graph_t *g, int T,
+                                        const karst_int_t *keys, const pair_t *pairs,
+                                        karst_int_t n_pairs, const float *bound, double lb,
+                                        double reuse, unsigned char *flag, double *to_net,
+                                        karst_skeleton_t *sk, karst_int_t *kept) {
+  spec_t sp;
+  memset(&sp, 0, sizeof sp);
+  karst_error_t err = KARST_SUCCESS;
+  sp.ctx = ctx;
+  sp.g = g;
+  sp.keys = keys;
+  sp.pairs = pairs;
+  sp.n_pairs = n_pairs;
+  sp.bound = bound;
+  sp.lb = lb;
+  sp.reuse = reuse;
+  sp.flag = flag;
+  sp.to_net = to_net;
+  sp.sk = sk;
+  sp.window = (karst_int_t)T * SPEC_WINDOW_PER_THREAD;
+  atomic_init(&sp.cancel, 0);
+  sp.ws = calloc((size_t)T, sizeof *sp.ws);
+  sp.slot = calloc((size_t)sp.window, sizeof *sp.slot);
+  if (!sp.ws || !sp.slot) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
+    goto cleanup;
+  }
+  for (int t = 0; t < T; t++)
+    if ((err = karst_search_create(ctx, g, &sp.ws[t]))) goto cleanup;
+  if (pthread_mutex_init(&sp.mu, NULL)) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: cannot create a mutex");
+    goto cleanup;
+  }
+  if (pthread_cond_init(&sp.cv, NULL)) {
+    pthread_mutex_destroy(&sp.mu);
+    err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: cannot create a condition variable");
+    goto cleanup;
+  }
+  karst_i_parallel_run(T, spec_worker, &sp);
+  pthread_cond_destroy(&sp.cv);
+  pthread_mutex_destroy(&sp.mu);
+  err = sp.err;
+cleanup:
+  *kept = sp.kept;
+  if (sp.ws)
+    for (int t = 0; t < T; t++)
+      karst_search_free(sp.ws[t]);
+  if (sp.slot)
+    for (karst_int_t i = 0; i < sp.window; i++)
+      karst_path_destroy(&sp.slot[i].path);
+  free(sp.ws);
+  free(sp.slot);
+  return err;
+}
+
 /**
  * The large-scale skeleton S (Paris et al. 2021, §5.1): apply the γ rule to
  * the key-point distance matrix (on the original least-cost distances d),
@@ -356,7 +561,13 @@ karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, kar
     for (karst_int_t v = 0; v < g->n; v++)
       to_net[v] = INFINITY;
   }
-  const karst_reuse_t ru = {reuse, flag, to_net};
+  const karst_reuse_t ru = {reuse, flag, to_net, NULL, NULL};
+  const int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
+  if (sharing && T > 1 && n_pairs > 1) {
+    err = lay_pairs_parallel(ctx, g, T, keys, pairs, n_pairs, bound, lb_per_metre, reuse, flag,
+                             to_net, sk, &kept);
+    goto cleanup;
+  }
   for (karst_int_t k = 0; k < n_pairs; k++) {
     const karst_int_t a = pairs[k].a, b = pairs[k].b;
     if (karst_interrupted(ctx)) {

@@ -422,7 +422,7 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
       assert_int_equal(karst_search_create(&ctx, &gd, &s2), KARST_SUCCESS);
       assert_int_equal(karst_paths_dijkstra(&ctx, s2, 1, &src, NULL, NULL, 0, NULL), KARST_SUCCESS);
       double dref = karst_search_dist(s2, t);
-      const karst_reuse_t full = {r, flag, to_net}, no_net = {r, flag, NULL};
+      const karst_reuse_t full = {r, flag, to_net, NULL, NULL}, no_net = {r, flag, NULL, NULL, NULL};
       karst_error_t e =
           karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, bound + (size_t)ia * n, &full, &p);
       if (!(dref < INFINITY)) {
@@ -466,7 +466,7 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
       free(cd);
     }
     /* A factor outside (0, 1] is refused. */
-    const karst_reuse_t bad = {0.0, flag, to_net};
+    const karst_reuse_t bad = {0.0, flag, to_net, NULL, NULL};
     assert_int_equal(karst_paths_astar_reuse(&ctx, s1, keys[0], keys[1], 1.0, NULL, &bad, &p),
                      KARST_EINVAL);
     karst_path_destroy(&p);

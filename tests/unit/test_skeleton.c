@@ -329,11 +329,100 @@ static void test_skeleton_on_dense_graph(void **state) {
   free(xyz);
 }
 
+/* Path sharing laid on several threads (speculative searches, committed in pair order) gives the
+ * network of the one-thread loop, bit for bit: same nodes in the same order, same edges, same
+ * branch ids, same kept count. 24 key points on a jittered lattice, γ = 0.8 keeps all 276 pairs;
+ * many of their paths run along conduits already laid (nothing to commit, speculation pays) and
+ * the others change the network (the searches under way are cancelled and redone). An
+ * interruption is reported the same way. */
+static void test_path_sharing_any_thread_count(void **state) {
+  (void)state;
+  karst_rng_t r;
+  karst_rng_init(&r, 7, 0);
+  const double o[3] = {0, 0, 0};
+  double *xyz = fx_jittered_grid(18, 14, 5, 4.0, o, 0.35, &r);
+  const karst_int_t n = 18 * 14 * 5;
+  karst_graph_t g;
+  fx_knn_graph(&g, n, xyz, 14, fx_euclid_cost, NULL);
+  enum { K = 24 };
+  karst_int_t keys[K];
+  for (int i = 0; i < K; i++) { /* distinct vertices */
+    int fresh;
+    do {
+      keys[i] = (karst_int_t)karst_rng_below(&r, n);
+      fresh = 1;
+      for (int j = 0; j < i; j++)
+        fresh &= keys[j] != keys[i];
+    } while (!fresh);
+  }
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  double dist[K * K];
+  float *bound = malloc((size_t)(K - 1) * (size_t)n * sizeof *bound);
+  assert_int_equal(karst_paths_keypoint_bounds(&ctx, &g, K, keys, dist, bound), KARST_SUCCESS);
+  karst_skeleton_t ref;
+  karst_int_t kept_ref = 0;
+  const int threads[] = {1, 2, 3, 5};
+  for (int t = 0; t < 4; t++) {
+    ctx.nthreads = threads[t];
+    karst_skeleton_t sk;
+    karst_int_t kept = 0;
+    assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+    assert_int_equal(
+        karst_skeleton_build(&ctx, &g, K, keys, dist, NULL, bound, 0.8, 0.7, 1.0, &sk, &kept),
+        KARST_SUCCESS);
+    if (t == 0) {
+      ref = sk;
+      kept_ref = kept;
+      assert_int_equal(kept, K * (K - 1) / 2);
+      assert_true(sk.net.n_edges > K); /* a real network, not a star of key points */
+      continue;
+    }
+    assert_int_equal(kept, kept_ref);
+    assert_int_equal(sk.net.n_nodes, ref.net.n_nodes);
+    assert_int_equal(sk.net.n_edges, ref.net.n_edges);
+    assert_int_equal(sk.n_paths, ref.n_paths);
+    assert_memory_equal(sk.net.xyz, ref.net.xyz, (size_t)ref.net.n_nodes * 3 * sizeof(double));
+    assert_memory_equal(sk.net.edges, ref.net.edges,
+                        (size_t)ref.net.n_edges * 2 * sizeof(karst_int_t));
+    assert_memory_equal(karst_network_attr_find(&sk.net, KARST_ATTR_EDGE, "branch_id")->data,
+                        karst_network_attr_find(&ref.net, KARST_ATTR_EDGE, "branch_id")->data,
+                        (size_t)ref.net.n_edges * sizeof(double));
+    karst_skeleton_destroy(&sk);
+  }
+  /* Sharing merged conduits: fewer edges than the plain union of least-cost paths (reuse = 1). */
+  karst_skeleton_t plain;
+  ctx.nthreads = 2;
+  assert_int_equal(karst_skeleton_init(&ctx, &plain, &g), KARST_SUCCESS);
+  assert_int_equal(
+      karst_skeleton_build(&ctx, &g, K, keys, dist, NULL, bound, 0.8, 1.0, 1.0, &plain, NULL),
+      KARST_SUCCESS);
+  assert_true(ref.net.n_edges < plain.net.n_edges);
+  karst_skeleton_destroy(&plain);
+  /* An interruption stops the parallel loop with the one-thread loop's error. */
+  volatile int stop = 1;
+  ctx.interrupt = &stop;
+  for (int t = 0; t < 2; t++) {
+    ctx.nthreads = t ? 2 : 1;
+    karst_skeleton_t sk;
+    assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+    assert_int_equal(
+        karst_skeleton_build(&ctx, &g, K, keys, dist, NULL, bound, 0.8, 0.7, 1.0, &sk, NULL),
+        KARST_EINTERRUPTED);
+    assert_string_equal(ctx.errmsg, "skeleton interrupted");
+    karst_skeleton_destroy(&sk);
+  }
+  karst_skeleton_destroy(&ref);
+  free(bound);
+  fx_graph_free(&g);
+  free(xyz);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_gabriel_and_rng),         cmocka_unit_test(test_hand_cases),
       cmocka_unit_test(test_union_and_junctions),     cmocka_unit_test(test_path_sharing_ladder),
-      cmocka_unit_test(test_skeleton_on_dense_graph),
+      cmocka_unit_test(test_skeleton_on_dense_graph), cmocka_unit_test(test_path_sharing_any_thread_count),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
