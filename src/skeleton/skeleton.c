@@ -498,6 +498,9 @@ cleanup:
  * s; 1.55 s without the network term (N = 0, h = r·D); 13.5 s with the Euclidean bound r·lb·|v − t|
  * alone. At reuse = 0.5 (with equal fracture weights): 0.82 s, 1.46 s, 3.38 s. The same network
  * each time, as it must be (the searches are exact and break ties by vertex index).
+ * With ctx->nthreads > 1 the searches run ahead on several threads and are
+ * committed in pair order (lay_pairs_parallel): on the looping cave the 1081
+ * searches take 0.61 s on 2 threads against 1.18 s on one, same network.
  *
  * @param g             the sample graph.
  * @param n_keys, keys  key points as vertices.
