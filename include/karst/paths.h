@@ -67,8 +67,10 @@ karst_error_t karst_paths_dijkstra(karst_ctx_t *ctx, karst_search_t *s, karst_in
 typedef struct karst_reuse {
   double factor;               /**< r in (0, 1] */
   const unsigned char *reused; /**< n_arcs flags, set on both arcs of each network edge, or NULL */
-  const double *dist_to_net;   /**< n least original costs to the nearest network vertex, INFINITY
-                                    while the network is empty; NULL: taken as 0 (always safe) */
+  const double *dist_to_net;   /**< n lower bounds of the least original cost to the nearest network
+                                    vertex that change by at most the arc cost along an arc: the
+                                    exact costs (INFINITY while the network is empty), or those
+                                    capped at any constant; NULL: taken as 0 (always safe) */
   int (*cancelled)(void *arg); /**< polled every 256 settled vertices: non-zero abandons the search
                                     with KARST_EINTERRUPTED; NULL: never */
   void *cancel_arg;            /**< passed to @c cancelled */

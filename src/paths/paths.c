@@ -257,7 +257,7 @@ static float float_below(double x) {
 static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
                                 const karst_int_t *sources, karst_int_t target, double lb,
                                 const unsigned char *blocked, const unsigned char *is_target,
-                                karst_int_t stop_after, karst_int_t *last_target) {
+                                karst_int_t stop_after, karst_int_t *last_target, int want_pred) {
   const karst_graph_t *g = s->g;
   const int astar = target >= 0 && lb > 0 && g->xyz;
   const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
@@ -306,13 +306,13 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
         if (!(nd < INFINITY)) continue;
         nw->stamp = s->cur;
         nw->pos = -1;
-        hh[w] = astar ? lb * euclid(g->xyz, w, target) : 0.0;
+        if (astar) hh[w] = lb * euclid(g->xyz, w, target);
       } else if (!(nd < nw->dist)) {
         continue;
       }
       nw->dist = nd;
-      pred[w] = (int32_t)v;
-      heap_update(s, nw, nd + hh[w], w);
+      if (want_pred) pred[w] = (int32_t)v;
+      heap_update(s, nw, astar ? nd + hh[w] : nd, w);
     }
   }
   return KARST_SUCCESS;
@@ -350,7 +350,7 @@ karst_error_t karst_paths_astar(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
     return karst_set_error(ctx, KARST_EINVAL,
                            "A*: the cost lower bound per metre must be finite and >= 0, got %g",
                            lb_per_metre);
-  karst_error_t err = run_search(ctx, s, 1, &source, target, lb_per_metre, NULL, NULL, 0, NULL);
+  karst_error_t err = run_search(ctx, s, 1, &source, target, lb_per_metre, NULL, NULL, 0, NULL, 1);
   if (err) return err;
   if (!is_settled(s, target))
     return karst_set_error(ctx, KARST_EUNREACHABLE,
@@ -380,7 +380,7 @@ karst_error_t karst_paths_dijkstra(karst_ctx_t *ctx, karst_search_t *s, karst_in
   if (n_sources < 1 || !sources)
     return karst_set_error(ctx, KARST_EINVAL, "Dijkstra: no source given");
   return run_search(ctx, s, n_sources, sources, -1, 0.0, blocked, is_target, stop_after,
-                    last_target);
+                    last_target, 1);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -420,7 +420,10 @@ static double reuse_h(const karst_graph_t *g, karst_int_t v, karst_int_t target,
  *   lower bound of the original least cost from v to t that changes by at most
  *   c(u, w) along an arc (karst_paths_keypoint_bounds gives one; the exact
  *   distance is one), and N (reuse->dist_to_net) the original least cost from
- *   v to the nearest network vertex (karst_paths_lower_distances).
+ *   v to the nearest network vertex (karst_paths_lower_distances), or that
+ *   cost capped at a constant M, min(N, M), which is below it and, like it,
+ *   changes by at most c along an arc (the skeleton keeps N capped so that a
+ *   new path lowers it only nearby).
  *   Admissible: a path P from v to t of original cost C >= d(v, t) >= D(v), of
  *   which Y is spent on non-network arcs, costs C' = r C + (1 − r) Y. If P uses
  *   no network arc, Y = C >= D(v); otherwise the part of P before its first
@@ -428,8 +431,8 @@ static double reuse_h(const karst_graph_t *g, karst_int_t v, karst_int_t target,
  *   C' >= r D(v) + (1 − r) min(N(v), D(v)).
  *   Consistent: on a network arc both ends are network vertices (N = 0), so
  *   h_N changes by r |ΔD| <= r c = c'; on any other arc D and N (a least-cost
- *   distance to a set) change by at most c, so h_N changes by at most
- *   r c + (1 − r) c = c = c'.
+ *   distance to a set, capped or not) change by at most c, so h_N changes by
+ *   at most r c + (1 − r) c = c = c'.
  *   Why it pays: far from the network it is the exact remaining cost times
  *   r plus (1 − r) times the cost of reaching the network, so the search stays
  *   within a thin shell around the network and the straight corridor, where
@@ -607,7 +610,8 @@ static void *rows_worker(void *arg) {
       karst_int_t want = 0;
       for (karst_int_t j = i + 1; j < t->n_keys; j++)
         if (!mask[t->keys[j]]) mask[t->keys[j]] = 1, want++;
-      t->err = karst_paths_dijkstra(&t->ctx, s, 1, &ki, NULL, mask, want, NULL);
+      /* The bound rows need no predecessors. */
+      t->err = run_search(&t->ctx, s, 1, &ki, -1, 0.0, NULL, mask, want, NULL, t->pred != NULL);
       for (karst_int_t j = i + 1; j < t->n_keys; j++)
         mask[t->keys[j]] = 0;
       if (t->err) goto cleanup;

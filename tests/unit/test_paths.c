@@ -407,9 +407,10 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
         assert_true((double)bound[(size_t)i * n + v] <= karst_search_dist(s1, v));
     }
     unsigned char *flag = calloc((size_t)g.n_arcs + 1, 1), *in_net = calloc((size_t)n, 1);
-    double *to_net = malloc((size_t)n * sizeof *to_net);
+    double *to_net = malloc((size_t)n * sizeof *to_net), *to_cap = malloc((size_t)n * sizeof *to_cap);
+    const double M = 30.0; /* the skeleton's cap on the network distance, here about a third of the box */
     for (karst_int_t v = 0; v < n; v++)
-      to_net[v] = INFINITY;
+      to_net[v] = INFINITY, to_cap[v] = M;
     karst_path_t p, q;
     karst_path_init(&p);
     karst_path_init(&q);
@@ -422,7 +423,8 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
       assert_int_equal(karst_search_create(&ctx, &gd, &s2), KARST_SUCCESS);
       assert_int_equal(karst_paths_dijkstra(&ctx, s2, 1, &src, NULL, NULL, 0, NULL), KARST_SUCCESS);
       double dref = karst_search_dist(s2, t);
-      const karst_reuse_t full = {r, flag, to_net, NULL, NULL}, no_net = {r, flag, NULL, NULL, NULL};
+      const karst_reuse_t full = {r, flag, to_net, NULL, NULL}, no_net = {r, flag, NULL, NULL, NULL},
+                          capped = {r, flag, to_cap, NULL, NULL};
       karst_error_t e =
           karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, bound + (size_t)ia * n, &full, &p);
       if (!(dref < INFINITY)) {
@@ -438,6 +440,10 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
             karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, bound + (size_t)ia * n, &no_net, &q),
             KARST_SUCCESS);
         assert_rel(q.cost, dref, 1e-12);
+        assert_int_equal(
+            karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, bound + (size_t)ia * n, &capped, &q),
+            KARST_SUCCESS);
+        assert_rel(q.cost, dref, 1e-12);
         /* The path joins the network: flag its arcs, lower the distances. */
         for (karst_int_t i = 1; i < p.n; i++)
           for (karst_int_t a = 0; a < g.n_arcs; a++) {
@@ -448,6 +454,7 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
         for (karst_int_t i = 0; i < p.n; i++)
           in_net[p.v[i]] = 1;
         assert_int_equal(karst_paths_lower_distances(&ctx, s1, p.n, p.v, to_net), KARST_SUCCESS);
+        assert_int_equal(karst_paths_lower_distances(&ctx, s1, p.n, p.v, to_cap), KARST_SUCCESS);
         karst_int_t m = 0, *net = malloc((size_t)n * sizeof *net);
         for (karst_int_t v = 0; v < n; v++)
           if (in_net[v]) net[m++] = v;
@@ -459,6 +466,8 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
             assert_rel(to_net[v], ref, 1e-12);
           else
             assert_true(isinf(to_net[v]));
+          /* Capped: min(distance, M), lowered only where the new path comes within M. */
+          assert_rel(to_cap[v], ref < M ? ref : M, 1e-12);
         }
         free(net);
       }
@@ -472,7 +481,7 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
     karst_path_destroy(&p);
     karst_path_destroy(&q);
     karst_search_free(s1);
-    free(flag), free(in_net), free(to_net), free(bound);
+    free(flag), free(in_net), free(to_net), free(to_cap), free(bound);
     fx_graph_free(&g);
     free(xyz);
   }
