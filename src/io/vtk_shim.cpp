@@ -567,7 +567,6 @@ karst_error_t read_network(karst_ctx_t *ctx, const char *path, karst_network_t *
   const karst_int_t np = pd->GetNumberOfPoints();
   vtkCellArray *lines = pd->GetLines();
   const karst_int_t nverts = pd->GetNumberOfVerts();
-  const karst_int_t nlines = lines ? lines->GetNumberOfCells() : 0;
   if (pd->GetNumberOfPolys() > 0 || pd->GetNumberOfStrips() > 0 || nverts > 0)
     karst_log(ctx, KARST_LOG_WARNING,
               "%s: %" PRId64 " vertex, %" PRId64 " polygon and %" PRId64
