@@ -24,8 +24,9 @@ extern "C" {
  * meridian in the northern hemisphere; about (lon - lon0) sin(lat).
  *
  * Systems that cannot be converted offline fail with KARST_EUNSUPPORTED
- * ("coordinate system 'X' is not convertible offline"); a point outside the
- * projection fails with KARST_ERANGE. Magnetic declination is not handled
+ * ("coordinate system 'X' is not convertible offline: only UTM, the British
+ * National Grid, PROJ +proj=tmerc and latitude/longitude systems are
+ * supported"); a point outside the projection fails with KARST_ERANGE. Magnetic declination is not handled
  * here: Survex's cavern applies it when it reduces the survey.
  */
 karst_error_t karst_crs_convergence(karst_ctx_t *ctx, const char *crs, double x, double y,

@@ -282,10 +282,11 @@ static int run(int argc, char **argv) {
         row->true_north = 1;
         row->convergence = gamma;
       } else {
+        /* ctx.errmsg names the coordinate system and says why it is not converted. */
         fprintf(stderr,
-                "karst metrics: warning: %s: --true-north: coordinate system '%s' is not "
-                "convertible (%s); azimuths stay relative to grid north\n",
-                files[i], net.crs, ctx.errmsg);
+                "karst metrics: warning: %s: --true-north: %s; azimuths stay relative to grid "
+                "north\n",
+                files[i], ctx.errmsg);
       }
     }
     if (!err) err = karst_metrics_compute(&ctx, &net, &opt, &row->m);

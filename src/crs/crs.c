@@ -284,7 +284,8 @@ static int parse_survex(const char *s, karst_i_crs_t *c, double *dx, double *dy)
  *                in degrees for geographic systems)
  * @param degrees output: the convergence in degrees
  * @return KARST_SUCCESS; KARST_EUNSUPPORTED "coordinate system 'X' is not
- *         convertible offline" for anything else (or no CS at all);
+ *         convertible offline: only UTM, ... are supported" for anything else
+ *         (or no CS at all);
  *         KARST_EINVAL for a non-finite point or a malformed PROJ value;
  *         KARST_ERANGE for a point outside the projection's domain.
  *
@@ -325,7 +326,10 @@ karst_error_t karst_crs_convergence(karst_ctx_t *ctx, const char *crs, double x,
                            bad);
   if (r)
     return karst_set_error(ctx, KARST_EUNSUPPORTED,
-                           "coordinate system '%s' is not convertible offline", name);
+                           "coordinate system '%s' is not convertible offline: only UTM, the "
+                           "British National Grid, PROJ +proj=tmerc and latitude/longitude "
+                           "systems are supported",
+                           name);
   if (c.kind == KARST_I_CRS_GEOGRAPHIC) {
     *degrees = 0.0;
     return KARST_SUCCESS;

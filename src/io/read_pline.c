@@ -104,7 +104,8 @@ enum { MAX_TOKENS = 8 };
  * @param ctx  context (errors as "FILE:LINE: message")
  * @param path the .pl file
  * @param net  initialised network; replaced only on success
- * @return KARST_SUCCESS; KARST_EPARSE for a missing header, a short or
+ * @return KARST_SUCCESS; KARST_EPARSE for a missing header, a GOCAD object
+ *         other than PLine (named with its line), a short or
  *         non-numeric VRTX, a repeated id, an ATOM or SEG naming an unknown id,
  *         or a file without vertices; KARST_EIO, KARST_ENOMEM.
  * Time complexity: O(file size) expected (hashed ids).
@@ -142,8 +143,16 @@ karst_error_t karst_read_pline(karst_ctx_t *ctx, const char *path, karst_network
       in_block = 1;
       continue;
     }
+    /* Another GOCAD object type (TSurf, VSet, SGrid ...) has VRTX lines too: reading them as
+     * cave stations would be wrong, so name the type instead of guessing. */
+    if (n >= 2 && strcmp(tok[0], "GOCAD") == 0 && strcmp(tok[1], "PLine") != 0) {
+      err = karst_set_error(ctx, KARST_EPARSE,
+                            "%s:%ld: GOCAD %s object: only GOCAD PLine objects are read", path,
+                            lineno, tok[1]);
+      goto cleanup;
+    }
     if (!seen_header) {
-      if (!(n >= 2 && strcmp(tok[0], "GOCAD") == 0 && strcmp(tok[1], "PLine") == 0)) {
+      if (!(n >= 2 && strcmp(tok[0], "GOCAD") == 0)) {
         err = karst_set_error(ctx, KARST_EPARSE,
                               "%s:%ld: not a GOCAD PLine file: expected 'GOCAD PLine', got '%s'",
                               path, lineno, tok[0]);

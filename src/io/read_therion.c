@@ -154,6 +154,12 @@ static const char *const COLS[T_COUNT][MAX_COLS] = {{"ID", "NAME", "X", "Y", "Z"
                                                     {"SHOT_ID", "FLAG", NULL, NULL, NULL}};
 static const int DEFAULT_POS[T_COUNT][MAX_COLS] = {
     {0, 1, 3, 4, 5}, {0, 1, 2, -1, -1}, {0, 1, -1, -1, -1}};
+/* Therion's own column lists (as in the shipped g_huttes.sql), quoted when a row is too short
+ * for the layout assumed without a "create table". */
+static const char *const THERION_LAYOUT[T_COUNT] = {
+    "ID, NAME, SURVEY_ID, X, Y, Z",
+    "ID, FROM_ID, TO_ID, CENTRELINE_ID, LENGTH, BEARING, GRADIENT, ... (13 values)",
+    "SHOT_ID, FLAG"};
 
 typedef struct station {
   int64_t id;
@@ -169,6 +175,7 @@ typedef struct shot {
 
 typedef struct tables {
   int pos[T_COUNT][MAX_COLS]; /* column index of each needed column, -1 when absent */
+  long create_line[T_COUNT];  /* line of the table's "create table", 0 when none */
   station_t *st;
   size_t n_st, cap_st;
   shot_t *sh;
@@ -218,6 +225,7 @@ static karst_error_t parse_create(lexer_t *lx, tables_t *tb) {
     if (COLS[t][c] && pos[c] < 0)
       return lfail(lx, line, KARST_EPARSE, "table %s has no column %s", TABLE_NAMES[t], COLS[t][c]);
   memcpy(tb->pos[t], pos, sizeof pos);
+  tb->create_line[t] = line;
   return skip_statement(lx);
 }
 
@@ -325,12 +333,24 @@ static karst_error_t parse_insert(lexer_t *lx, tables_t *tb) {
   }
   if ((err = next(lx))) goto cleanup;
   const int *pos = tb->pos[t];
-  for (int c = 0; c < MAX_COLS; c++)
-    if (pos[c] >= (int)nv) {
-      err = lfail(lx, line, KARST_EPARSE, "insert into %s: %zu values, no column %s",
-                  TABLE_NAMES[t], nv, COLS[t][c]);
-      goto cleanup;
-    }
+  int last = 0; /* the needed column placed furthest right */
+  for (int c = 1; c < MAX_COLS; c++)
+    if (pos[c] > pos[last]) last = c;
+  if (pos[last] >= (int)nv) {
+    if (tb->create_line[t])
+      err = lfail(lx, line, KARST_EPARSE,
+                  "insert into %s: %zu value%s, expected at least %d: 'create table %s' on line "
+                  "%ld puts %s at value %d",
+                  TABLE_NAMES[t], nv, nv == 1 ? "" : "s", pos[last] + 1, TABLE_NAMES[t],
+                  tb->create_line[t], COLS[t][last], pos[last] + 1);
+    else
+      err = lfail(lx, line, KARST_EPARSE,
+                  "insert into %s: %zu value%s, expected at least %d: with no 'create table %s' "
+                  "in the file, Therion's layout is assumed: %s",
+                  TABLE_NAMES[t], nv, nv == 1 ? "" : "s", pos[last] + 1, TABLE_NAMES[t],
+                  THERION_LAYOUT[t]);
+    goto cleanup;
+  }
   if (t == T_STATION) {
     GROW(tb->st, tb->n_st, tb->cap_st);
     station_t *s = &tb->st[tb->n_st];

@@ -92,6 +92,15 @@ grep -q "no coordinate system" "$TMP/err" && ok "true-north reported" || bad "tr
 # meridian convergence of the British National Grid at the survey (about -0.014 degrees).
 check 0 "--true-north with a CRS" "$KARST" metrics --format json --true-north "$SRC/datasets/surveys/dowprov/DowProv.3d"
 "$PY" -c "import json,sys; r=json.load(open(sys.argv[1]))[0]; assert r['crs']=='EPSG:7405' and r['true_north'] is True and -0.05<r['meridian_convergence']<0" "$TMP/out" && ok "CS string and convergence" || bad "CS string and convergence"
+# A CS that cannot be converted offline (DowProv's header with EPSG:7405 changed to Poland's
+# EPSG:2180, same length): one warning that names it once and says what is supported.
+"$PY" -c "import sys; d=open(sys.argv[1],'rb').read(); open(sys.argv[2],'wb').write(d.replace(b'EPSG:7405', b'EPSG:2180', 1))" \
+  "$SRC/datasets/surveys/dowprov/DowProv.3d" "$TMP/pl.3d"
+check 0 "--true-north with an unconvertible CS" "$KARST" metrics --format json --true-north "$TMP/pl.3d"
+[ "$(grep -o "EPSG:2180" "$TMP/err" | wc -l)" = 1 ] && grep -q "not convertible offline: only UTM" "$TMP/err" &&
+  grep -q "^karst metrics: warning: $TMP/pl.3d: --true-north: coordinate system 'EPSG:2180' is not convertible offline: only UTM, the British National Grid, PROJ +proj=tmerc and latitude/longitude systems are supported; azimuths stay relative to grid north$" "$TMP/err" &&
+  ok "unconvertible CS said once, with why" || { bad "unconvertible CS message"; cat "$TMP/err"; }
+"$PY" -c "import json,sys; r=json.load(open(sys.argv[1]))[0]; assert r['crs']=='EPSG:2180' and r['true_north'] is False" "$TMP/out" && ok "grid north kept for EPSG:2180" || bad "grid north kept for EPSG:2180"
 check 0 "table shows the CS" "$KARST" metrics "$SRC/datasets/surveys/dowprov/DowProv.3d"
 grep -q "coordinate system: EPSG:7405" "$TMP/out" && ok "table CS line" || bad "table CS line"
 

@@ -179,6 +179,11 @@ static void test_errors(void **state) {
   expect_error("+proj=lcc +lat_1=49 +lat_2=44 +lon_0=3", 0, 0, KARST_EUNSUPPORTED,
                "is not convertible offline");
   expect_error("IJTSK", 0, 0, KARST_EUNSUPPORTED, "'IJTSK' is not convertible offline");
+  /* ... and says why: what is understood offline (Poland's CS92, a transverse Mercator known
+   * only by its EPSG code, is not). */
+  expect_error("EPSG:2180", 500000, 400000, KARST_EUNSUPPORTED,
+               "coordinate system 'EPSG:2180' is not convertible offline: only UTM, the British "
+               "National Grid, PROJ +proj=tmerc and latitude/longitude systems are supported");
   expect_error("+proj=utm +zone=31 +units=us-ft", 0, 0, KARST_EUNSUPPORTED, "not convertible");
   expect_error("EPSG:32661", 0, 0, KARST_EUNSUPPORTED, "not convertible"); /* UPS north */
   expect_error("", 0, 0, KARST_EUNSUPPORTED, "no coordinate system");

@@ -114,26 +114,50 @@ static void test_sakany(void **state) {
   karst_network_destroy(&net);
 }
 
-/* Grotte des Huttes: counts checked independently with awk on Huttes_links.dat (41 distinct
- * links; degrees: 6 of 1, 29 of 2, 6 of 3; one component, so 41 - 41 + 1 = 1 cycle; no loop
- * or parallel branch, so Gs keeps the 12 nodes of degree != 2 and 12 + 1 - 1 edges). */
+/* Grotte des Huttes, read from the node/link pair and from the Therion SQL export (the same
+ * survey; coordinates differ in the last bits). Every value comes from the independent Python
+ * reference tests/tools/karstnet_reference.py (METRICS.md's rules, no code shared with
+ * src/metrics/; validated on Monachou to 1e-9 and Sakany to the printed digits), printed with
+ * %.17g from Huttes_nodes.dat; see tests/tools/README.md to rerun it. Counts also checked with
+ * awk on Huttes_links.dat (41 distinct links; degrees: 6 of 1, 29 of 2, 6 of 3; one component,
+ * so 41 - 41 + 1 = 1 cycle; no loop or parallel branch, so Gs keeps the 12 nodes of degree != 2
+ * and 12 + 1 - 1 edges). */
 static void test_huttes(void **state) {
   (void)state;
-  karst_ctx_t ctx;
-  karst_ctx_init(&ctx);
-  karst_network_t net;
-  karst_network_init(&net);
-  assert_int_equal(karst_read_karstnet(&ctx, DATA "Huttes_links.dat", &net), KARST_SUCCESS);
-  karst_metrics_t m = compute(&net, 0.0, 1);
-  assert_int_equal(m.nodes, 41);
-  assert_int_equal(m.edges, 41);
-  assert_int_equal(m.reduced_nodes, 12);
-  assert_int_equal(m.reduced_edges, 12);
-  assert_int_equal(m.cycles, 1);
-  assert_int_equal(m.extremities, 6);
-  assert_int_equal(m.junctions, 6);
-  assert_rel(m.mean_degree, 2.0, 1e-15);
-  karst_network_destroy(&net);
+  const char *files[] = {DATA "Huttes_links.dat", DATA "g_huttes.sql"};
+  for (int f = 0; f < 2; f++) {
+    karst_ctx_t ctx;
+    karst_ctx_init(&ctx);
+    karst_network_t net;
+    karst_network_init(&net);
+    assert_int_equal(karst_read_network(&ctx, files[f], KARST_FORMAT_AUTO, &net), KARST_SUCCESS);
+    karst_metrics_t m = compute(&net, 0.0, 1 + f);
+    assert_int_equal(m.nodes, 41);
+    assert_int_equal(m.edges, 41);
+    assert_rel(m.total_length, 190.46232192415874, REL);
+    assert_rel(m.vertical_extent, 20.760000000000105, REL);
+    assert_int_equal(m.branches, 12);
+    assert_rel(m.mean_length, 15.871860160346557, REL);
+    assert_rel(m.cv_length, 1.0438102384996826, REL);
+    assert_rel(m.length_entropy, 0.6184917646170377, REL);
+    assert_rel(m.tortuosity, 1.2066287388401382, REL);
+    assert_rel(m.orientation_entropy, 0.9259356844114861, REL);
+    assert_int_equal(m.reduced_nodes, 12);
+    assert_int_equal(m.reduced_edges, 12);
+    assert_int_equal(m.components, 1);
+    assert_int_equal(m.cycles, 1);
+    assert_int_equal(m.extremities, 6);
+    assert_int_equal(m.junctions, 6);
+    assert_rel(m.aspl, 3.0151515151515151, REL);
+    assert_rel(m.cpd, 0.47438016528925625, REL);
+    assert_rel(m.mean_degree, 2.0, REL);
+    assert_rel(m.cv_degree, 0.5222329678670935, REL);
+    assert_rel(m.correlation_vertex_degree, -0.33333333333333331, REL);
+    assert_rel(m.howard_alpha, 0.052631578947368418, REL);
+    assert_rel(m.howard_beta, 1.0, REL);
+    assert_rel(m.howard_gamma, 0.40000000000000002, REL);
+    karst_network_destroy(&net);
+  }
 }
 
 /* Empty network and nodes without edges: nothing to measure, every metric undefined. */

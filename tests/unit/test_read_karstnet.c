@@ -200,7 +200,14 @@ static void expect_pline_error(const char *name, const char *text, const char *w
 static void test_pline_errors(void **state) {
   (void)state;
   expect_pline_error("empty", "", "empty.pl", "empty file");
-  expect_pline_error("magic", "GOCAD TSurf 1\nVRTX 1 0 0 0\n", "magic.pl:1:", "not a GOCAD PLine");
+  /* Another GOCAD object type is named, where it starts (first or later object). */
+  expect_pline_error("tsurf", "GOCAD TSurf 1\nHEADER {\nname:s\n}\nVRTX 1 0 0 0\nTRGL 1 1 1\n",
+                     "tsurf.pl:1: ", "GOCAD TSurf object: only GOCAD PLine objects are read");
+  expect_pline_error("mixed",
+                     "GOCAD PLine 1\nVRTX 1 0 0 0\nVRTX 2 1 0 0\nSEG 1 2\nEND\nGOCAD VSet 1\n",
+                     "mixed.pl:6: ", "GOCAD VSet object: only GOCAD PLine objects are read");
+  expect_pline_error("magic", "VRTX 1 0 0 0\n",
+                     "magic.pl:1:", "not a GOCAD PLine file: expected 'GOCAD PLine', got 'VRTX'");
   expect_pline_error("seg", "GOCAD PLine 1\nVRTX 1 0 0 0\nSEG 1 2\n",
                      "seg.pl:3:", "vertex 2 is not defined");
   expect_pline_error("atom", "GOCAD PLine 1\nVRTX 1 0 0 0\nATOM 2 7\n",

@@ -227,8 +227,22 @@ static void test_errors(void **state) {
   expect_fail(ST1 "insert into STATION values (2, 'B, 1, 1.0, 0.0, 0.0);\n", KARST_EPARSE,
               ":2: string opened here is never closed");
   expect_fail(ST1 "insert into SHOT values 1, 1, 2);\n", KARST_EPARSE, ":2: expected '('");
-  expect_fail(ST1 "insert into STATION values (2, 'B', 1);\n", KARST_EPARSE,
-              ":2: insert into STATION: 3 values, no column X");
+  /* A row too short for the layout says which layout: Therion's (no "create table"; here a
+   * STATION row without SURVEY_ID), or the file's own "create table". */
+  snprintf(path_line, sizeof path_line,
+           "%s:2: insert into STATION: 5 values, expected at least 6: with no 'create table "
+           "STATION' in the file, Therion's layout is assumed: ID, NAME, SURVEY_ID, X, Y, Z",
+           tmp_path());
+  expect_fail(ST1 "insert into STATION values (2, 'B', 1.0, 0.0, 0.0);\n", KARST_EPARSE, path_line);
+  expect_fail(ST1 "insert into SHOT values (1, 1);\n", KARST_EPARSE,
+              ":2: insert into SHOT: 2 values, expected at least 3: with no 'create table SHOT' "
+              "in the file, Therion's layout is assumed: ID, FROM_ID, TO_ID, CENTRELINE_ID");
+  expect_fail("create table STATION (NAME varchar(9), ID integer, X real, Y real, Z real);\n"
+              "insert into STATION values ('A', 1, 0.0, 0.0, 0.0);\n"
+              "insert into STATION values ('B', 2, 1.0, 0.0);\n",
+              KARST_EPARSE,
+              ":3: insert into STATION: 4 values, expected at least 5: 'create table STATION' on "
+              "line 1 puts Z at value 5");
   expect_fail("create table STATION (ID integer, NAME varchar(9), X real);\n", KARST_EPARSE,
               ":1: table STATION has no column Y");
   /* Binary garbage. */
