@@ -95,4 +95,27 @@ done
 cmp -s "$TMP/a/network_nodes.dat" "$TMP/c/network_nodes.dat" && fail "seeds 5 and 6 gave the same network"
 [ ! -e "$TMP/c/samples.vtp" ] || fail "samples.vtp written without --samples"
 
+# The outputs are one set, committed together with run.json last. A run whose last file cannot be
+# put in place (run.json is a non-empty directory, which rename cannot replace) fails with exit 1
+# and leaves none of the set and no temporary file.
+mkdir -p "$TMP/d/run.json/x"
+"$KARST" generate "$TMP/small.yaml" -o "$TMP/d" --seed 5 --samples --quiet 2>"$TMP/d.err"
+[ $? -eq 1 ] || fail "a run that cannot write run.json should exit 1"
+grep -q "run.json: cannot rename into place" "$TMP/d.err" || fail "the error should name run.json: $(cat "$TMP/d.err")"
+[ "$(ls -A "$TMP/d")" = "run.json" ] || fail "a failed run left part of its set: $(ls -A "$TMP/d")"
+# Over a previous complete set (a copy of the seed-5 set in "$TMP/b", its run.json replaced by a
+# directory only after the copy), the same failure puts back the previous files unchanged.
+cp -r "$TMP/b" "$TMP/e"
+"$KARST" generate "$TMP/small.yaml" -o "$TMP/e" --seed 6 --quiet 2>/dev/null || fail "seed 6 over seed 5 failed"
+cmp -s "$TMP/c/network_nodes.dat" "$TMP/e/network_nodes.dat" || fail "a rerun did not replace the set"
+[ ! -e "$TMP/e/samples.vtp" ] || fail "a rerun without --samples left the previous samples.vtp"
+cp -r "$TMP/b" "$TMP/g"
+rm "$TMP/g/run.json" && mkdir -p "$TMP/g/run.json/x"
+"$KARST" generate "$TMP/small.yaml" -o "$TMP/g" --seed 6 --samples --quiet 2>/dev/null
+[ $? -eq 1 ] || fail "a rerun that cannot write run.json should exit 1"
+for f in network.vtp network_nodes.dat network_links.dat samples.vtp; do
+  cmp -s "$TMP/b/$f" "$TMP/g/$f" || fail "$f of the previous set changed by a failed run"
+done
+[ "$(ls -A "$TMP/g" | wc -l)" -eq 5 ] || fail "a failed rerun left temporaries: $(ls -A "$TMP/g")"
+
 echo "ok"
