@@ -61,7 +61,7 @@ karst_tunnel_type_t karst_classification_type(const karst_scenario_t *sc, const 
 
 /* Random Fourier features of the radius field: enough waves for a marginal that is normal to
  * within a few per cent (central limit over cosines of independent phases). */
-#define RADIUS_FIELD_WAVES 256
+#define RADIUS_FIELD_WAVES KARST_CLASSIFICATION_RADIUS_WAVES
 
 typedef struct {
   double w[RADIUS_FIELD_WAVES][3];

@@ -9,6 +9,7 @@ SRC=$2
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
+PY=/usr/bin/python3
 
 # Usage errors exit 2.
 "$KARST" generate >/dev/null 2>&1; [ $? -eq 2 ] || fail "no arguments should exit 2"
@@ -70,10 +71,52 @@ grep -q '"seed": 5,' "$TMP/a/run.json" || fail "run.json lacks the seed"
 grep -q '"scenario_hash": "[0-9a-f]\{16\}"' "$TMP/a/run.json" || fail "run.json lacks the scenario hash"
 grep -q '"gamma": 2' "$TMP/a/run.json" || fail "run.json lacks gamma"
 grep -q '"skeleton":' "$TMP/a/run.json" || fail "run.json lacks the skeleton stage time"
-if [ -x /usr/bin/python3 ]; then
-  /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['counts']['network_edges'] > 0" \
-    "$TMP/a/run.json" || fail "run.json is not valid JSON with network edges"
-fi
+# run.json: valid JSON; one time per real stage (the edge costs are computed with the graph, so
+# there is no "cost" key); the radius field's parameters (the scenario's default correlation
+# length, 100 m in docs/scenario.md, and the 256 waves of classification.c). network.vtp and
+# samples.vtp read back by VTK with as many lines and points as run.json counts.
+"$PY" - "$TMP/a" <<'EOF' || fail "run.json or the VTK files do not hold what they should"
+import json, sys, vtk
+d = json.load(open(sys.argv[1] + "/run.json"))
+assert d["counts"]["network_edges"] > 0, d["counts"]
+keys = list(d["stage_seconds"])
+assert keys == ["sampling", "graph", "paths", "skeleton", "amplification", "classification"], keys
+cl = d["parameters"]["classification"]
+assert cl["radius_correlation"] == 100 and cl["radius_field_waves"] == 256, cl
+assert d["parameters"]["terrain"] == {"elevation": 60}, d["parameters"]["terrain"]
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1] + "/network.vtp"); r.Update()
+pd = r.GetOutput()
+assert pd.GetNumberOfPoints() == d["counts"]["network_nodes"], pd.GetNumberOfPoints()
+assert pd.GetNumberOfLines() == d["counts"]["network_edges"], pd.GetNumberOfLines()
+for a in ("tunnel_type", "radius", "cost", "vadose", "branch_id", "amplification_step"):
+    assert pd.GetCellData().GetArray(a) is not None, a
+for a in ("kind", "water_table_distance"):
+    assert pd.GetPointData().GetArray(a) is not None, a
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1] + "/samples.vtp"); r.Update()
+assert r.GetOutput().GetNumberOfPoints() == d["counts"]["samples"], r.GetOutput().GetNumberOfPoints()
+EOF
+
+# A heightfield terrain: run.json records its georeference as read. The grid below has
+# xllcorner -10, yllcorner -5, cellsize 50, so (by hand) its cell centres start at
+# xllcenter -10 + 25 = 15, yllcenter -5 + 25 = 20.
+cat > "$TMP/hf.asc" <<'EOF'
+ncols 6
+nrows 6
+xllcorner -10
+yllcorner -5
+cellsize 50
+EOF
+for i in 1 2 3 4 5 6; do echo "62 61 60 60 61 62" >> "$TMP/hf.asc"; done
+sed 's|^  elevation: 60$|  heightfield: hf.asc|' "$TMP/small.yaml" > "$TMP/hf.yaml"
+grep -q "heightfield: hf.asc" "$TMP/hf.yaml" || fail "could not write the heightfield scenario"
+"$KARST" generate "$TMP/hf.yaml" -o "$TMP/h" --seed 5 --quiet || fail "heightfield run failed"
+"$PY" - "$TMP/h/run.json" <<'EOF' || fail "run.json lacks the heightfield's georeference"
+import json, sys
+t = json.load(open(sys.argv[1]))["parameters"]["terrain"]
+assert t["grid"].endswith("hf.asc") and len(t["grid_hash"]) == 16, t
+assert (t["ncols"], t["nrows"], t["cellsize"]) == (6, 6, 50), t
+assert (t["xllcorner"], t["yllcorner"], t["xllcenter"], t["yllcenter"]) == (-10, -5, 15, 20), t
+EOF
 
 # Same seed: byte-identical outputs, also with another thread count.
 "$KARST" generate "$TMP/small.yaml" -o "$TMP/b" --seed 5 --samples --threads 2 --quiet || fail "second run failed"
