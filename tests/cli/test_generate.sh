@@ -10,6 +10,10 @@ TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
 PY=/usr/bin/python3
+# The files are read back by VTK's own Python reader and run.json by Python's json module: a
+# missing interpreter or module is a failure, not a skip (scripts/install-deps installs
+# python3-vtk9, and CI has it).
+"$PY" -c "import json, vtk" 2>/dev/null || fail "$PY with the vtk module is required (scripts/install-deps installs python3-vtk9)"
 
 # Usage errors exit 2.
 "$KARST" generate >/dev/null 2>&1; [ $? -eq 2 ] || fail "no arguments should exit 2"
