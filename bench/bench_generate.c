@@ -25,8 +25,10 @@ static void print_stats(const char *what, const karst_generate_stats_t *st, doub
          what, (long long)st->n_samples, (long long)st->n_graph_edges, (long long)st->n_key_points,
          (long long)st->n_skeleton_paths, (long long)st->n_nodes, st->total_length);
   printf("%-22s", "");
+  /* The edge costs are computed with the kNN graph, so "graph" times both (there is no cost stage). */
   for (int s = 0; s < KARST_STAGE_COUNT; s++)
-    printf(" %s %.3f s", karst_stage_name(s), st->stage_seconds[s]);
+    printf(" %s %.3f s", s == KARST_STAGE_GRAPH ? "graph+costs" : karst_stage_name(s),
+           st->stage_seconds[s]);
   if (runs > 1)
     printf("\n%-22s sampling-to-skeleton %.3f s (fastest of %d runs, median %.3f s), total %.3f s, "
            "peak RSS so far %.0f MiB\n",

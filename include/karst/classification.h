@@ -16,6 +16,9 @@
 extern "C" {
 #endif
 
+/** Number of random Fourier waves of the conduit-radius field (karst_classification_run). */
+#define KARST_CLASSIFICATION_RADIUS_WAVES 256
+
 /** Water-table zone of a point: above the band, within it, below it. */
 typedef enum {
   KARST_ZONE_VADOSE = 0,

@@ -18,10 +18,11 @@
 extern "C" {
 #endif
 
+/** Timed stages of a realisation (karst_generate_stats_t.stage_seconds). The edge costs are
+ * computed with the kNN graph (karst_graph_build) and timed as part of "graph". */
 enum {
   KARST_STAGE_SAMPLING,
   KARST_STAGE_GRAPH,
-  KARST_STAGE_COST,
   KARST_STAGE_PATHS,
   KARST_STAGE_SKELETON,
   KARST_STAGE_AMPLIFICATION,

@@ -36,6 +36,41 @@ char *karst_temp_name(const char *path);
 /** Rename @p tmp onto @p path, removing @p tmp on failure. */
 karst_error_t karst_rename_into_place(karst_ctx_t *ctx, const char *tmp, const char *path);
 
+/**
+ * A set of files that replace each other's previous versions together (the
+ * outputs of one run): each member is written to a temporary name first, and
+ * karst_fileset_commit renames them all into place in the order they were
+ * added, so the member added last (e.g. run.json) marks a complete set.
+ */
+typedef struct karst_fileset {
+  int n, cap;
+  char **path;     /**< final names, in commit order */
+  char **tmp_path; /**< temporary names beside them; NULL: a stale member, removed on commit */
+} karst_fileset_t;
+
+/** An empty set. */
+void karst_fileset_init(karst_fileset_t *fs);
+/**
+ * Add member @p path, to be written by the caller to a temporary name beside
+ * it: @p tmp when not NULL (same directory, so the rename is atomic), else
+ * karst_temp_name(path). *@p tmp_out (may be NULL) receives the name to write,
+ * owned by the set.
+ */
+karst_error_t karst_fileset_add(karst_ctx_t *ctx, karst_fileset_t *fs, const char *path,
+                                const char *tmp, const char **tmp_out);
+/** Add @p path as a stale member: a file of a previous set that the new set removes on commit. */
+karst_error_t karst_fileset_add_stale(karst_ctx_t *ctx, karst_fileset_t *fs, const char *path);
+/**
+ * Rename every temporary onto its final name, in order; on failure restore the
+ * members already replaced from hard-link backups of their previous versions
+ * (a member whose previous version cannot be linked is removed instead),
+ * remove the remaining temporaries, and return the error. The set is empty
+ * afterwards in both cases.
+ */
+karst_error_t karst_fileset_commit(karst_ctx_t *ctx, karst_fileset_t *fs);
+/** Remove every temporary and empty the set (safe after a commit, or twice). */
+void karst_fileset_abort(karst_fileset_t *fs);
+
 /** Write @p s as a JSON string literal with the escapes JSON requires (NULL: null). */
 void karst_json_string(FILE *fp, const char *s);
 

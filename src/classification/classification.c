@@ -24,8 +24,11 @@ karst_zone_t karst_classification_zone(const karst_scenario_t *sc, double z) {
  *
  *   1. resistance π(m) < chamber_resistance               → chamber
  *      (breakout chambers in ghost-rock zones where c_π ≈ 0, §5.3)
- *   2. vadose and depth below terrain < epikarst_depth     → epikarst
- *   3. steep (angle to horizontal ≥ vertical_angle):
+ *   2. steep (angle to horizontal ≥ vertical_angle), vadose and depth below
+ *      terrain < epikarst_depth                            → epikarst ("narrow vertical
+ *      conduits that start from the surface", §5.3: a gentle segment near the
+ *      surface is not epikarst but falls through to rule 4)
+ *   3. steep:
  *        vadose or at the water table                      → tube (circular shafts, §5.3)
  *        phreatic                                          → passage (phreatic lifts)
  *   4. gentle:
@@ -43,12 +46,14 @@ karst_tunnel_type_t karst_classification_type(const karst_scenario_t *sc, const 
   if (karst_permeability_eval(&sc->permeability, m) < cl->chamber_resistance)
     return KARST_TUNNEL_CHAMBER;
   karst_zone_t zone = karst_classification_zone(sc, m[2]);
-  double depth = karst_terrain_height(&sc->terrain, m[0], m[1]) - m[2];
-  if (zone == KARST_ZONE_VADOSE && depth < cl->epikarst_depth) return KARST_TUNNEL_EPIKARST;
   double dx = b[0] - a[0], dy = b[1] - a[1], dz = b[2] - a[2];
   double angle = atan2(fabs(dz), sqrt(dx * dx + dy * dy)) * (180.0 / M_PI);
   int steep = (dx != 0 || dy != 0 || dz != 0) && angle >= cl->vertical_angle;
-  if (steep) return zone == KARST_ZONE_PHREATIC ? KARST_TUNNEL_PASSAGE : KARST_TUNNEL_TUBE;
+  if (steep) {
+    double depth = karst_terrain_height(&sc->terrain, m[0], m[1]) - m[2];
+    if (zone == KARST_ZONE_VADOSE && depth < cl->epikarst_depth) return KARST_TUNNEL_EPIKARST;
+    return zone == KARST_ZONE_PHREATIC ? KARST_TUNNEL_PASSAGE : KARST_TUNNEL_TUBE;
+  }
   switch (zone) {
   case KARST_ZONE_VADOSE:
     return KARST_TUNNEL_CANYON;
@@ -61,7 +66,7 @@ karst_tunnel_type_t karst_classification_type(const karst_scenario_t *sc, const 
 
 /* Random Fourier features of the radius field: enough waves for a marginal that is normal to
  * within a few per cent (central limit over cosines of independent phases). */
-#define RADIUS_FIELD_WAVES 256
+#define RADIUS_FIELD_WAVES KARST_CLASSIFICATION_RADIUS_WAVES
 
 typedef struct {
   double w[RADIUS_FIELD_WAVES][3];

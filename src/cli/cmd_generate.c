@@ -62,29 +62,52 @@ static int run(int argc, char **argv) {
   karst_samples_t samples;
   karst_samples_init(&samples);
   karst_generate_stats_t stats;
-  char *path = NULL;
+  karst_fileset_t files;
+  karst_fileset_init(&files);
+  char *path = NULL, *prefix = NULL;
   int status = CLI_OK;
   karst_error_t err;
   if ((err = karst_scenario_load(&ctx, scenario, &sc))) goto fail;
   if (!have_seed) seed = sc.seed;
   if ((err = karst_generate(&ctx, &sc, seed, 0, &net, want_samples ? &samples : NULL, &stats)))
     goto fail;
+  /* The five files are one set: each is written to a temporary name, then all are renamed into
+   * place with run.json last, so a run that fails leaves no new file, and a previous set in DIR
+   * stays whole (karst_fileset_commit). A samples.vtp left by an earlier run with --samples goes
+   * when this run writes none, so it never sits beside a network it does not belong to. */
   if ((err = karst_mkdir_p(&ctx, outdir))) goto fail;
+  const char *tmp;
   if (!(path = join(outdir, "network.vtp"))) goto nomem;
-  if ((err = karst_vtk_write_network(&ctx, path, &net))) goto fail;
+  if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
+  if ((err = karst_vtk_write_network(&ctx, tmp, &net))) goto fail;
   free(path);
-  if (!(path = join(outdir, "network"))) goto nomem;
-  if ((err = karst_write_karstnet(&ctx, path, &net))) goto fail;
-  free(path);
-  path = NULL;
-  if (want_samples) {
-    if (!(path = join(outdir, "samples.vtp"))) goto nomem;
-    if ((err = karst_vtk_write_samples(&ctx, path, &samples))) goto fail;
-    free(path);
-    path = NULL;
+  /* Karstnet's writer takes a prefix: temporaries PREFIX_nodes.dat and PREFIX_links.dat. */
+  if (!(path = join(outdir, "network")) || !(prefix = karst_temp_name(path))) goto nomem;
+  static const char *const dat[2] = {"_nodes.dat", "_links.dat"};
+  for (int i = 0; i < 2; i++) {
+    char *final = malloc(strlen(path) + 12), *t = malloc(strlen(prefix) + 12);
+    if (final) sprintf(final, "%s%s", path, dat[i]);
+    if (t) sprintf(t, "%s%s", prefix, dat[i]);
+    err = final && t ? karst_fileset_add(&ctx, &files, final, t, NULL)
+                     : karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
+    free(final);
+    free(t);
+    if (err) goto fail;
   }
+  if ((err = karst_write_karstnet(&ctx, prefix, &net))) goto fail;
+  free(path);
+  if (!(path = join(outdir, "samples.vtp"))) goto nomem;
+  if (want_samples) {
+    if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
+    if ((err = karst_vtk_write_samples(&ctx, tmp, &samples))) goto fail;
+  } else if ((err = karst_fileset_add_stale(&ctx, &files, path))) {
+    goto fail;
+  }
+  free(path);
   if (!(path = join(outdir, "run.json"))) goto nomem;
-  if ((err = karst_generate_write_run(&ctx, path, &sc, seed, 0, &stats))) goto fail;
+  if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
+  if ((err = karst_generate_write_run(&ctx, tmp, &sc, seed, 0, &stats))) goto fail;
+  if ((err = karst_fileset_commit(&ctx, &files))) goto fail;
   if (!quiet)
     printf("%s: seed %llu: %lld samples, %lld key points, %lld skeleton paths, network of %lld "
            "nodes, %lld edges, %.1f m -> %s/\n",
@@ -97,7 +120,9 @@ nomem:
 fail:
   status = cli_fail("generate", &ctx, err);
 cleanup:
+  karst_fileset_abort(&files);
   free(path);
+  free(prefix);
   karst_samples_destroy(&samples);
   karst_network_destroy(&net);
   karst_scenario_destroy(&sc);
@@ -108,7 +133,9 @@ const cli_command_t cli_cmd_generate = {
     "generate", run, "generate a cave network from a scenario (Paris et al. 2021)",
     "usage: karst generate SCENARIO.yaml -o DIR [--seed S] [--samples] [--threads N] [--quiet]\n\n"
     "Runs one realisation of the scenario (sampling, graph, least-cost paths, gamma-skeleton,\n"
-    "amplification, classification; docs/generation.md) and writes, each file atomically:\n"
+    "amplification, classification; docs/generation.md) and writes these files as one set\n"
+    "(all to temporary names first, then renamed into place, run.json last; a failed run\n"
+    "leaves none of them, and a previous set in DIR as it was):\n"
     "  DIR/network.vtp                    the network for ParaView (point data: kind,\n"
     "                                     water_table_distance; cell data: tunnel_type, radius,\n"
     "                                     cost, vadose, branch_id, amplification_step)\n"

@@ -16,7 +16,7 @@
 #include "karst/skeleton.h"
 
 static const char *const stage_names[KARST_STAGE_COUNT] = {
-    "sampling", "graph", "cost", "paths", "skeleton", "amplification", "classification"};
+    "sampling", "graph", "paths", "skeleton", "amplification", "classification"};
 
 /** Name of a pipeline stage ("sampling", "graph", ...); "unknown" out of range. O(1). */
 const char *karst_stage_name(int stage) {
@@ -181,7 +181,7 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
 
   karst_progress(ctx, "amplification", 0, 1);
   t = karst_i_now();
-  karst_rng_derive(&r_amp, seed, realisation, KARST_STAGE_AMPLIFICATION);
+  karst_rng_derive(&r_amp, seed, realisation, KARST_I_STREAM_AMPLIFICATION);
   if ((err = karst_amplification_ramify(ctx, sc, g, &r_amp, NULL, &sk, NULL, NULL))) goto cleanup;
   karst_skeleton_mark_junctions(&sk);
   if ((err = karst_amplification_displace(ctx, sc, sc->tortuosity, &r_amp, NULL, &sk.net, &out)))
@@ -190,7 +190,7 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
 
   karst_progress(ctx, "classification", 0, 1);
   t = karst_i_now();
-  karst_rng_derive(&r_class, seed, realisation, KARST_STAGE_CLASSIFICATION);
+  karst_rng_derive(&r_class, seed, realisation, KARST_I_STREAM_CLASSIFICATION);
   if ((err = karst_classification_run(ctx, sc, &r_class, &out))) goto cleanup;
   if (sc->name && !out.title) {
     out.title = strdup(sc->name);
@@ -222,8 +222,8 @@ cleanup:
 
 /**
  * One realisation of Paris et al. 2021, §4–5 (see generate.h for the
- * attributes written). Stage s draws from its own stream
- * karst_rng_derive(seed, realisation, s), so changing one stage's draws
+ * attributes written). Each drawing stage has its own stream
+ * karst_rng_derive(seed, realisation, KARST_I_STREAM_<stage>), so changing one stage's draws
  * never shifts another's, and the result does not depend on ctx->nthreads
  * (the only parallel stages — graph costs and key-point distances — compute
  * values that do not depend on the split).
@@ -260,14 +260,13 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
 
   karst_progress(ctx, "sampling", 0, 1);
   double t = karst_i_now();
-  karst_rng_derive(&r, seed, realisation, KARST_STAGE_SAMPLING);
+  karst_rng_derive(&r, seed, realisation, KARST_I_STREAM_SAMPLING);
   if ((err = karst_sampling_run(ctx, sc, &r, smp))) goto cleanup;
   if (stats) stats->stage_seconds[KARST_STAGE_SAMPLING] = karst_i_now() - t;
 
   karst_progress(ctx, "graph", 0, 1);
   t = karst_i_now();
-  /* karst_graph_build computes the kNN graph and the edge costs together;
-   * its time is reported under "graph" and "cost" stays 0. */
+  /* karst_graph_build computes the kNN graph and the edge costs together: one stage, "graph". */
   if ((err = karst_graph_build(ctx, sc, smp, &g))) goto cleanup;
   if (stats) {
     stats->stage_seconds[KARST_STAGE_GRAPH] = karst_i_now() - t;

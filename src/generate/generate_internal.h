@@ -19,6 +19,13 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
                                           const karst_graph_t *g, double lb_per_metre,
                                           karst_network_t *net, karst_generate_stats_t *stats);
 
+/* Random stream of each drawing stage (karst_rng_derive's substream). Fixed numbers, not the
+ * stage indices: they are the indices the stages had while a "cost" stage was listed, kept so
+ * that a seed gives the same network as before it was dropped from the timings. */
+#define KARST_I_STREAM_SAMPLING 0
+#define KARST_I_STREAM_AMPLIFICATION 5
+#define KARST_I_STREAM_CLASSIFICATION 6
+
 /* Seconds on a monotonic clock. */
 double karst_i_now(void);
 /* Peak resident memory of the process in bytes (getrusage). */

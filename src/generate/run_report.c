@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "karst/amplification.h"
+#include "karst/classification.h"
 #include "karst/generate.h"
 #include "karst/io.h"
 
@@ -87,10 +88,25 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   fputs(",\n    \"domain_max\": ", fp), vec3(fp, sc->domain_max);
   fputs(",\n    \"terrain\": {", fp);
   if (sc->terrain.is_grid) {
-    fputs("\"grid\": ", fp), karst_json_string(fp, sc->terrain.path);
-    fprintf(fp, ", \"ncols\": %lld, \"nrows\": %lld, \"cellsize\": ", (long long)sc->terrain.ncols,
-            (long long)sc->terrain.nrows);
-    json_num(fp, sc->terrain.cellsize);
+    /* The georeference as read (ESRI grid: lower-left corner and cell centre, cell size) and
+     * the file's hash, so that run.json says which surface the run used. */
+    const karst_terrain_t *tr = &sc->terrain;
+    char hash[17] = "";
+    karst_ctx_t hctx;
+    karst_ctx_init(&hctx);
+    fputs("\"grid\": ", fp), karst_json_string(fp, tr->path);
+    fputs(", \"grid_hash\": ", fp);
+    if (tr->path && karst_file_hash(&hctx, tr->path, hash) == KARST_SUCCESS)
+      karst_json_string(fp, hash);
+    else
+      fputs("null", fp);
+    fprintf(fp, ", \"ncols\": %lld, \"nrows\": %lld, \"cellsize\": ", (long long)tr->ncols,
+            (long long)tr->nrows);
+    json_num(fp, tr->cellsize);
+    fputs(", \"xllcorner\": ", fp), json_num(fp, tr->xll - 0.5 * tr->cellsize);
+    fputs(", \"yllcorner\": ", fp), json_num(fp, tr->yll - 0.5 * tr->cellsize);
+    fputs(", \"xllcenter\": ", fp), json_num(fp, tr->xll);
+    fputs(", \"yllcenter\": ", fp), json_num(fp, tr->yll);
   } else {
     fputs("\"elevation\": ", fp), json_num(fp, sc->terrain.elevation);
   }
@@ -179,6 +195,8 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   fputs(", \"water_table_band\": ", fp), json_num(fp, sc->classification.water_table_band);
   fputs(", \"epikarst_depth\": ", fp), json_num(fp, sc->classification.epikarst_depth);
   fputs(", \"chamber_resistance\": ", fp), json_num(fp, sc->classification.chamber_resistance);
+  fputs(", \"radius_correlation\": ", fp), json_num(fp, sc->classification.radius_correlation);
+  fprintf(fp, ", \"radius_field_waves\": %d", KARST_CLASSIFICATION_RADIUS_WAVES);
   fputs(", \"radius\": {", fp);
   for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++) {
     fprintf(fp, "%s\"%s\": [", t ? ", " : "", karst_tunnel_type_name((karst_tunnel_type_t)t));

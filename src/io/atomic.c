@@ -97,3 +97,148 @@ karst_error_t karst_mkdir_p(karst_ctx_t *ctx, const char *dir) {
   if (!ok) return karst_set_error(ctx, KARST_EIO, "%s: not a directory", dir);
   return KARST_SUCCESS;
 }
+
+/* File sets: the outputs of one run, committed together. */
+
+void karst_fileset_init(karst_fileset_t *fs) { memset(fs, 0, sizeof *fs); }
+
+static karst_error_t fileset_push(karst_ctx_t *ctx, karst_fileset_t *fs, char *path, char *tmp) {
+  if (fs->n == fs->cap) {
+    int cap = fs->cap ? 2 * fs->cap : 8;
+    char **p = realloc(fs->path, (size_t)cap * sizeof *p);
+    if (p) fs->path = p;
+    char **t = p ? realloc(fs->tmp_path, (size_t)cap * sizeof *t) : NULL;
+    if (t) fs->tmp_path = t;
+    if (!p || !t) {
+      free(path);
+      free(tmp);
+      return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    }
+    fs->cap = cap;
+  }
+  fs->path[fs->n] = path;
+  fs->tmp_path[fs->n] = tmp;
+  fs->n++;
+  return KARST_SUCCESS;
+}
+
+/**
+ * Add member @p path of @p fs, written by the caller to @p tmp (or to
+ * karst_temp_name(path) when @p tmp is NULL); *@p tmp_out gets that name.
+ * @return KARST_SUCCESS or KARST_ENOMEM. Time complexity: amortised O(|path|).
+ */
+karst_error_t karst_fileset_add(karst_ctx_t *ctx, karst_fileset_t *fs, const char *path,
+                                const char *tmp, const char **tmp_out) {
+  char *p = strdup(path);
+  char *t = tmp ? strdup(tmp) : karst_temp_name(path);
+  if (!p || !t) {
+    free(p);
+    free(t);
+    return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+  }
+  karst_error_t err = fileset_push(ctx, fs, p, t);
+  if (!err && tmp_out) *tmp_out = t;
+  return err;
+}
+
+/**
+ * Add @p path as a stale member of @p fs: removed on commit (restored if the
+ * commit fails), so a file of a previous set that the new set lacks does not
+ * survive beside it. @return KARST_SUCCESS or KARST_ENOMEM. O(|path|).
+ */
+karst_error_t karst_fileset_add_stale(karst_ctx_t *ctx, karst_fileset_t *fs, const char *path) {
+  char *p = strdup(path);
+  if (!p) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+  return fileset_push(ctx, fs, p, NULL);
+}
+
+/** Remove every temporary of @p fs and empty it. O(members). */
+void karst_fileset_abort(karst_fileset_t *fs) {
+  for (int i = 0; i < fs->n; i++) {
+    if (fs->tmp_path[i]) remove(fs->tmp_path[i]);
+    free(fs->path[i]);
+    free(fs->tmp_path[i]);
+  }
+  free(fs->path);
+  free(fs->tmp_path);
+  karst_fileset_init(fs);
+}
+
+/**
+ * Commit @p fs: first check that every temporary exists and hard-link each
+ * existing final file to a backup name, then rename the temporaries into
+ * place (and remove stale members) in the order they were added. When a step
+ * fails, the members already replaced get their previous versions back from
+ * the backups (or are removed when there was none, or it could not be linked:
+ * the previous set then loses that file rather than mixing versions), the
+ * temporaries are removed, and the error names the member. The last member is
+ * renamed last, so a reader that sees it sees the whole new set.
+ *
+ * @return KARST_SUCCESS, KARST_EIO (message names the file), KARST_ENOMEM.
+ * Time complexity: O(members) file-system operations.
+ */
+karst_error_t karst_fileset_commit(karst_ctx_t *ctx, karst_fileset_t *fs) {
+  karst_error_t err = KARST_SUCCESS;
+  int n = fs->n, done = 0;
+  char **bak = calloc((size_t)(n > 0 ? n : 1), sizeof *bak);
+  if (!bak) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
+  for (int i = 0; i < n; i++) {
+    struct stat st;
+    if (fs->tmp_path[i] && stat(fs->tmp_path[i], &st) != 0) {
+      int e = errno;
+      err = karst_set_error(ctx, KARST_EIO, "%s: its temporary %s is missing: %s", fs->path[i],
+                            fs->tmp_path[i], strerror(e));
+      goto cleanup;
+    }
+    if (lstat(fs->path[i], &st) != 0 || !S_ISREG(st.st_mode)) continue;
+    if (!(bak[i] = karst_temp_name(fs->path[i]))) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", fs->path[i]);
+      goto cleanup;
+    }
+    if (link(fs->path[i], bak[i]) != 0) {
+      free(bak[i]);
+      bak[i] = NULL;
+    }
+  }
+  for (; done < n; done++) {
+    int i = done;
+    int bad = fs->tmp_path[i] ? rename(fs->tmp_path[i], fs->path[i]) != 0
+                              : (remove(fs->path[i]) != 0 && errno != ENOENT);
+    if (bad) {
+      int e = errno;
+      err = karst_set_error(ctx, KARST_EIO,
+                            "%s: cannot %s: %s (the files of its set already replaced were put back)", fs->path[i],
+                            fs->tmp_path[i] ? "rename into place" : "remove", strerror(e));
+      break;
+    }
+  }
+  if (!err) /* renamed: nothing for karst_fileset_abort to remove */
+    for (int i = 0; i < n; i++) {
+      free(fs->tmp_path[i]);
+      fs->tmp_path[i] = NULL;
+    }
+  if (err) /* undo members 0 .. done-1, newest first */
+    for (int i = done - 1; i >= 0; i--) {
+      if (bak[i]) {
+        if (rename(bak[i], fs->path[i]) == 0) {
+          free(bak[i]);
+          bak[i] = NULL;
+        }
+      } else if (fs->tmp_path[i]) {
+        remove(fs->path[i]);
+      }
+    }
+cleanup:
+  if (bak)
+    for (int i = 0; i < n; i++)
+      if (bak[i]) {
+        remove(bak[i]);
+        free(bak[i]);
+      }
+  free(bak);
+  karst_fileset_abort(fs); /* removes the temporaries not renamed */
+  return err;
+}

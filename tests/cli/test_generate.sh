@@ -9,6 +9,11 @@ SRC=$2
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
+PY=/usr/bin/python3
+# The files are read back by VTK's own Python reader and run.json by Python's json module: a
+# missing interpreter or module is a failure, not a skip (scripts/install-deps installs
+# python3-vtk9, and CI has it).
+"$PY" -c "import json, vtk" 2>/dev/null || fail "$PY with the vtk module is required (scripts/install-deps installs python3-vtk9)"
 
 # Usage errors exit 2.
 "$KARST" generate >/dev/null 2>&1; [ $? -eq 2 ] || fail "no arguments should exit 2"
@@ -70,10 +75,52 @@ grep -q '"seed": 5,' "$TMP/a/run.json" || fail "run.json lacks the seed"
 grep -q '"scenario_hash": "[0-9a-f]\{16\}"' "$TMP/a/run.json" || fail "run.json lacks the scenario hash"
 grep -q '"gamma": 2' "$TMP/a/run.json" || fail "run.json lacks gamma"
 grep -q '"skeleton":' "$TMP/a/run.json" || fail "run.json lacks the skeleton stage time"
-if [ -x /usr/bin/python3 ]; then
-  /usr/bin/python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['counts']['network_edges'] > 0" \
-    "$TMP/a/run.json" || fail "run.json is not valid JSON with network edges"
-fi
+# run.json: valid JSON; one time per real stage (the edge costs are computed with the graph, so
+# there is no "cost" key); the radius field's parameters (the scenario's default correlation
+# length, 100 m in docs/scenario.md, and the 256 waves of classification.c). network.vtp and
+# samples.vtp read back by VTK with as many lines and points as run.json counts.
+"$PY" - "$TMP/a" <<'EOF' || fail "run.json or the VTK files do not hold what they should"
+import json, sys, vtk
+d = json.load(open(sys.argv[1] + "/run.json"))
+assert d["counts"]["network_edges"] > 0, d["counts"]
+keys = list(d["stage_seconds"])
+assert keys == ["sampling", "graph", "paths", "skeleton", "amplification", "classification"], keys
+cl = d["parameters"]["classification"]
+assert cl["radius_correlation"] == 100 and cl["radius_field_waves"] == 256, cl
+assert d["parameters"]["terrain"] == {"elevation": 60}, d["parameters"]["terrain"]
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1] + "/network.vtp"); r.Update()
+pd = r.GetOutput()
+assert pd.GetNumberOfPoints() == d["counts"]["network_nodes"], pd.GetNumberOfPoints()
+assert pd.GetNumberOfLines() == d["counts"]["network_edges"], pd.GetNumberOfLines()
+for a in ("tunnel_type", "radius", "cost", "vadose", "branch_id", "amplification_step"):
+    assert pd.GetCellData().GetArray(a) is not None, a
+for a in ("kind", "water_table_distance"):
+    assert pd.GetPointData().GetArray(a) is not None, a
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1] + "/samples.vtp"); r.Update()
+assert r.GetOutput().GetNumberOfPoints() == d["counts"]["samples"], r.GetOutput().GetNumberOfPoints()
+EOF
+
+# A heightfield terrain: run.json records its georeference as read. The grid below has
+# xllcorner -10, yllcorner -5, cellsize 50, so (by hand) its cell centres start at
+# xllcenter -10 + 25 = 15, yllcenter -5 + 25 = 20.
+cat > "$TMP/hf.asc" <<'EOF'
+ncols 6
+nrows 6
+xllcorner -10
+yllcorner -5
+cellsize 50
+EOF
+for i in 1 2 3 4 5 6; do echo "62 61 60 60 61 62" >> "$TMP/hf.asc"; done
+sed 's|^  elevation: 60$|  heightfield: hf.asc|' "$TMP/small.yaml" > "$TMP/hf.yaml"
+grep -q "heightfield: hf.asc" "$TMP/hf.yaml" || fail "could not write the heightfield scenario"
+"$KARST" generate "$TMP/hf.yaml" -o "$TMP/h" --seed 5 --quiet || fail "heightfield run failed"
+"$PY" - "$TMP/h/run.json" <<'EOF' || fail "run.json lacks the heightfield's georeference"
+import json, sys
+t = json.load(open(sys.argv[1]))["parameters"]["terrain"]
+assert t["grid"].endswith("hf.asc") and len(t["grid_hash"]) == 16, t
+assert (t["ncols"], t["nrows"], t["cellsize"]) == (6, 6, 50), t
+assert (t["xllcorner"], t["yllcorner"], t["xllcenter"], t["yllcenter"]) == (-10, -5, 15, 20), t
+EOF
 
 # Same seed: byte-identical outputs, also with another thread count.
 "$KARST" generate "$TMP/small.yaml" -o "$TMP/b" --seed 5 --samples --threads 2 --quiet || fail "second run failed"
@@ -94,5 +141,28 @@ done
 "$KARST" generate "$TMP/small.yaml" -o "$TMP/c" --seed 6 --quiet || fail "seed 6 run failed"
 cmp -s "$TMP/a/network_nodes.dat" "$TMP/c/network_nodes.dat" && fail "seeds 5 and 6 gave the same network"
 [ ! -e "$TMP/c/samples.vtp" ] || fail "samples.vtp written without --samples"
+
+# The outputs are one set, committed together with run.json last. A run whose last file cannot be
+# put in place (run.json is a non-empty directory, which rename cannot replace) fails with exit 1
+# and leaves none of the set and no temporary file.
+mkdir -p "$TMP/d/run.json/x"
+"$KARST" generate "$TMP/small.yaml" -o "$TMP/d" --seed 5 --samples --quiet 2>"$TMP/d.err"
+[ $? -eq 1 ] || fail "a run that cannot write run.json should exit 1"
+grep -q "run.json: cannot rename into place" "$TMP/d.err" || fail "the error should name run.json: $(cat "$TMP/d.err")"
+[ "$(ls -A "$TMP/d")" = "run.json" ] || fail "a failed run left part of its set: $(ls -A "$TMP/d")"
+# Over a previous complete set (a copy of the seed-5 set in "$TMP/b", its run.json replaced by a
+# directory only after the copy), the same failure puts back the previous files unchanged.
+cp -r "$TMP/b" "$TMP/e"
+"$KARST" generate "$TMP/small.yaml" -o "$TMP/e" --seed 6 --quiet 2>/dev/null || fail "seed 6 over seed 5 failed"
+cmp -s "$TMP/c/network_nodes.dat" "$TMP/e/network_nodes.dat" || fail "a rerun did not replace the set"
+[ ! -e "$TMP/e/samples.vtp" ] || fail "a rerun without --samples left the previous samples.vtp"
+cp -r "$TMP/b" "$TMP/g"
+rm "$TMP/g/run.json" && mkdir -p "$TMP/g/run.json/x"
+"$KARST" generate "$TMP/small.yaml" -o "$TMP/g" --seed 6 --samples --quiet 2>/dev/null
+[ $? -eq 1 ] || fail "a rerun that cannot write run.json should exit 1"
+for f in network.vtp network_nodes.dat network_links.dat samples.vtp; do
+  cmp -s "$TMP/b/$f" "$TMP/g/$f" || fail "$f of the previous set changed by a failed run"
+done
+[ "$(ls -A "$TMP/g" | wc -l)" -eq 5 ] || fail "a failed rerun left temporaries: $(ls -A "$TMP/g")"
 
 echo "ok"

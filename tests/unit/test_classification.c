@@ -46,9 +46,18 @@ static void test_decision_table(void **state) {
   assert_int_equal(seg(&sc, 0, 46, 0, 8), KARST_TUNNEL_TUBE);     /* at the table, vertical */
   assert_int_equal(seg(&sc, 0, 20, 10, 0), KARST_TUNNEL_BED);     /* phreatic, horizontal */
   assert_int_equal(seg(&sc, 0, 15, 0, 10), KARST_TUNNEL_PASSAGE); /* phreatic, vertical */
-  assert_int_equal(seg(&sc, 0, 95, 10, 0), KARST_TUNNEL_EPIKARST); /* 5 m below the terrain */
-  assert_int_equal(seg(&sc, 0, 91, 0, 6), KARST_TUNNEL_EPIKARST);  /* centre 94: vertical too */
-  assert_int_equal(seg(&sc, 0, 88, 10, 0), KARST_TUNNEL_CANYON); /* 12 m deep: below the epikarst */
+  /* Epikarst: steep AND in the 10 m below the terrain (Paris et al. §5.3, "narrow vertical
+   * conduits that start from the surface"). By hand: seg(x, z, dx, dz) runs from (x, 0, z) to
+   * (x + dx, 0, z + dz), midpoint depth 100 − (z + dz / 2), angle atan(|dz| / |dx|). */
+  assert_int_equal(seg(&sc, 0, 91, 0, 6), KARST_TUNNEL_EPIKARST);  /* depth 6, 90° */
+  assert_int_equal(seg(&sc, 0, 95, 10, 0), KARST_TUNNEL_CANYON);   /* depth 5, 0°: not epikarst */
+  assert_int_equal(seg(&sc, 0, 97, 10, 1), KARST_TUNNEL_CANYON);   /* depth 2.5, 5.7° */
+  assert_int_equal(seg(&sc, 0, 83, 0, 10), KARST_TUNNEL_TUBE);     /* depth 12, 90°: a shaft */
+  assert_int_equal(seg(&sc, 0, 88, 10, 0), KARST_TUNNEL_CANYON); /* depth 12, 0° */
+  /* At the angle threshold near the surface: dz = tan 60° (+1e-12) over dx = 1, midpoint depth
+   * 100 − (93 + 0.866) = 6.13, is epikarst; tan 59° over 1 m is gentle, a canyon. */
+  assert_int_equal(seg(&sc, 0, 93, 1, tan(60.0 * M_PI / 180) + 1e-12), KARST_TUNNEL_EPIKARST);
+  assert_int_equal(seg(&sc, 0, 93, 1, tan(59.0 * M_PI / 180)), KARST_TUNNEL_CANYON);
   double a[3] = {495, 500, 30}, b[3] = {505, 500, 30};
   assert_int_equal(karst_classification_type(&sc, a, b), KARST_TUNNEL_CHAMBER); /* ghost rock */
   /* Band edges: |z − W| ≤ 5 counts as the table; 5.5 m above is vadose. */

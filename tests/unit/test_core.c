@@ -151,11 +151,138 @@ static void test_atomic_file(void **state) {
   assert_int_equal(system(cmd), 0);
 }
 
+/* Write @p text to @p path (a member's temporary). */
+static void put(const char *path, const char *text) {
+  FILE *fp = fopen(path, "w");
+  assert_non_null(fp);
+  fputs(text, fp);
+  fclose(fp);
+}
+
+/* Contents of @p path ("" when it cannot be read). */
+static const char *get(const char *dir, const char *name) {
+  static char buf[64];
+  char path[256];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  buf[0] = '\0';
+  FILE *fp = fopen(path, "r");
+  if (!fp) return buf;
+  size_t n = fread(buf, 1, sizeof buf - 1, fp);
+  buf[n] = '\0';
+  fclose(fp);
+  return buf;
+}
+
+/* The names in @p dir, sorted, hidden ones included, joined by spaces. */
+static const char *listing(const char *dir) {
+  static char buf[512];
+  char cmd[300];
+  snprintf(cmd, sizeof cmd, "ls -A %s | sort | tr '\\n' ' '", dir);
+  FILE *p = popen(cmd, "r");
+  assert_non_null(p);
+  size_t n = fread(buf, 1, sizeof buf - 1, p);
+  buf[n] = '\0';
+  pclose(p);
+  return buf;
+}
+
+/* Add a, b (and stale s when @p stale), then c, writing "<tag> a" ... to the temporaries. */
+static void fill_set(karst_ctx_t *ctx, karst_fileset_t *fs, const char *dir, const char *tag,
+                     int stale) {
+  const char *names[] = {"a", "b", "c"};
+  char path[256], text[32];
+  for (int i = 0; i < 3; i++) {
+    if (i == 2 && stale) {
+      snprintf(path, sizeof path, "%s/s", dir);
+      assert_int_equal(karst_fileset_add_stale(ctx, fs, path), 0);
+    }
+    const char *tmp = NULL;
+    snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+    assert_int_equal(karst_fileset_add(ctx, fs, path, NULL, &tmp), 0);
+    snprintf(text, sizeof text, "%s %s", tag, names[i]);
+    put(tmp, text);
+  }
+}
+
+/* A file set is committed whole or not at all: a failure on its last member (c is a non-empty
+ * directory, which rename cannot replace) leaves none of a new set in an empty directory and puts
+ * back the previous versions of a set it was replacing; a commit replaces a, b and c and removes
+ * the stale s; an abort leaves nothing. */
+static void test_fileset(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  char dir[] = "/tmp/karst_fileset_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  char path[256], cmd[600];
+  karst_fileset_t fs;
+
+  /* Empty set: commit and abort do nothing. */
+  karst_fileset_init(&fs);
+  assert_int_equal(karst_fileset_commit(&ctx, &fs), 0);
+  karst_fileset_abort(&fs);
+  assert_string_equal(listing(dir), "");
+
+  /* Abort: the temporaries go, nothing else appears. */
+  karst_fileset_init(&fs);
+  fill_set(&ctx, &fs, dir, "new", 0);
+  assert_int_equal(fs.n, 3);
+  karst_fileset_abort(&fs);
+  assert_string_equal(listing(dir), "");
+
+  /* Failure on the last member in an empty directory: none of a, b. */
+  snprintf(path, sizeof path, "%s/c/x", dir);
+  assert_int_equal(karst_mkdir_p(&ctx, path), 0);
+  karst_fileset_init(&fs);
+  fill_set(&ctx, &fs, dir, "new", 0);
+  assert_int_equal(karst_fileset_commit(&ctx, &fs), KARST_EIO);
+  snprintf(path, sizeof path, "%s/c: cannot rename into place", dir);
+  assert_non_null(strstr(ctx.errmsg, path));
+  assert_string_equal(listing(dir), "c ");
+  assert_int_equal(fs.n, 0);
+
+  /* Failure over a previous set: a and b get their old contents back, s stays. */
+  snprintf(path, sizeof path, "%s/a", dir), put(path, "old a");
+  snprintf(path, sizeof path, "%s/b", dir), put(path, "old b");
+  snprintf(path, sizeof path, "%s/s", dir), put(path, "old s");
+  karst_fileset_init(&fs);
+  fill_set(&ctx, &fs, dir, "new", 1);
+  assert_int_equal(karst_fileset_commit(&ctx, &fs), KARST_EIO);
+  assert_string_equal(listing(dir), "a b c s ");
+  assert_string_equal(get(dir, "a"), "old a");
+  assert_string_equal(get(dir, "b"), "old b");
+  assert_string_equal(get(dir, "s"), "old s");
+
+  /* Success over a previous set: the new a, b, c; s removed; no temporary or backup left. */
+  snprintf(cmd, sizeof cmd, "rm -r %s/c && printf 'old c' > %s/c", dir, dir);
+  assert_int_equal(system(cmd), 0);
+  karst_fileset_init(&fs);
+  fill_set(&ctx, &fs, dir, "new", 1);
+  assert_int_equal(karst_fileset_commit(&ctx, &fs), 0);
+  assert_string_equal(listing(dir), "a b c ");
+  assert_string_equal(get(dir, "a"), "new a");
+  assert_string_equal(get(dir, "b"), "new b");
+  assert_string_equal(get(dir, "c"), "new c");
+
+  /* A member whose temporary was never written: an error naming it, nothing replaced. */
+  karst_fileset_init(&fs);
+  fill_set(&ctx, &fs, dir, "third", 0);
+  snprintf(path, sizeof path, "%s/d", dir);
+  assert_int_equal(karst_fileset_add(&ctx, &fs, path, NULL, NULL), 0);
+  assert_int_equal(karst_fileset_commit(&ctx, &fs), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "/d: its temporary"));
+  assert_string_equal(listing(dir), "a b c ");
+  assert_string_equal(get(dir, "a"), "new a");
+
+  snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+  assert_int_equal(system(cmd), 0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_error_list),     cmocka_unit_test(test_rng_streams),
       cmocka_unit_test(test_rng_moments),    cmocka_unit_test(test_network_storage),
-      cmocka_unit_test(test_atomic_file),
+      cmocka_unit_test(test_atomic_file),   cmocka_unit_test(test_fileset),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
