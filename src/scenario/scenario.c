@@ -768,9 +768,11 @@ static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const
   if (!resolved) return no_memory(r);
   memcpy(resolved, r->file, dirlen);
   strcpy(resolved + dirlen, hf);
-  fp = fopen(resolved, "r");
-  if (!fp) {
-    err = fail_at(r, v, KARST_EIO, "%s: cannot open '%s': %s", sub, resolved, strerror(errno));
+  if ((err = karst_i_open_regular(r->ctx, resolved, "heightfield", KARST_HEIGHTFIELD_MAX_BYTES,
+                                  &fp))) {
+    char msg[KARST_ERRMSG_MAX];
+    snprintf(msg, sizeof msg, "%s", r->ctx->errmsg);
+    err = fail_at(r, v, err, "%s: %s", sub, msg);
     goto cleanup;
   }
   err = karst_i_terrain_read_grid(r->ctx, fp, resolved, &sc->terrain);
@@ -1718,9 +1720,15 @@ static karst_error_t read_file(karst_ctx_t *ctx, const char *path, unsigned char
   karst_error_t err = KARST_SUCCESS;
   unsigned char *buf = NULL;
   size_t n = 0, cap = 0;
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  FILE *fp = NULL;
+  if ((err = karst_i_open_regular(ctx, path, "scenario", KARST_SCENARIO_MAX_BYTES, &fp)))
+    return err;
   for (;;) {
+    if (n > (size_t)KARST_SCENARIO_MAX_BYTES) { /* grew after it was opened */
+      err = karst_set_error(ctx, KARST_ERANGE, "%s: the scenario file is more than %lld bytes",
+                            path, (long long)KARST_SCENARIO_MAX_BYTES);
+      goto cleanup;
+    }
     if (n == cap) {
       size_t ncap = cap ? 2 * cap : 65536;
       unsigned char *nb = realloc(buf, ncap);

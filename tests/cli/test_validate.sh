@@ -54,6 +54,12 @@ expect_err "$DATA/bad/empty.yaml:1:1: the scenario file is empty (expected a map
 run 1 "missing file" "$KARST" validate "$tmp/none.yaml"
 grep -q "none.yaml: cannot open: No such file or directory" "$tmp/err" || { say "FAIL: missing file message"; fail=1; }
 run 1 "a directory" "$KARST" validate "$tmp"
+expect_err "$tmp: is a directory; the scenario must be a regular file"
+run 1 "/dev/zero (would never end)" "$KARST" validate /dev/zero
+expect_err "/dev/zero: is a character device; the scenario must be a regular file"
+mkfifo "$tmp/pipe.yaml"
+run 1 "a FIFO without a writer (would block)" "$KARST" validate "$tmp/pipe.yaml"
+expect_err "$tmp/pipe.yaml: is a FIFO (named pipe); the scenario must be a regular file"
 run 1 "good then bad: still exit 1" "$KARST" validate "$DATA/good/minimal.yaml" "$DATA/bad/nan.yaml"
 grep -q "ok: 'minimal'" "$tmp/out" || { say "FAIL: the good file was not reported"; fail=1; }
 
