@@ -310,9 +310,11 @@ static karst_error_t get_number(reader_t *r, yaml_node_t *n, const char *path, d
 
 /* An integer within [lo, hi] (the limits of the C type). Integer literals are
  * read exactly; a floating literal is accepted only when it is a whole
- * number below 2^53 (so "5e6" works and "2.5" does not). */
+ * number below 2^53 (so "5e6" works and "2.5" does not). A value outside the
+ * type is reported with the field's own bounds [mlo, mhi] (e.g. k: 1 to
+ * 2147483647), so the message says what is allowed. */
 static karst_error_t get_integer(reader_t *r, yaml_node_t *n, const char *path, int64_t lo,
-                                 int64_t hi, int64_t *out) {
+                                 int64_t hi, int64_t mlo, int64_t mhi, int64_t *out) {
   char d[80];
   if (n->type != YAML_SCALAR_NODE || !is_plain(n) || is_null(n))
     return fail_at(r, n, KARST_EINVAL, "%s must be an integer, got %s", path,
@@ -328,19 +330,23 @@ static karst_error_t get_integer(reader_t *r, yaml_node_t *n, const char *path, 
     long long x = strtoll(s, NULL, 10);
     if (errno == ERANGE || x < lo || x > hi)
       return fail_at(r, n, KARST_ERANGE,
-                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, lo,
-                     hi, describe(n, d, sizeof d));
+                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, mlo,
+                     mhi, describe(n, d, sizeof d));
     v = (int64_t)x;
   } else {
     char *end;
     double x = strtod(s, &end);
-    if (end == s || *end != '\0' || !isfinite(x) || x != floor(x) || fabs(x) > 9007199254740992.0)
+    if (end == s || *end != '\0' || !isfinite(x) || x != floor(x))
       return fail_at(r, n, KARST_EINVAL, "%s must be an integer, got %s", path,
                      describe(n, d, sizeof d));
     if (x < (double)lo || x > (double)hi)
       return fail_at(r, n, KARST_ERANGE,
-                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, lo,
-                     hi, describe(n, d, sizeof d));
+                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, mlo,
+                     mhi, describe(n, d, sizeof d));
+    if (fabs(x) > 9007199254740992.0)
+      return fail_at(r, n, KARST_EINVAL,
+                     "%s: %s is beyond 2^53 and not exact in floating notation; write it in digits",
+                     path, describe(n, d, sizeof d));
     v = (int64_t)x;
   }
   *out = v;
@@ -533,8 +539,12 @@ static karst_error_t read_field(reader_t *r, const field_t *f, yaml_node_t *val,
   case T_I64: {
     int64_t v = 0;
     int64_t lo = f->type == T_INT ? INT_MIN : INT64_MIN,
-            hi = f->type == T_INT ? INT_MAX : INT64_MAX;
-    if ((err = get_integer(r, val, path, lo, hi, &v))) return err;
+            hi = f->type == T_INT ? INT_MAX : INT64_MAX, mlo = lo, mhi = hi;
+    if ((f->range.flags & R_LO) && f->range.lo > (double)lo)
+      mlo = (int64_t)floor(f->range.lo) + ((f->range.flags & R_LO_OPEN) ? 1 : 0);
+    if ((f->range.flags & R_HI) && f->range.hi < (double)hi)
+      mhi = (int64_t)ceil(f->range.hi) - ((f->range.flags & R_HI_OPEN) ? 1 : 0);
+    if ((err = get_integer(r, val, path, lo, hi, mlo, mhi, &v))) return err;
     if ((err = check_range(r, f, val, path, (double)v))) return err;
     if (f->type == T_INT)
       *(int *)at = (int)v;

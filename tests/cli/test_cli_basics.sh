@@ -19,6 +19,13 @@ check 2 "help unknown" "$KARST" help frobnicate
 check 2 "validate without file" "$KARST" validate
 check 2 "validate bad option" "$KARST" validate --frob x.yaml
 check 1 "validate missing file" "$KARST" validate /nonexistent/scenario.yaml
+# --seed out of range or not a number: a usage error naming the option (before any file is read).
+for s in -1 18446744073709551616 abc 1e3 " 5"; do
+  check 2 "generate --seed '$s'" "$KARST" generate /nonexistent.yaml -o /tmp/none --seed "$s"
+  grep -q "^karst generate: --seed must be an integer from 0 to 18446744073709551615, got '$s'" \
+    /tmp/karst_cli_out.$$ || { echo "FAIL: --seed '$s' message"; cat /tmp/karst_cli_out.$$; fail=1; }
+  check 2 "ensemble --seed '$s'" "$KARST" ensemble /nonexistent.yaml -n 1 -o /tmp/none --seed "$s"
+done
 for c in validate generate metrics ensemble compare report mesh; do
   "$KARST" --help | grep -q "^  $c " || { echo "FAIL: $c not listed in --help"; fail=1; }
 done

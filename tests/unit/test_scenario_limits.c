@@ -11,6 +11,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -202,6 +203,85 @@ static void test_heightfield_too_many_cells(void **state) {
   expect_grid(g, KARST_EPARSE, prefix, "row 1 has 3 values, expected ncols = 10000");
 }
 
+/* ------------------------------------------------------------------------ */
+/* 2. Integers out of their type's range                                    */
+/* ------------------------------------------------------------------------ */
+
+/* A valid scenario with @p extra as its line 6 (the key under test). */
+static const char *scenario_with(const char *name, const char *extra) {
+  char text[1024];
+  snprintf(text, sizeof text,
+           "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+           "terrain: {elevation: 40}\n"
+           "key_points:\n"
+           "  - {name: in, type: sink, position: [10, 10, 20]}\n"
+           "  - {name: out, type: spring, position: [90, 90, 10]}\n"
+           "%s\n",
+           extra);
+  return tmp_file(name, text);
+}
+
+static void expect_line6(const char *extra, int col, karst_error_t code, const char *part) {
+  const char *s = scenario_with("int.yaml", extra);
+  char prefix[300];
+  snprintf(prefix, sizeof prefix, "%s:6:%d: ", s, col);
+  expect_load(s, code, prefix, part);
+}
+
+/* INT_MAX = 2^31 - 1 = 2147483647, INT64_MAX = 2^63 - 1 = 9223372036854775807,
+ * UINT64_MAX = 2^64 - 1 = 18446744073709551615. Values one past each bound,
+ * and far past them, name the field, its bounds and the value as written.
+ * Columns: "sampling: {k: " is 14 characters, so the value is at column 15. */
+static void test_integer_ranges(void **state) {
+  (void)state;
+  expect_line6("sampling: {k: 2147483648}", 15, KARST_ERANGE,
+               "sampling.k must be an integer between 1 and 2147483647, got 2147483648");
+  expect_line6("sampling: {k: 99999999999999999999}", 15, KARST_ERANGE,
+               "sampling.k must be an integer between 1 and 2147483647, got 99999999999999999999");
+  expect_line6("sampling: {k: 1e17}", 15, KARST_ERANGE,
+               "sampling.k must be an integer between 1 and 2147483647, got 1e17");
+  expect_line6("sampling: {k: -3}", 15, KARST_ERANGE, "sampling.k must be >= 1, got -3");
+  expect_line6("sampling: {k: -2147483649}", 15, KARST_ERANGE,
+               "sampling.k must be an integer between 1 and 2147483647, got -2147483649");
+  expect_line6("sampling: {max_samples: 9223372036854775808}", 25, KARST_ERANGE,
+               "sampling.max_samples must be an integer between 1 and 9223372036854775807, got "
+               "9223372036854775808");
+  expect_line6("random: {realisations: 2147483648}", 24, KARST_ERANGE,
+               "random.realisations must be an integer between 1 and 2147483647, got 2147483648");
+  expect_line6("random: {realisations: -1}", 24, KARST_ERANGE,
+               "random.realisations must be >= 1, got -1");
+  expect_line6("amplification: {steps: -1}", 24, KARST_ERANGE,
+               "amplification.steps must be >= 0, got -1");
+  expect_line6("amplification: {steps: 2147483648}", 24, KARST_ERANGE,
+               "amplification.steps must be an integer between 0 and 2147483647, got 2147483648");
+  expect_line6("amplification: {points: 3000000000}", 25, KARST_ERANGE,
+               "amplification.points must be an integer between 0 and 2147483647, got 3000000000");
+  expect_line6("amplification: {points: -7}", 25, KARST_ERANGE,
+               "amplification.points must be >= 0, got -7");
+  expect_line6("random: {seed: 18446744073709551616}", 16, KARST_EINVAL,
+               "random.seed must be an unsigned 64-bit integer (0 to 18446744073709551615), got "
+               "18446744073709551616");
+  expect_line6("random: {seed: -1}", 16, KARST_EINVAL,
+               "random.seed must be an unsigned 64-bit integer (0 to 18446744073709551615), got -1");
+  /* Whole numbers beyond 2^53 in floating notation are not exact: refused as such. */
+  expect_line6("sampling: {max_samples: 1e17}", 25, KARST_EINVAL,
+               "sampling.max_samples: 1e17 is beyond 2^53");
+  /* The bounds themselves are accepted. */
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  const char *ok = scenario_with("ok.yaml", "sampling: {k: 2147483647, max_samples: "
+                                            "9223372036854775807}\nrandom: {seed: "
+                                            "18446744073709551615, realisations: 2147483647}");
+  assert_int_equal(karst_scenario_load(&ctx, ok, &sc), KARST_SUCCESS);
+  assert_int_equal(sc.sampling.k, 2147483647);
+  assert_true(sc.sampling.max_samples == INT64_MAX);
+  assert_true(sc.seed == UINT64_MAX);
+  assert_int_equal(sc.realisations, 2147483647);
+  karst_scenario_destroy(&sc);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_scenario_not_regular),
@@ -209,6 +289,7 @@ int main(void) {
       cmocka_unit_test(test_heightfield_not_regular),
       cmocka_unit_test(test_heightfield_too_large),
       cmocka_unit_test(test_heightfield_too_many_cells),
+      cmocka_unit_test(test_integer_ranges),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }
