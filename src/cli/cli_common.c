@@ -103,7 +103,7 @@ int cli_usage_error(const char *cmd, const char *fmt, ...) {
     const char *nl = strchr(c->usage, '\n');
     fprintf(stderr, "%.*s\n", nl ? (int)(nl - c->usage) : (int)strlen(c->usage), c->usage);
   }
-  fprintf(stderr, "Run 'karst help %s' for details.\n", cmd);
+  fprintf(stderr, "Run 'karst help %s' for its options, 'karst --help' for the commands.\n", cmd);
   return CLI_USAGE;
 }
 

@@ -16,6 +16,19 @@ check 0 "help validate" "$KARST" help validate
 check 2 "no command" "$KARST"
 check 2 "unknown command" "$KARST" frobnicate
 check 2 "help unknown" "$KARST" help frobnicate
+check 2 "unknown global option" "$KARST" --bogus
+grep -q "^karst: unknown option '--bogus'.*See 'karst --help'" /tmp/karst_cli_out.$$ \
+  || { echo "FAIL: --bogus message"; cat /tmp/karst_cli_out.$$; fail=1; }
+"$KARST" frobnicate 2>&1 | grep -q "^karst: 'frobnicate' is not a karst command. See 'karst --help'" \
+  || { echo "FAIL: unknown command message"; fail=1; }
+# Unknown options of each command: exit 2, the option named, a hint to the help.
+for c in validate generate metrics ensemble compare report mesh; do
+  check 2 "$c --bogus" "$KARST" $c --bogus x
+  grep -q "^karst $c: unknown option.*'--bogus'" /tmp/karst_cli_out.$$ \
+    || { echo "FAIL: $c --bogus message"; cat /tmp/karst_cli_out.$$; fail=1; }
+  grep -q "^Run 'karst help $c' for its options, 'karst --help' for the commands.$" /tmp/karst_cli_out.$$ \
+    || { echo "FAIL: $c --bogus hint"; cat /tmp/karst_cli_out.$$; fail=1; }
+done
 check 2 "validate without file" "$KARST" validate
 check 2 "validate bad option" "$KARST" validate --frob x.yaml
 check 1 "validate missing file" "$KARST" validate /nonexistent/scenario.yaml
