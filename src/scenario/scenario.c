@@ -1387,6 +1387,48 @@ static karst_error_t check_fail(karst_ctx_t *ctx, const karst_scenario_t *sc, in
                          line > 0 && col > 0 ? col : 1, msg);
 }
 
+/* Key points by position (x, then y, then z), ties by list order. */
+static int cmp_kp_pos(const void *a, const void *b) {
+  const karst_keypoint_t *x = *(const karst_keypoint_t *const *)a;
+  const karst_keypoint_t *y = *(const karst_keypoint_t *const *)b;
+  for (int k = 0; k < 3; k++)
+    if (x->p[k] != y->p[k]) return x->p[k] < y->p[k] ? -1 : 1;
+  return x < y ? -1 : x > y;
+}
+
+/* The first pair (in list order of the later one) of key points at exactly
+ * the same position: *dup is the later, *first the earlier; *dup = -1 when
+ * there is none. Such a pair would be two samples at one point, joined by a
+ * zero-length edge. NaN positions compare unequal (refused elsewhere).
+ * Returns 0, or -1 when out of memory. O(n log n). */
+static int first_coincident(const karst_scenario_t *sc, int *dup, int *first) {
+  *dup = -1;
+  *first = -1;
+  int n = sc->n_key_points;
+  if (n < 2) return 0;
+  const karst_keypoint_t **v = malloc(sizeof *v * (size_t)n);
+  if (!v) return -1;
+  for (int i = 0; i < n; i++)
+    v[i] = &sc->key_points[i];
+  qsort(v, (size_t)n, sizeof *v, cmp_kp_pos);
+  for (int i = 0; i + 1 < n;) {
+    int j = i + 1;
+    while (j < n && v[j]->p[0] == v[i]->p[0] && v[j]->p[1] == v[i]->p[1] &&
+           v[j]->p[2] == v[i]->p[2])
+      j++;
+    if (j > i + 1) { /* v[i] is the earliest of the group, v[i + 1] the next */
+      int later = (int)(v[i + 1] - sc->key_points);
+      if (*dup < 0 || later < *dup) {
+        *dup = later;
+        *first = (int)(v[i] - sc->key_points);
+      }
+    }
+    i = j;
+  }
+  free(v);
+  return 0;
+}
+
 /* The per-field rules of a schema, applied to values already in memory
  * (they matter for scenarios built in code; the reader checked them on the way in). */
 static karst_error_t check_values(karst_ctx_t *ctx, const karst_scenario_t *sc, const schema_t *s,
@@ -1617,6 +1659,18 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
                         "key_points[%d] '%s' at z = %g m is above the terrain (%g m at x = %g, "
                         "y = %g); key points must lie in the bedrock",
                         i, kp->name, p[2], h, p[0], p[1]);
+  }
+  {
+    int dup, first;
+    if (first_coincident(sc, &dup, &first))
+      return karst_set_error(ctx, KARST_ENOMEM, "out of memory checking key-point positions");
+    if (dup >= 0) {
+      const karst_keypoint_t *a = &sc->key_points[first], *b = &sc->key_points[dup];
+      return check_fail(ctx, sc, b->line, b->column, KARST_EINVAL,
+                        "key_points[%d] '%s' (line %d) is at the same position (%g, %g, %g) as "
+                        "key_points[%d] '%s' (line %d); key points must be at distinct positions",
+                        dup, b->name, b->line, b->p[0], b->p[1], b->p[2], first, a->name, a->line);
+    }
   }
   if (springs == 0)
     return check_fail(ctx, sc, sc->pos_key_points.line, sc->pos_key_points.column, KARST_EINVAL,

@@ -7,6 +7,7 @@
  * (line 1 is the first line of the string, columns from 1). */
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -282,6 +283,171 @@ static void test_integer_ranges(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* ------------------------------------------------------------------------ */
+/* 4. Key points on the ground, coincident, close together                  */
+/* ------------------------------------------------------------------------ */
+
+/* Load @p path (must succeed), generate with seed 3, and return the position
+ * of the network node labelled @p name through @p xyz; returns the number of
+ * nodes with that label. */
+static int generate_and_find(const char *path, const char *name, double xyz[3]) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  ctx.nthreads = 1;
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  karst_error_t err = karst_scenario_load(&ctx, path, &sc);
+  if (err) print_error("load: %s\n", ctx.errmsg);
+  assert_int_equal(err, KARST_SUCCESS);
+  karst_network_t net;
+  karst_network_init(&net);
+  err = karst_generate(&ctx, &sc, 3, 0, &net, NULL, NULL);
+  if (err) print_error("generate: %s\n", ctx.errmsg);
+  assert_int_equal(err, KARST_SUCCESS);
+  int found = 0;
+  for (karst_int_t i = 0; net.node_labels && i < net.n_nodes; i++) {
+    if (net.node_labels[i] && !strcmp(net.node_labels[i], name)) {
+      memcpy(xyz, net.xyz + 3 * i, 3 * sizeof(double));
+      found++;
+    }
+  }
+  karst_network_destroy(&net);
+  karst_scenario_destroy(&sc);
+  return found;
+}
+
+/* A sink exactly on a flat ground at 40 m: validate and generate agree (the
+ * bedrock is z <= h), and the network keeps the sink at (10, 10, 40). */
+static void test_keypoint_on_flat_ground(void **state) {
+  (void)state;
+  const char *s = tmp_file("ground_flat.yaml",
+                           "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+                           "terrain: {elevation: 40}\n"
+                           "key_points:\n"
+                           "  - {name: in, type: sink, position: [10, 10, 40]}\n"
+                           "  - {name: out, type: spring, position: [90, 90, 10]}\n");
+  double p[3];
+  assert_int_equal(generate_and_find(s, "in", p), 1);
+  assert_close(p[0], 10, 0);
+  assert_close(p[1], 10, 0);
+  assert_close(p[2], 40, 0);
+  /* 1 mm above the ground is still refused, with the terrain height. */
+  s = tmp_file("ground_above.yaml",
+               "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+               "terrain: {elevation: 40}\n"
+               "key_points:\n"
+               "  - {name: in, type: sink, position: [10, 10, 40.001]}\n"
+               "  - {name: out, type: spring, position: [90, 90, 10]}\n");
+  char prefix[300];
+  snprintf(prefix, sizeof prefix, "%s:4:5: ", s);
+  expect_load(s, KARST_ERANGE, prefix, "key_points[0] 'in' at z = 40.001 m is above the terrain");
+}
+
+/* The same on a heightfield, at the grid node (50, 50) whose elevation the
+ * file gives as 37.5 (the bilinear surface passes through its nodes). */
+static void test_keypoint_on_heightfield_ground(void **state) {
+  (void)state;
+  tmp_file("slope.asc", "ncols 3\nnrows 3\nxllcenter 0\nyllcenter 0\ncellsize 50\n"
+                        "35 40 45\n32.5 37.5 42.5\n30 35 40\n");
+  const char *s = tmp_file("ground_grid.yaml",
+                           "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+                           "terrain: {heightfield: slope.asc}\n"
+                           "key_points:\n"
+                           "  - {name: in, type: sink, position: [50, 50, 37.5]}\n"
+                           "  - {name: out, type: spring, position: [90, 90, 10]}\n");
+  double p[3];
+  assert_int_equal(generate_and_find(s, "in", p), 1);
+  assert_close(p[2], 37.5, 0);
+}
+
+/* Segments from a point on the ground, on the V-shaped grid of test_cost.c
+ * (z = 50, 10, 50 at x = 0, 10, 20; one row of cells along y). From the
+ * valley floor a = (10, 5, 10), h(x) = 10 + 4|x - 10| near it:
+ *   to (0, 5, 40): z - h = (10 + 30 s) - (10 + 40 s) = -10 s < 0 inside -> in;
+ *   to (0, 5, 10): z - h = -40 s -> in;  straight down to (10, 5, 0): -10 s -> in;
+ *   to (0, 5, 50), on the ground at both ends: z - h = 0 all along -> out;
+ *   to (20, 5, 30): crosses the x = 10 grid line at s = 0 only, then
+ *   z - h = (10 + 20 s) - (10 + 40 s) < 0 -> in. */
+static void test_segments_from_the_ground(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  sc.domain_min[0] = 0, sc.domain_max[0] = 20;
+  sc.domain_min[1] = 0, sc.domain_max[1] = 10;
+  sc.domain_min[2] = -10, sc.domain_max[2] = 60;
+  sc.terrain.is_grid = 1;
+  sc.terrain.ncols = 3, sc.terrain.nrows = 2, sc.terrain.cellsize = 10;
+  sc.terrain.xll = 0, sc.terrain.yll = 0;
+  sc.terrain.z = malloc(6 * sizeof(double));
+  assert_non_null(sc.terrain.z);
+  const double v[6] = {50, 10, 50, 50, 10, 50};
+  memcpy(sc.terrain.z, v, sizeof v);
+  const double a[3] = {10, 5, 10};
+  const double in1[3] = {0, 5, 40}, in2[3] = {0, 5, 10}, in3[3] = {10, 5, 0}, in4[3] = {20, 5, 30};
+  const double along[3] = {0, 5, 50}, above[3] = {10, 5, 10.001};
+  assert_true(karst_cost_in_bedrock(&sc, a));
+  assert_false(karst_cost_in_bedrock(&sc, above));
+  assert_true(karst_cost_segment_in_bedrock(&sc, a, in1));
+  assert_true(karst_cost_segment_in_bedrock(&sc, in1, a));
+  assert_true(karst_cost_segment_in_bedrock(&sc, a, in2));
+  assert_true(karst_cost_segment_in_bedrock(&sc, a, in3));
+  assert_true(karst_cost_segment_in_bedrock(&sc, a, in4));
+  assert_false(karst_cost_segment_in_bedrock(&sc, a, along));
+  assert_false(karst_cost_segment_in_bedrock(&sc, along, a));
+  assert_true(isfinite(karst_cost_edge(&sc, a, in1)));
+  assert_true(isinf(karst_cost_edge(&sc, a, along)));
+  karst_scenario_destroy(&sc);
+}
+
+/* Two key points at one position: refused, naming both and their lines. */
+static void test_coincident_key_points(void **state) {
+  (void)state;
+  const char *s = tmp_file("same.yaml", "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+                                        "terrain: {elevation: 40}\n"
+                                        "key_points:\n"
+                                        "  - {name: a, type: sink, position: [10, 10, 20]}\n"
+                                        "  - {name: out, type: spring, position: [90, 90, 10]}\n"
+                                        "  - {name: b, type: waypoint, position: [10, 10, 20]}\n");
+  char prefix[300];
+  snprintf(prefix, sizeof prefix, "%s:6:5: ", s);
+  expect_load(s, KARST_EINVAL, prefix,
+              "key_points[2] 'b' (line 6) is at the same position (10, 10, 20) as key_points[0] "
+              "'a' (line 4); key points must be at distinct positions");
+  /* 1e-9 m apart is another position. */
+  s = tmp_file("near.yaml", "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+                            "terrain: {elevation: 40}\n"
+                            "key_points:\n"
+                            "  - {name: a, type: sink, position: [10, 10, 20]}\n"
+                            "  - {name: out, type: spring, position: [90, 90, 10]}\n"
+                            "  - {name: b, type: waypoint, position: [10, 10, 20.000000001]}\n");
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  assert_int_equal(karst_scenario_load(&ctx, s, &sc), KARST_SUCCESS);
+  karst_scenario_destroy(&sc);
+}
+
+/* Key points closer than sampling.feature_radius (here 0.5 m apart, radius
+ * 3 m): the sampler inserts every key point as a sample without a distance
+ * test, so both are in the graph and both end up as nodes of the network at
+ * their own positions. */
+static void test_close_key_points(void **state) {
+  (void)state;
+  const char *s = tmp_file("close.yaml", "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+                                         "terrain: {elevation: 40}\n"
+                                         "sampling: {feature_radius: 3}\n"
+                                         "key_points:\n"
+                                         "  - {name: a, type: sink, position: [10, 10, 20]}\n"
+                                         "  - {name: b, type: sink, position: [10.5, 10, 20]}\n"
+                                         "  - {name: out, type: spring, position: [90, 90, 10]}\n");
+  double pa[3], pb[3];
+  assert_int_equal(generate_and_find(s, "a", pa), 1);
+  assert_int_equal(generate_and_find(s, "b", pb), 1);
+  assert_close(pa[0], 10, 0);
+  assert_close(pb[0], 10.5, 0);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_scenario_not_regular),
@@ -290,6 +456,11 @@ int main(void) {
       cmocka_unit_test(test_heightfield_too_large),
       cmocka_unit_test(test_heightfield_too_many_cells),
       cmocka_unit_test(test_integer_ranges),
+      cmocka_unit_test(test_keypoint_on_flat_ground),
+      cmocka_unit_test(test_keypoint_on_heightfield_ground),
+      cmocka_unit_test(test_segments_from_the_ground),
+      cmocka_unit_test(test_coincident_key_points),
+      cmocka_unit_test(test_close_key_points),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }
