@@ -448,6 +448,78 @@ static void test_close_key_points(void **state) {
   assert_close(pb[0], 10.5, 0);
 }
 
+/* ------------------------------------------------------------------------ */
+/* 5. A key point generation cannot connect                                 */
+/* ------------------------------------------------------------------------ */
+
+static karst_int_t find_root(karst_int_t *parent, karst_int_t v) {
+  while (parent[v] != v)
+    v = parent[v] = parent[parent[v]];
+  return v;
+}
+
+/* tests/data/scenarios/generate/knn_disconnected.yaml (k = 1) validates but
+ * cannot be generated. The message gives the key point's FILE:LINE:COLUMN
+ * (line 12, column 5: the "{" of its entry), the spring it cannot reach and
+ * the number of connected pieces of the graph, which is checked against an
+ * independent count: the same samples and graph (same seed and stream as
+ * karst_generate) with union-find over the edges instead of the BFS of
+ * src/generate. */
+static void test_unreachable_message(void **state) {
+  (void)state;
+  const char *path = KARST_SOURCE_DIR "/tests/data/scenarios/generate/knn_disconnected.yaml";
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  ctx.nthreads = 1;
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  assert_int_equal(karst_scenario_load(&ctx, path, &sc), KARST_SUCCESS);
+  karst_network_t net;
+  karst_network_init(&net);
+  assert_int_equal(karst_generate(&ctx, &sc, sc.seed, 0, &net, NULL, NULL), KARST_EUNREACHABLE);
+  assert_int_equal(net.n_nodes, 0);
+  char msg[KARST_ERRMSG_MAX];
+  snprintf(msg, sizeof msg, "%s", ctx.errmsg);
+  print_message("%s\n", msg);
+
+  karst_samples_t smp;
+  karst_samples_init(&smp);
+  karst_graph_t g;
+  karst_graph_init(&g);
+  karst_rng_t r;
+  karst_rng_derive(&r, sc.seed, 0, KARST_STAGE_SAMPLING);
+  assert_int_equal(karst_sampling_run(&ctx, &sc, &r, &smp), KARST_SUCCESS);
+  assert_int_equal(karst_graph_build(&ctx, &sc, &smp, &g), KARST_SUCCESS);
+  karst_int_t *parent = malloc(sizeof *parent * (size_t)g.n);
+  assert_non_null(parent);
+  for (karst_int_t v = 0; v < g.n; v++)
+    parent[v] = v;
+  for (karst_int_t u = 0; u < g.n; u++)
+    for (karst_int_t a = g.offsets[u]; a < g.offsets[u + 1]; a++)
+      parent[find_root(parent, u)] = find_root(parent, g.adj[a]);
+  long long pieces = 0;
+  for (karst_int_t v = 0; v < g.n; v++)
+    pieces += find_root(parent, v) == v;
+  int apart = find_root(parent, 0) != find_root(parent, 1);
+  assert_true(apart);
+  assert_true(pieces > 1);
+
+  char expect[KARST_ERRMSG_MAX];
+  snprintf(expect, sizeof expect,
+           "%s:12:5: key point 'far_sink' at (10.00, 10.00, 20.00) cannot be connected to "
+           "'outlet' (line 13): no path through the bedrock joins them; the k-nearest-neighbour "
+           "graph of %lld samples falls into %lld connected pieces, and the 2 key points lie in "
+           "2 of them. Raise sampling.k (now 1) or lower sampling.fill_radius (now 10 m)",
+           path, (long long)g.n, pieces);
+  if (strncmp(msg, expect, strlen(expect)) != 0)
+    print_error("got      \"%s\"\nexpected \"%s...\"\n", msg, expect);
+  assert_true(strncmp(msg, expect, strlen(expect)) == 0);
+  free(parent);
+  karst_graph_destroy(&g);
+  karst_samples_destroy(&smp);
+  karst_scenario_destroy(&sc);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_scenario_not_regular),
@@ -461,6 +533,7 @@ int main(void) {
       cmocka_unit_test(test_segments_from_the_ground),
       cmocka_unit_test(test_coincident_key_points),
       cmocka_unit_test(test_close_key_points),
+      cmocka_unit_test(test_unreachable_message),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }
