@@ -38,6 +38,13 @@ run 0 "several good files" "$KARST" validate "$DATA/good/minimal.yaml" "$DATA/go
 (cd "$SRC/tests/data" && "$KARST" validate scenarios/good/grid.yaml >/dev/null 2>&1) \
   || { say "FAIL: grid.yaml by a relative path"; fail=1; }
 
+# docs/scenario.md lists every shipped scenario, and each validates.
+for f in "$SRC"/datasets/scenarios/*.yaml; do
+  b=$(basename "$f")
+  grep -q "\`$b\`" "$SRC/docs/scenario.md" || { say "FAIL: docs/scenario.md does not list $b"; fail=1; }
+  "$KARST" validate "$f" >/dev/null 2>&1 || { say "FAIL: shipped $b does not validate"; fail=1; }
+done
+
 # Exit 2: usage errors.
 run 2 "no file" "$KARST" validate
 run 2 "unknown option" "$KARST" validate --strict "$DATA/good/minimal.yaml"
