@@ -120,8 +120,7 @@ static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *s
     if (reach_ref < reach_i) k = r, r = &sc->key_points[i];
     char where[KARST_ERRMSG_MAX / 4] = "", rline[32] = "", pieces_text[256] = "";
     if (sc->path && k->line > 0)
-      snprintf(where, sizeof where, "%s:%d:%d: ", sc->path, k->line,
-               k->column > 0 ? k->column : 1);
+      snprintf(where, sizeof where, "%s:%d:%d: ", sc->path, k->line, k->column > 0 ? k->column : 1);
     if (r->line > 0) snprintf(rline, sizeof rline, " (line %d)", r->line);
     karst_int_t pieces = 0, key_pieces = 0;
     if (count_pieces(g, n, &pieces, &key_pieces) == 0)

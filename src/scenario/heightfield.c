@@ -338,10 +338,9 @@ static karst_error_t read_header(grid_reader_t *g, double hv[H_COUNT], int hline
                                "%s:%d:%d: %s must be a whole number >= 1, got %s", g->name,
                                g->lineno, vcol, header_names[h], tok);
       if (v > KARST_HEIGHTFIELD_MAX_CELLS) /* also keeps it exact in a double */
-        return karst_set_error(ctx, KARST_ERANGE,
-                               "%s:%d:%d: %s = %s is more than the limit of %lld cells", g->name,
-                               g->lineno, vcol, header_names[h], tok,
-                               (long long)KARST_HEIGHTFIELD_MAX_CELLS);
+        return karst_set_error(
+            ctx, KARST_ERANGE, "%s:%d:%d: %s = %s is more than the limit of %lld cells", g->name,
+            g->lineno, vcol, header_names[h], tok, (long long)KARST_HEIGHTFIELD_MAX_CELLS);
       hv[h] = (double)v;
     } else {
       double v;

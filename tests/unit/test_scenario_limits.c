@@ -11,8 +11,8 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
-#include <stdio.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -72,8 +72,8 @@ static void expect_load(const char *path, karst_error_t code, const char *prefix
   karst_scenario_init(&sc);
   karst_error_t err = karst_scenario_load(&ctx, path, &sc);
   if (err != code || strncmp(ctx.errmsg, prefix, strlen(prefix)) || !strstr(ctx.errmsg, part))
-    print_error("got %s: \"%s\"\nexpected %s: \"%s...%s...\"\n", karst_error_name(err),
-                ctx.errmsg, karst_error_name(code), prefix, part);
+    print_error("got %s: \"%s\"\nexpected %s: \"%s...%s...\"\n", karst_error_name(err), ctx.errmsg,
+                karst_error_name(code), prefix, part);
   assert_int_equal(err, code);
   assert_true(strncmp(ctx.errmsg, prefix, strlen(prefix)) == 0);
   assert_non_null(strstr(ctx.errmsg, part));
@@ -89,8 +89,8 @@ static void expect_grid(const char *path, karst_error_t code, const char *prefix
   memset(&t, 0, sizeof t);
   karst_error_t err = karst_terrain_load_grid(&ctx, path, &t);
   if (err != code || strncmp(ctx.errmsg, prefix, strlen(prefix)) || !strstr(ctx.errmsg, part))
-    print_error("got %s: \"%s\"\nexpected %s: \"%s...%s...\"\n", karst_error_name(err),
-                ctx.errmsg, karst_error_name(code), prefix, part);
+    print_error("got %s: \"%s\"\nexpected %s: \"%s...%s...\"\n", karst_error_name(err), ctx.errmsg,
+                karst_error_name(code), prefix, part);
   assert_int_equal(err, code);
   assert_true(strncmp(ctx.errmsg, prefix, strlen(prefix)) == 0);
   assert_non_null(strstr(ctx.errmsg, part));
@@ -122,8 +122,8 @@ static void test_scenario_not_regular(void **state) {
   char prefix[300];
   snprintf(prefix, sizeof prefix, "%s: ", dir);
   expect_load(dir, KARST_EIO, prefix, "is a directory; the scenario must be a regular file");
-  expect_load("/dev/zero", KARST_EIO, "/dev/zero: ",
-              "is a character device; the scenario must be a regular file");
+  expect_load("/dev/zero", KARST_EIO,
+              "/dev/zero: ", "is a character device; the scenario must be a regular file");
   const char *fifo = tmp_file("pipe.yaml", NULL);
   assert_int_equal(mkfifo(fifo, 0600), 0);
   /* Opening a FIFO without a writer would block: the type is checked first. */
@@ -262,8 +262,9 @@ static void test_integer_ranges(void **state) {
   expect_line6("random: {seed: 18446744073709551616}", 16, KARST_EINVAL,
                "random.seed must be an unsigned 64-bit integer (0 to 18446744073709551615), got "
                "18446744073709551616");
-  expect_line6("random: {seed: -1}", 16, KARST_EINVAL,
-               "random.seed must be an unsigned 64-bit integer (0 to 18446744073709551615), got -1");
+  expect_line6(
+      "random: {seed: -1}", 16, KARST_EINVAL,
+      "random.seed must be an unsigned 64-bit integer (0 to 18446744073709551615), got -1");
   /* Whole numbers beyond 2^53 in floating notation are not exact: refused as such. */
   expect_line6("sampling: {max_samples: 1e17}", 25, KARST_EINVAL,
                "sampling.max_samples: 1e17 is beyond 2^53");
@@ -320,24 +321,23 @@ static int generate_and_find(const char *path, const char *name, double xyz[3]) 
  * bedrock is z <= h), and the network keeps the sink at (10, 10, 40). */
 static void test_keypoint_on_flat_ground(void **state) {
   (void)state;
-  const char *s = tmp_file("ground_flat.yaml",
-                           "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
-                           "terrain: {elevation: 40}\n"
-                           "key_points:\n"
-                           "  - {name: in, type: sink, position: [10, 10, 40]}\n"
-                           "  - {name: out, type: spring, position: [90, 90, 10]}\n");
+  const char *s =
+      tmp_file("ground_flat.yaml", "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+                                   "terrain: {elevation: 40}\n"
+                                   "key_points:\n"
+                                   "  - {name: in, type: sink, position: [10, 10, 40]}\n"
+                                   "  - {name: out, type: spring, position: [90, 90, 10]}\n");
   double p[3];
   assert_int_equal(generate_and_find(s, "in", p), 1);
   assert_close(p[0], 10, 0);
   assert_close(p[1], 10, 0);
   assert_close(p[2], 40, 0);
   /* 1 mm above the ground is still refused, with the terrain height. */
-  s = tmp_file("ground_above.yaml",
-               "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
-               "terrain: {elevation: 40}\n"
-               "key_points:\n"
-               "  - {name: in, type: sink, position: [10, 10, 40.001]}\n"
-               "  - {name: out, type: spring, position: [90, 90, 10]}\n");
+  s = tmp_file("ground_above.yaml", "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+                                    "terrain: {elevation: 40}\n"
+                                    "key_points:\n"
+                                    "  - {name: in, type: sink, position: [10, 10, 40.001]}\n"
+                                    "  - {name: out, type: spring, position: [90, 90, 10]}\n");
   char prefix[300];
   snprintf(prefix, sizeof prefix, "%s:4:5: ", s);
   expect_load(s, KARST_ERANGE, prefix, "key_points[0] 'in' at z = 40.001 m is above the terrain");
@@ -349,12 +349,12 @@ static void test_keypoint_on_heightfield_ground(void **state) {
   (void)state;
   tmp_file("slope.asc", "ncols 3\nnrows 3\nxllcenter 0\nyllcenter 0\ncellsize 50\n"
                         "35 40 45\n32.5 37.5 42.5\n30 35 40\n");
-  const char *s = tmp_file("ground_grid.yaml",
-                           "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
-                           "terrain: {heightfield: slope.asc}\n"
-                           "key_points:\n"
-                           "  - {name: in, type: sink, position: [50, 50, 37.5]}\n"
-                           "  - {name: out, type: spring, position: [90, 90, 10]}\n");
+  const char *s =
+      tmp_file("ground_grid.yaml", "domain: {min: [0, 0, 0], max: [100, 100, 50]}\n"
+                                   "terrain: {heightfield: slope.asc}\n"
+                                   "key_points:\n"
+                                   "  - {name: in, type: sink, position: [50, 50, 37.5]}\n"
+                                   "  - {name: out, type: spring, position: [90, 90, 10]}\n");
   double p[3];
   assert_int_equal(generate_and_find(s, "in", p), 1);
   assert_close(p[2], 37.5, 0);
