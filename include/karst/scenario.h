@@ -20,6 +20,12 @@ extern "C" {
 #define KARST_SCENARIO_PERM_MAX_NODES 100000
 /** Deepest nesting of [ ] and { } accepted in a scenario file (libyaml slows down quadratically). */
 #define KARST_SCENARIO_MAX_NESTING 256
+/** Largest scenario file read, in bytes (64 MiB): a scenario is a few kilobytes of YAML. */
+#define KARST_SCENARIO_MAX_BYTES (64LL << 20)
+/** Largest heightfield file read, in bytes (2 GiB). */
+#define KARST_HEIGHTFIELD_MAX_BYTES (2LL << 30)
+/** Most cells (ncols x nrows) of a heightfield (1e8 cells, 800 MB of elevations). */
+#define KARST_HEIGHTFIELD_MAX_CELLS 100000000LL
 /**
  * A heightfield covers the domain when its cells (edges, not centres) span the
  * domain's x-y extent; it may fall short by this fraction of a cell, so that

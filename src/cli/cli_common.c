@@ -103,7 +103,7 @@ int cli_usage_error(const char *cmd, const char *fmt, ...) {
     const char *nl = strchr(c->usage, '\n');
     fprintf(stderr, "%.*s\n", nl ? (int)(nl - c->usage) : (int)strlen(c->usage), c->usage);
   }
-  fprintf(stderr, "Run 'karst help %s' for details.\n", cmd);
+  fprintf(stderr, "Run 'karst help %s' for its options, 'karst --help' for the commands.\n", cmd);
   return CLI_USAGE;
 }
 
@@ -113,8 +113,11 @@ void cli_print_help(const cli_command_t *cmd) {
 
 int cli_is_help(const char *arg) { return strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0; }
 
+/* Digits only (strtoull alone would take " -5" as 2^64 - 5 and "+5" as 5). */
 int cli_parse_u64(const char *s, uint64_t *out) {
-  if (!s || !*s || *s == '-') return -1;
+  if (!s || !*s) return -1;
+  for (const char *c = s; *c; c++)
+    if (*c < '0' || *c > '9') return -1;
   char *end;
   errno = 0;
   unsigned long long v = strtoull(s, &end, 10);
@@ -125,6 +128,10 @@ int cli_parse_u64(const char *s, uint64_t *out) {
 
 int cli_parse_int(const char *s, int *out) {
   if (!s || !*s) return -1;
+  const char *c = s + (*s == '-');
+  if (!*c) return -1;
+  for (; *c; c++)
+    if (*c < '0' || *c > '9') return -1;
   char *end;
   errno = 0;
   long v = strtol(s, &end, 10);

@@ -77,7 +77,9 @@ static int run(int argc, char **argv) {
         return cli_usage_error("ensemble", "-j needs a positive integer, got '%s'", argv[i]);
     } else if (strcmp(a, "--seed") == 0 && more) {
       if (cli_parse_u64(argv[++i], &seed))
-        return cli_usage_error("ensemble", "--seed needs an unsigned integer, got '%s'", argv[i]);
+        return cli_usage_error("ensemble",
+                               "--seed must be an integer from 0 to 18446744073709551615, got '%s'",
+                               argv[i]);
       have_seed = 1;
     } else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
       quiet = 1;

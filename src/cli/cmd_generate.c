@@ -27,7 +27,8 @@ static int run(int argc, char **argv) {
       outdir = argv[i];
     } else if (strcmp(a, "--seed") == 0) {
       if (++i >= argc || cli_parse_u64(argv[i], &seed))
-        return cli_usage_error("generate", "--seed needs a non-negative integer, got '%s'",
+        return cli_usage_error("generate",
+                               "--seed must be an integer from 0 to 18446744073709551615, got '%s'",
                                i < argc ? argv[i] : "");
       have_seed = 1;
     } else if (strcmp(a, "--threads") == 0) {

@@ -90,7 +90,8 @@ static int run(int argc, char **argv) {
       i++;
     } else if (strcmp(a, "--seed") == 0) {
       if (!more || cli_parse_u64(argv[i + 1], &par.seed))
-        return cli_usage_error("mesh", "--seed needs a non-negative integer, got '%s'",
+        return cli_usage_error("mesh",
+                               "--seed must be an integer from 0 to 18446744073709551615, got '%s'",
                                more ? argv[i + 1] : "");
       i++;
     } else if (strcmp(a, "-j") == 0 || strcmp(a, "--threads") == 0) {

@@ -61,7 +61,13 @@ int main(int argc, char **argv) {
   }
   const cli_command_t *c = cli_find_command(argv[1]);
   if (!c) {
-    fprintf(stderr, "karst: '%s' is not a karst command. See 'karst --help'.\n", argv[1]);
+    if (argv[1][0] == '-')
+      fprintf(stderr,
+              "karst: unknown option '%s' (the options before a command are --help and "
+              "--version). See 'karst --help'.\n",
+              argv[1]);
+    else
+      fprintf(stderr, "karst: '%s' is not a karst command. See 'karst --help'.\n", argv[1]);
     return CLI_USAGE;
   }
   for (int i = 2; i < argc; i++)

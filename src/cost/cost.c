@@ -46,14 +46,17 @@ static int in_box(const karst_scenario_t *sc, const double p[3]) {
 }
 
 /**
- * Whether @p p lies in the bedrock: inside the closed domain box and strictly
- * below the terrain (Paris et al. 2021, §4: the bedrock H).
+ * Whether @p p lies in the bedrock: inside the closed domain box and at or
+ * below the terrain, z <= h(x, y) (Paris et al. 2021, §4: the bedrock H).
+ * The ground itself belongs to the bedrock so that a key point placed exactly
+ * on it (a swallow hole, a spring) is accepted by karst_scenario_check and by
+ * generation alike; random samples are still drawn strictly below it.
  * @param sc the scenario; @param p the point.
  * @return 1 inside, 0 outside (also for non-finite coordinates).
  * Time complexity: O(1).
  */
 int karst_cost_in_bedrock(const karst_scenario_t *sc, const double p[3]) {
-  return finite3(p) && in_box(sc, p) && p[2] < karst_terrain_height(&sc->terrain, p[0], p[1]);
+  return finite3(p) && in_box(sc, p) && p[2] <= karst_terrain_height(&sc->terrain, p[0], p[1]);
 }
 
 /* Iterator over the parameters s in (0, 1) where a segment coordinate
@@ -92,15 +95,21 @@ static void line_iter_next(line_iter_t *it) {
   line_iter_set(it);
 }
 
-/* Largest value of the quadratic through (0, q0), (1/2, qm), (1, q1) on [0, 1]. */
-static double quadratic_max(double q0, double qm, double q1) {
-  double m = fmax(q0, q1);
+/*
+ * Whether the quadratic through (0, q0), (1/2, qm), (1, q1) is negative at
+ * every t of the open interval (0, 1). The end values may be 0 (an end point
+ * on the ground): inside, a non-constant quadratic stays strictly below
+ * max(q0, q1) unless its vertex is inside (0, 1), where it is checked.
+ */
+static int quadratic_negative_inside(double q0, double qm, double q1) {
   double A = 2 * q0 - 4 * qm + 2 * q1, B = -3 * q0 + 4 * qm - q1;
+  if (A == 0 && B == 0) return q0 < 0; /* constant, e.g. along the ground */
+  if (fmax(q0, q1) > 0) return 0;
   if (A < 0) {
     double t = -B / (2 * A);
-    if (t > 0 && t < 1) m = fmax(m, q0 + B * t + A * t * t);
+    if (t > 0 && t < 1 && q0 + B * t + A * t * t >= 0) return 0;
   }
-  return m;
+  return 1;
 }
 
 /**
@@ -108,8 +117,10 @@ static double quadratic_max(double q0, double qm, double q1) {
  * so its test is on the end points. A flat terrain bounds a half-space (end
  * points suffice); on a grid the bilinear surface restricted to the segment
  * is a quadratic in the segment parameter between two crossings of grid
- * lines (the clamped border included), so z(s) - h(s) is maximised exactly
- * piece by piece: no sampling step, no tolerance.
+ * lines (the clamped border included), so the sign of z(s) - h(s) is decided
+ * exactly piece by piece: no sampling step, no tolerance. The end points may
+ * lie on the ground (z = h); every point between them must be strictly below
+ * it, so a segment may leave a key point on the surface but not run along it.
  * @param sc the scenario; @param a, b the end points.
  * @return 1 when every point is in the bedrock, else 0.
  * Time complexity: O(1 + grid lines crossed).
@@ -138,7 +149,8 @@ int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double
       line_iter_next(&iy);
     if (!(s1 > s0)) continue;
     double qm = Q_AT(0.5 * (s0 + s1)), q1 = Q_AT(s1);
-    if (quadratic_max(q0, qm, q1) >= 0.0) return 0;
+    if (!quadratic_negative_inside(q0, qm, q1)) return 0;
+    if (s1 < 1.0 && !(q1 < 0.0)) return 0; /* a grid-line crossing is inside the segment */
     s0 = s1, q0 = q1;
   }
 #undef Q_AT

@@ -47,13 +47,61 @@ static karst_node_kind_t key_kind(karst_keypoint_type_t t) {
 }
 
 /*
+ * Connected pieces of the graph and of its key points: BFS over the CSR
+ * adjacency. *pieces counts them all, *key_pieces those holding a key point
+ * (vertices 0 .. n_keys-1). Returns 0, or -1 when out of memory. O(n + arcs).
+ */
+static int count_pieces(const karst_graph_t *g, karst_int_t n_keys, karst_int_t *pieces,
+                        karst_int_t *key_pieces) {
+  karst_int_t *comp = malloc(sizeof *comp * (size_t)(g->n > 0 ? g->n : 1));
+  karst_int_t *queue = malloc(sizeof *queue * (size_t)(g->n > 0 ? g->n : 1));
+  unsigned char *seen = calloc((size_t)(g->n > 0 ? g->n : 1), 1);
+  if (!comp || !queue || !seen) {
+    free(comp), free(queue), free(seen);
+    return -1;
+  }
+  for (karst_int_t v = 0; v < g->n; v++)
+    comp[v] = -1;
+  karst_int_t c = 0;
+  for (karst_int_t s = 0; s < g->n; s++) {
+    if (comp[s] >= 0) continue;
+    karst_int_t head = 0, tail = 0;
+    queue[tail++] = s;
+    comp[s] = c;
+    while (head < tail) {
+      karst_int_t u = queue[head++];
+      for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++) {
+        karst_int_t w = g->adj[a];
+        if (comp[w] < 0) {
+          comp[w] = c;
+          queue[tail++] = w;
+        }
+      }
+    }
+    c++;
+  }
+  karst_int_t kc = 0;
+  for (karst_int_t i = 0; i < n_keys && i < g->n; i++)
+    if (!seen[comp[i]]) {
+      seen[comp[i]] = 1;
+      kc++;
+    }
+  *pieces = c;
+  *key_pieces = kc;
+  free(comp), free(queue), free(seen);
+  return 0;
+}
+
+/*
  * Every key point must be joined to the others. Key points are grouped by
  * finite distance (connected components of the distance matrix); the main
  * group is the one holding the first spring (or key point 0 without a
- * spring). The first key point outside it is named in the error.
+ * spring). The first key point outside it is named in the error, at its
+ * FILE:LINE:COLUMN in the scenario, with the number of connected pieces of
+ * the graph and what to change.
  */
-static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_int_t n,
-                                     const double *dist) {
+static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                     const karst_graph_t *g, karst_int_t n, const double *dist) {
   karst_int_t ref = 0;
   for (karst_int_t i = 0; i < n; i++)
     if (sc->key_points[i].type == KARST_KEYPOINT_SPRING) {
@@ -70,15 +118,27 @@ static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *s
       reach_i += dist[i * n + j] < INFINITY;
     }
     if (reach_ref < reach_i) k = r, r = &sc->key_points[i];
-    char where[64] = "";
-    if (k->line > 0)
-      snprintf(where, sizeof where, " (%s:%d)", sc->path ? sc->path : "scenario", k->line);
+    char where[KARST_ERRMSG_MAX / 4] = "", rline[32] = "", pieces_text[256] = "";
+    if (sc->path && k->line > 0)
+      snprintf(where, sizeof where, "%s:%d:%d: ", sc->path, k->line, k->column > 0 ? k->column : 1);
+    if (r->line > 0) snprintf(rline, sizeof rline, " (line %d)", r->line);
+    karst_int_t pieces = 0, key_pieces = 0;
+    if (count_pieces(g, n, &pieces, &key_pieces) == 0)
+      snprintf(pieces_text, sizeof pieces_text,
+               "the k-nearest-neighbour graph of %lld samples falls into %lld connected "
+               "piece%s, and the %lld key points lie in %lld of them",
+               (long long)g->n, (long long)pieces, pieces == 1 ? "" : "s", (long long)n,
+               (long long)key_pieces);
+    else
+      snprintf(pieces_text, sizeof pieces_text, "the k-nearest-neighbour graph is disconnected");
     return karst_set_error(
         ctx, KARST_EUNREACHABLE,
-        "key point '%s'%s at (%.2f, %.2f, %.2f) cannot be connected to '%s': no path "
-        "through the bedrock joins them (is it enclosed by space above the terrain or outside "
-        "the domain?)",
-        k->name, where, k->p[0], k->p[1], k->p[2], r->name);
+        "%skey point '%s' at (%.2f, %.2f, %.2f) cannot be connected to '%s'%s: no path through "
+        "the bedrock joins them; %s. Raise sampling.k (now %d) or lower sampling.fill_radius "
+        "(now %g m) so that the samples join up, and check that the terrain or the domain box "
+        "does not cut the key point off",
+        where, k->name, k->p[0], k->p[1], k->p[2], r->name, rline, pieces_text, sc->sampling.k,
+        sc->sampling.fill_radius);
   }
   return KARST_SUCCESS;
 }
@@ -151,7 +211,7 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
                 : karst_paths_keypoint_distances(ctx, g, n, keys, lb_per_metre,
                                                  KARST_I_KEYPOINT_METHOD, dist);
   if (err) goto cleanup;
-  if ((err = check_connected(ctx, sc, n, dist))) goto cleanup;
+  if ((err = check_connected(ctx, sc, g, n, dist))) goto cleanup;
   if (stats) stats->stage_seconds[KARST_STAGE_PATHS] = karst_i_now() - t;
 
   karst_progress(ctx, "skeleton", 0, 1);

@@ -948,7 +948,7 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
                              "key point '%s' (%g, %g, %g) is outside the domain box", k->name, p[0],
                              p[1], p[2]);
     return karst_set_error(
-        ctx, KARST_EINVAL, "key point '%s' (%g, %g, %g) is not below the terrain (terrain at %g m)",
+        ctx, KARST_EINVAL, "key point '%s' (%g, %g, %g) is above the terrain (terrain at %g m)",
         k->name, p[0], p[1], p[2], karst_terrain_height(&sc->terrain, p[0], p[1]));
   }
   if (sc->n_key_points > sp->max_samples)

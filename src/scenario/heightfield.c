@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include "scenario_internal.h"
 
@@ -61,6 +62,55 @@ const char *karst_i_suggest(const char *word, const char *const *candidates, int
     }
   }
   return best;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Opening input files                                                      */
+/* ------------------------------------------------------------------------ */
+
+static const char *file_kind(mode_t m) {
+  if (S_ISDIR(m)) return "a directory";
+  if (S_ISFIFO(m)) return "a FIFO (named pipe)";
+  if (S_ISCHR(m)) return "a character device";
+  if (S_ISBLK(m)) return "a block device";
+  if (S_ISSOCK(m)) return "a socket";
+  return "not a regular file";
+}
+
+/* "64 MiB", "2 GiB" or a byte count. */
+static void size_text(long long bytes, char *buf, size_t sz) {
+  if (bytes >= (1LL << 30) && bytes % (1LL << 30) == 0)
+    snprintf(buf, sz, "%lld GiB", bytes >> 30);
+  else if (bytes >= (1LL << 20) && bytes % (1LL << 20) == 0)
+    snprintf(buf, sz, "%lld MiB", bytes >> 20);
+  else
+    snprintf(buf, sz, "%lld bytes", bytes);
+}
+
+karst_error_t karst_i_open_regular(karst_ctx_t *ctx, const char *path, const char *what,
+                                   long long max_bytes, FILE **fp) {
+  struct stat st;
+  char lim[32];
+  *fp = NULL;
+  if (stat(path, &st) != 0)
+    return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  if (!S_ISREG(st.st_mode))
+    return karst_set_error(ctx, KARST_EIO, "%s: is %s; the %s must be a regular file", path,
+                           file_kind(st.st_mode), what);
+  size_text(max_bytes, lim, sizeof lim);
+  if ((long long)st.st_size > max_bytes)
+    return karst_set_error(ctx, KARST_ERANGE,
+                           "%s: the %s file is %lld bytes, more than the limit of %s", path, what,
+                           (long long)st.st_size, lim);
+  FILE *f = fopen(path, "rb");
+  if (!f) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  /* The path may have been replaced between stat and fopen: check what was opened. */
+  if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
+    fclose(f);
+    return karst_set_error(ctx, KARST_EIO, "%s: the %s must be a regular file", path, what);
+  }
+  *fp = f;
+  return KARST_SUCCESS;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -127,12 +177,14 @@ typedef struct grid_reader {
   char *line;
   size_t cap;
   int lineno;
+  long long bytes; /* read so far, against KARST_HEIGHTFIELD_MAX_BYTES */
 } grid_reader_t;
 
 /* Next line (without its end-of-line characters); 0 at end of file. */
 static int next_line(grid_reader_t *g) {
   ssize_t n = getline(&g->line, &g->cap, g->fp);
   if (n < 0) return 0;
+  g->bytes += n;
   g->lineno++;
   while (n > 0 && (g->line[n - 1] == '\n' || g->line[n - 1] == '\r'))
     g->line[--n] = '\0';
@@ -285,6 +337,10 @@ static karst_error_t read_header(grid_reader_t *g, double hv[H_COUNT], int hline
         return karst_set_error(ctx, KARST_EPARSE,
                                "%s:%d:%d: %s must be a whole number >= 1, got %s", g->name,
                                g->lineno, vcol, header_names[h], tok);
+      if (v > KARST_HEIGHTFIELD_MAX_CELLS) /* also keeps it exact in a double */
+        return karst_set_error(
+            ctx, KARST_ERANGE, "%s:%d:%d: %s = %s is more than the limit of %lld cells", g->name,
+            g->lineno, vcol, header_names[h], tok, (long long)KARST_HEIGHTFIELD_MAX_CELLS);
       hv[h] = (double)v;
     } else {
       double v;
@@ -310,7 +366,7 @@ static karst_error_t read_header(grid_reader_t *g, double hv[H_COUNT], int hline
 karst_error_t karst_i_terrain_read_grid(karst_ctx_t *ctx, FILE *fp, const char *name,
                                         karst_terrain_t *t) {
   karst_error_t err = KARST_SUCCESS;
-  grid_reader_t g = {ctx, name, fp, NULL, 0, 0};
+  grid_reader_t g = {ctx, name, fp, NULL, 0, 0, 0};
   double hv[H_COUNT] = {0};
   int hline[H_COUNT] = {0};
   double *z = NULL;
@@ -356,40 +412,32 @@ karst_error_t karst_i_terrain_read_grid(karst_ctx_t *ctx, FILE *fp, const char *
   double cs = hv[H_CELLSIZE];
   int has_nodata = hline[H_NODATA] != 0;
   double nodata = hv[H_NODATA];
-  if (ncols > INT64_MAX / nrows) {
+  /* Each is <= 1e8 (read_header), so the product fits in int64; still,
+   * ncols > MAX / nrows (integer division) is ncols * nrows > MAX without forming it. */
+  if (ncols > KARST_HEIGHTFIELD_MAX_CELLS / nrows) {
     err = karst_set_error(ctx, KARST_ERANGE,
-                          "%s:%d:1: ncols x nrows = %" PRId64 " x %" PRId64 " is too large", name,
-                          hline[H_NROWS], ncols, nrows);
+                          "%s:%d:1: ncols x nrows = %" PRId64 " x %" PRId64 " = %" PRId64
+                          " cells, more than the limit of %lld",
+                          name, hline[H_NROWS] > hline[H_NCOLS] ? hline[H_NROWS] : hline[H_NCOLS],
+                          ncols, nrows, ncols * nrows, (long long)KARST_HEIGHTFIELD_MAX_CELLS);
     goto cleanup;
   }
   /* Rows arrive north to south; they are stored in file order and flipped at
-   * the end. The array grows with the rows actually present, so a header that
+   * the end. The array grows with the values actually read, so a header that
    * promises more than the file holds cannot make us allocate it. */
   int64_t zcap = 0, row = 0;
   do {
+    if (g.bytes > KARST_HEIGHTFIELD_MAX_BYTES) {
+      err = karst_set_error(ctx, KARST_ERANGE, "%s:%d:1: the heightfield is larger than %lld bytes",
+                            name, g.lineno, (long long)KARST_HEIGHTFIELD_MAX_BYTES);
+      goto cleanup;
+    }
     const char *s = skip_space(g.line);
     if (*s == '\0') continue;
     if (row >= nrows) {
       err = karst_set_error(ctx, KARST_EPARSE, "%s:%d:%d: more rows than nrows = %" PRId64, name,
                             g.lineno, (int)(s - g.line) + 1, nrows);
       goto cleanup;
-    }
-    if ((row + 1) * ncols > zcap) {
-      int64_t ncap = zcap ? zcap * 2 : ncols * 16;
-      if (ncap > nrows * ncols) ncap = nrows * ncols;
-      if (ncap < (row + 1) * ncols) ncap = (row + 1) * ncols;
-      if ((uint64_t)ncap > SIZE_MAX / sizeof(double)) {
-        err = karst_set_error(ctx, KARST_ENOMEM, "%s: grid too large", name);
-        goto cleanup;
-      }
-      double *nz = realloc(z, (size_t)ncap * sizeof(double));
-      if (!nz) {
-        err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory for %" PRId64 " cells", name,
-                              ncap);
-        goto cleanup;
-      }
-      z = nz;
-      zcap = ncap;
     }
     int64_t col = 0;
     while (*s) {
@@ -402,6 +450,18 @@ karst_error_t karst_i_terrain_read_grid(karst_ctx_t *ctx, FILE *fp, const char *
                               " values (extra value %s)",
                               name, g.lineno, c, row + 1, ncols, tok);
         goto cleanup;
+      }
+      if (row * ncols + col >= zcap) { /* below the cell limit, so no overflow */
+        int64_t ncap = zcap ? 2 * zcap : 4096;
+        if (ncap > nrows * ncols) ncap = nrows * ncols;
+        double *nz = realloc(z, (size_t)ncap * sizeof(double));
+        if (!nz) {
+          err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory for %" PRId64 " cells", name,
+                                ncap);
+          goto cleanup;
+        }
+        z = nz;
+        zcap = ncap;
       }
       double v;
       int rc = parse_double(s, e, &v);
@@ -495,13 +555,19 @@ cleanup:
  * @param path the .asc file
  * @param t    terrain to fill (is_grid = 1, path, grid, range, lipschitz);
  *             unchanged on failure
- * @return KARST_SUCCESS, KARST_EIO (cannot read), KARST_EPARSE (malformed),
- *         KARST_ERANGE (cellsize <= 0), KARST_EINVAL (NODATA cell) or KARST_ENOMEM.
+ * Limits: a regular file (not a directory, FIFO or device) of at most
+ * KARST_HEIGHTFIELD_MAX_BYTES with at most KARST_HEIGHTFIELD_MAX_CELLS cells;
+ * the elevation array grows with the values read, never from the header alone.
+ * @return KARST_SUCCESS, KARST_EIO (cannot read, not a regular file),
+ *         KARST_EPARSE (malformed), KARST_ERANGE (cellsize <= 0, too large),
+ *         KARST_EINVAL (NODATA cell) or KARST_ENOMEM.
  * Time complexity: O(file size).
  */
 karst_error_t karst_terrain_load_grid(karst_ctx_t *ctx, const char *path, karst_terrain_t *t) {
-  FILE *fp = fopen(path, "r");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  FILE *fp = NULL;
+  karst_error_t oerr =
+      karst_i_open_regular(ctx, path, "heightfield", KARST_HEIGHTFIELD_MAX_BYTES, &fp);
+  if (oerr) return oerr;
   karst_error_t err = karst_i_terrain_read_grid(ctx, fp, path, t);
   fclose(fp);
   return err;

@@ -310,9 +310,11 @@ static karst_error_t get_number(reader_t *r, yaml_node_t *n, const char *path, d
 
 /* An integer within [lo, hi] (the limits of the C type). Integer literals are
  * read exactly; a floating literal is accepted only when it is a whole
- * number below 2^53 (so "5e6" works and "2.5" does not). */
+ * number below 2^53 (so "5e6" works and "2.5" does not). A value outside the
+ * type is reported with the field's own bounds [mlo, mhi] (e.g. k: 1 to
+ * 2147483647), so the message says what is allowed. */
 static karst_error_t get_integer(reader_t *r, yaml_node_t *n, const char *path, int64_t lo,
-                                 int64_t hi, int64_t *out) {
+                                 int64_t hi, int64_t mlo, int64_t mhi, int64_t *out) {
   char d[80];
   if (n->type != YAML_SCALAR_NODE || !is_plain(n) || is_null(n))
     return fail_at(r, n, KARST_EINVAL, "%s must be an integer, got %s", path,
@@ -328,19 +330,23 @@ static karst_error_t get_integer(reader_t *r, yaml_node_t *n, const char *path, 
     long long x = strtoll(s, NULL, 10);
     if (errno == ERANGE || x < lo || x > hi)
       return fail_at(r, n, KARST_ERANGE,
-                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, lo,
-                     hi, describe(n, d, sizeof d));
+                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, mlo,
+                     mhi, describe(n, d, sizeof d));
     v = (int64_t)x;
   } else {
     char *end;
     double x = strtod(s, &end);
-    if (end == s || *end != '\0' || !isfinite(x) || x != floor(x) || fabs(x) > 9007199254740992.0)
+    if (end == s || *end != '\0' || !isfinite(x) || x != floor(x))
       return fail_at(r, n, KARST_EINVAL, "%s must be an integer, got %s", path,
                      describe(n, d, sizeof d));
     if (x < (double)lo || x > (double)hi)
       return fail_at(r, n, KARST_ERANGE,
-                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, lo,
-                     hi, describe(n, d, sizeof d));
+                     "%s must be an integer between %" PRId64 " and %" PRId64 ", got %s", path, mlo,
+                     mhi, describe(n, d, sizeof d));
+    if (fabs(x) > 9007199254740992.0)
+      return fail_at(r, n, KARST_EINVAL,
+                     "%s: %s is beyond 2^53 and not exact in floating notation; write it in digits",
+                     path, describe(n, d, sizeof d));
     v = (int64_t)x;
   }
   *out = v;
@@ -533,8 +539,12 @@ static karst_error_t read_field(reader_t *r, const field_t *f, yaml_node_t *val,
   case T_I64: {
     int64_t v = 0;
     int64_t lo = f->type == T_INT ? INT_MIN : INT64_MIN,
-            hi = f->type == T_INT ? INT_MAX : INT64_MAX;
-    if ((err = get_integer(r, val, path, lo, hi, &v))) return err;
+            hi = f->type == T_INT ? INT_MAX : INT64_MAX, mlo = lo, mhi = hi;
+    if ((f->range.flags & R_LO) && f->range.lo > (double)lo)
+      mlo = (int64_t)floor(f->range.lo) + ((f->range.flags & R_LO_OPEN) ? 1 : 0);
+    if ((f->range.flags & R_HI) && f->range.hi < (double)hi)
+      mhi = (int64_t)ceil(f->range.hi) - ((f->range.flags & R_HI_OPEN) ? 1 : 0);
+    if ((err = get_integer(r, val, path, lo, hi, mlo, mhi, &v))) return err;
     if ((err = check_range(r, f, val, path, (double)v))) return err;
     if (f->type == T_INT)
       *(int *)at = (int)v;
@@ -768,9 +778,11 @@ static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const
   if (!resolved) return no_memory(r);
   memcpy(resolved, r->file, dirlen);
   strcpy(resolved + dirlen, hf);
-  fp = fopen(resolved, "r");
-  if (!fp) {
-    err = fail_at(r, v, KARST_EIO, "%s: cannot open '%s': %s", sub, resolved, strerror(errno));
+  if ((err = karst_i_open_regular(r->ctx, resolved, "heightfield", KARST_HEIGHTFIELD_MAX_BYTES,
+                                  &fp))) {
+    char msg[KARST_ERRMSG_MAX];
+    snprintf(msg, sizeof msg, "%s", r->ctx->errmsg);
+    err = fail_at(r, v, err, "%s: %s", sub, msg);
     goto cleanup;
   }
   err = karst_i_terrain_read_grid(r->ctx, fp, resolved, &sc->terrain);
@@ -1375,6 +1387,48 @@ static karst_error_t check_fail(karst_ctx_t *ctx, const karst_scenario_t *sc, in
                          line > 0 && col > 0 ? col : 1, msg);
 }
 
+/* Key points by position (x, then y, then z), ties by list order. */
+static int cmp_kp_pos(const void *a, const void *b) {
+  const karst_keypoint_t *x = *(const karst_keypoint_t *const *)a;
+  const karst_keypoint_t *y = *(const karst_keypoint_t *const *)b;
+  for (int k = 0; k < 3; k++)
+    if (x->p[k] != y->p[k]) return x->p[k] < y->p[k] ? -1 : 1;
+  return x < y ? -1 : x > y;
+}
+
+/* The first pair (in list order of the later one) of key points at exactly
+ * the same position: *dup is the later, *first the earlier; *dup = -1 when
+ * there is none. Such a pair would be two samples at one point, joined by a
+ * zero-length edge. NaN positions compare unequal (refused elsewhere).
+ * Returns 0, or -1 when out of memory. O(n log n). */
+static int first_coincident(const karst_scenario_t *sc, int *dup, int *first) {
+  *dup = -1;
+  *first = -1;
+  int n = sc->n_key_points;
+  if (n < 2) return 0;
+  const karst_keypoint_t **v = malloc(sizeof *v * (size_t)n);
+  if (!v) return -1;
+  for (int i = 0; i < n; i++)
+    v[i] = &sc->key_points[i];
+  qsort(v, (size_t)n, sizeof *v, cmp_kp_pos);
+  for (int i = 0; i + 1 < n;) {
+    int j = i + 1;
+    while (j < n && v[j]->p[0] == v[i]->p[0] && v[j]->p[1] == v[i]->p[1] &&
+           v[j]->p[2] == v[i]->p[2])
+      j++;
+    if (j > i + 1) { /* v[i] is the earliest of the group, v[i + 1] the next */
+      int later = (int)(v[i + 1] - sc->key_points);
+      if (*dup < 0 || later < *dup) {
+        *dup = later;
+        *first = (int)(v[i] - sc->key_points);
+      }
+    }
+    i = j;
+  }
+  free(v);
+  return 0;
+}
+
 /* The per-field rules of a schema, applied to values already in memory
  * (they matter for scenarios built in code; the reader checked them on the way in). */
 static karst_error_t check_values(karst_ctx_t *ctx, const karst_scenario_t *sc, const schema_t *s,
@@ -1606,6 +1660,18 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
                         "y = %g); key points must lie in the bedrock",
                         i, kp->name, p[2], h, p[0], p[1]);
   }
+  {
+    int dup, first;
+    if (first_coincident(sc, &dup, &first))
+      return karst_set_error(ctx, KARST_ENOMEM, "out of memory checking key-point positions");
+    if (dup >= 0) {
+      const karst_keypoint_t *a = &sc->key_points[first], *b = &sc->key_points[dup];
+      return check_fail(ctx, sc, b->line, b->column, KARST_EINVAL,
+                        "key_points[%d] '%s' (line %d) is at the same position (%g, %g, %g) as "
+                        "key_points[%d] '%s' (line %d); key points must be at distinct positions",
+                        dup, b->name, b->line, b->p[0], b->p[1], b->p[2], first, a->name, a->line);
+    }
+  }
   if (springs == 0)
     return check_fail(ctx, sc, sc->pos_key_points.line, sc->pos_key_points.column, KARST_EINVAL,
                       "no spring among the %d key points: the network needs at least one "
@@ -1718,9 +1784,15 @@ static karst_error_t read_file(karst_ctx_t *ctx, const char *path, unsigned char
   karst_error_t err = KARST_SUCCESS;
   unsigned char *buf = NULL;
   size_t n = 0, cap = 0;
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  FILE *fp = NULL;
+  if ((err = karst_i_open_regular(ctx, path, "scenario", KARST_SCENARIO_MAX_BYTES, &fp)))
+    return err;
   for (;;) {
+    if (n > (size_t)KARST_SCENARIO_MAX_BYTES) { /* grew after it was opened */
+      err = karst_set_error(ctx, KARST_ERANGE, "%s: the scenario file is more than %lld bytes",
+                            path, (long long)KARST_SCENARIO_MAX_BYTES);
+      goto cleanup;
+    }
     if (n == cap) {
       size_t ncap = cap ? 2 * cap : 65536;
       unsigned char *nb = realloc(buf, ncap);

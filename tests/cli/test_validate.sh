@@ -38,6 +38,13 @@ run 0 "several good files" "$KARST" validate "$DATA/good/minimal.yaml" "$DATA/go
 (cd "$SRC/tests/data" && "$KARST" validate scenarios/good/grid.yaml >/dev/null 2>&1) \
   || { say "FAIL: grid.yaml by a relative path"; fail=1; }
 
+# docs/scenario.md lists every shipped scenario, and each validates.
+for f in "$SRC"/datasets/scenarios/*.yaml; do
+  b=$(basename "$f")
+  grep -q "\`$b\`" "$SRC/docs/scenario.md" || { say "FAIL: docs/scenario.md does not list $b"; fail=1; }
+  "$KARST" validate "$f" >/dev/null 2>&1 || { say "FAIL: shipped $b does not validate"; fail=1; }
+done
+
 # Exit 2: usage errors.
 run 2 "no file" "$KARST" validate
 run 2 "unknown option" "$KARST" validate --strict "$DATA/good/minimal.yaml"
@@ -54,6 +61,12 @@ expect_err "$DATA/bad/empty.yaml:1:1: the scenario file is empty (expected a map
 run 1 "missing file" "$KARST" validate "$tmp/none.yaml"
 grep -q "none.yaml: cannot open: No such file or directory" "$tmp/err" || { say "FAIL: missing file message"; fail=1; }
 run 1 "a directory" "$KARST" validate "$tmp"
+expect_err "$tmp: is a directory; the scenario must be a regular file"
+run 1 "/dev/zero (would never end)" "$KARST" validate /dev/zero
+expect_err "/dev/zero: is a character device; the scenario must be a regular file"
+mkfifo "$tmp/pipe.yaml"
+run 1 "a FIFO without a writer (would block)" "$KARST" validate "$tmp/pipe.yaml"
+expect_err "$tmp/pipe.yaml: is a FIFO (named pipe); the scenario must be a regular file"
 run 1 "good then bad: still exit 1" "$KARST" validate "$DATA/good/minimal.yaml" "$DATA/bad/nan.yaml"
 grep -q "ok: 'minimal'" "$tmp/out" || { say "FAIL: the good file was not reported"; fail=1; }
 
