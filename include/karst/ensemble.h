@@ -49,11 +49,18 @@ typedef struct karst_ensemble_hooks {
   void *user;
 } karst_ensemble_hooks_t;
 
+/** Most members an ensemble may have: -n beyond this is refused before anything is created
+ *  (member directories are at least 4 digits; 1e8 members is far beyond any real study). */
+#define KARST_ENSEMBLE_MAX_MEMBERS 100000000
+/** Most worker threads per process: -j beyond this is refused (a guard against typos such as
+ *  -j 20000, which would try to start that many threads). */
+#define KARST_ENSEMBLE_MAX_THREADS 1024
+
 /** How to run an ensemble. */
 typedef struct karst_ensemble_options {
-  karst_int_t n;               /**< members, >= 1 */
+  karst_int_t n;               /**< members, within [1, KARST_ENSEMBLE_MAX_MEMBERS] */
   uint64_t seed;               /**< base seed */
-  int nthreads;                /**< worker threads per process, >= 1 (default 1) */
+  int nthreads;                /**< worker threads per process, [1, KARST_ENSEMBLE_MAX_THREADS] (default 1) */
   int use_mpi;                 /**< 1: split across MPI ranks when MPI is initialised (default 1) */
   const char *scenario_path;   /**< recorded in ensemble.json (may be NULL) */
   const char *scenario_hash;   /**< 16 hex digits (karst_file_hash), guards re-runs (may be NULL) */

@@ -575,13 +575,14 @@ static karst_error_t check_arguments(karst_ctx_t *ctx, const char *dir,
                                      const karst_ensemble_options_t *opt,
                                      const karst_ensemble_hooks_t *h) {
   if (!dir || !*dir) return karst_set_error(ctx, KARST_EINVAL, "no output directory given");
-  if (opt->n < 1 || opt->n > 100000000)
+  if (opt->n < 1 || opt->n > KARST_ENSEMBLE_MAX_MEMBERS)
     return karst_set_error(ctx, KARST_ERANGE,
-                           "the number of realisations must be within [1, 1e8], got %" PRId64,
-                           opt->n);
-  if (opt->nthreads < 1)
-    return karst_set_error(ctx, KARST_ERANGE, "the number of threads must be >= 1, got %d",
-                           opt->nthreads);
+                           "the number of realisations must be within [1, %d], got %" PRId64,
+                           KARST_ENSEMBLE_MAX_MEMBERS, opt->n);
+  if (opt->nthreads < 1 || opt->nthreads > KARST_ENSEMBLE_MAX_THREADS)
+    return karst_set_error(ctx, KARST_ERANGE,
+                           "the number of threads must be within [1, %d], got %d",
+                           KARST_ENSEMBLE_MAX_THREADS, opt->nthreads);
   if (!h || !h->realise || !h->write)
     return karst_set_error(ctx, KARST_EINVAL, "the ensemble needs realise and write hooks");
   if (h->n_metrics < 0 || (h->n_metrics > 0 && !h->metric_names))

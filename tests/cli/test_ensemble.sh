@@ -17,8 +17,18 @@ check() { # expected-exit description command...
 # --- usage errors -----------------------------------------------------------------------
 check 2 "ensemble without arguments" "$KARST" ensemble
 check 2 "ensemble without -o" "$KARST" ensemble x.yaml -n 3
-check 2 "ensemble -n 0" "$KARST" ensemble x.yaml -n 0 -o "$T/e"
-check 2 "ensemble -j x" "$KARST" ensemble x.yaml -n 3 -j x -o "$T/e"
+# -n and -j out of range: exit 2, a message naming the option and the value, nothing created.
+# The bounds are KARST_ENSEMBLE_MAX_MEMBERS = 100000000 and KARST_ENSEMBLE_MAX_THREADS = 1024.
+bad_option() { # option value
+  "$KARST" ensemble x.yaml -n 3 "$1" "$2" -o "$T/e" >"$T/out" 2>&1; local got=$?
+  if [ "$got" != 2 ]; then echo "FAIL: ensemble $1 '$2': exit $got, expected 2"; cat "$T/out"; fail=1; return; fi
+  grep -qF -- "$1 must be" "$T/out" && grep -qF -- "got '$2'" "$T/out" ||
+    { echo "FAIL: ensemble $1 '$2': message does not name the option and value"; cat "$T/out"; fail=1; return; }
+  [ ! -e "$T/e" ] || { echo "FAIL: ensemble $1 '$2' created $T/e"; fail=1; return; }
+  echo "ok: ensemble $1 '$2' is a usage error"
+}
+for v in 0 -3 abc 1e8 " 5" "" 100000001 18446744073709551617; do bad_option -n "$v"; done
+for v in 0 -1 x 2.5 1025 99999999999; do bad_option -j "$v"; done
 check 2 "ensemble unknown option" "$KARST" ensemble x.yaml --frob -o "$T/e"
 check 1 "ensemble missing scenario" "$KARST" ensemble /nonexistent.yaml -n 2 -o "$T/e"
 check 2 "compare without directory" "$KARST" compare

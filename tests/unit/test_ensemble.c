@@ -532,9 +532,16 @@ static void test_arguments(void **state) {
   opt.n = 0;
   assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_ERANGE);
   assert_non_null(strstr(ctx.errmsg, "got 0"));
+  opt.n = KARST_ENSEMBLE_MAX_MEMBERS + (karst_int_t)1;
+  assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_ERANGE);
+  assert_non_null(strstr(ctx.errmsg, "got 100000001"));
   opt.n = 2;
   opt.nthreads = 0;
   assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_ERANGE);
+  opt.nthreads = KARST_ENSEMBLE_MAX_THREADS + 1;
+  assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_ERANGE);
+  assert_non_null(strstr(ctx.errmsg, "got 1025"));
+  assert_int_equal(count_entries(d, NULL), 0); /* refused before anything was created */
   opt.nthreads = 1;
   h.realise = NULL;
   assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_EINVAL);
