@@ -12,6 +12,7 @@
  *   DIR/realisations/NNNN/metrics.csv   one header line and one row
  *   DIR/realisations/ensemble.key       scenario hash and base seed (guards re-runs)
  *   DIR/ensemble.pvd, DIR/metrics.csv, DIR/ensemble.json (rebuilt at the end)
+ *   DIR/.ensemble.lock                   only while a run works in DIR
  */
 #ifndef KARST_ENSEMBLE_H
 #define KARST_ENSEMBLE_H
@@ -55,6 +56,11 @@ typedef struct karst_ensemble_hooks {
 /** Most worker threads per process: -j beyond this is refused (a guard against typos such as
  *  -j 20000, which would try to start that many threads). */
 #define KARST_ENSEMBLE_MAX_THREADS 1024
+
+/** The lock file of a running ensemble, DIR/.ensemble.lock: held with an exclusive flock(2)
+ *  while karst_ensemble_run works in DIR (a second run into DIR fails with KARST_EBUSY) and
+ *  removed when the run ends. */
+#define KARST_ENSEMBLE_LOCK_NAME ".ensemble.lock"
 
 /** How to run an ensemble. */
 typedef struct karst_ensemble_options {

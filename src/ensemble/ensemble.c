@@ -18,11 +18,13 @@
 
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -122,6 +124,75 @@ static karst_error_t remove_stale_temporaries(karst_ctx_t *ctx, const char *dir)
   }
   closedir(d);
   return err;
+}
+
+/* ------------------------------------------------------------------------ */
+/* The lock: one run at a time in DIR.                                      */
+/* ------------------------------------------------------------------------ */
+/* Take the exclusive, non-blocking flock(2) of DIR/.ensemble.lock and write this process's id
+ * into it. The lock file is unlinked when the run ends (release_lock), so a finished ensemble
+ * holds exactly the files of an uninterrupted run. Because of that unlink, a process may win
+ * the lock on a file that another process has just unlinked; it then checks that the name
+ * still refers to the inode it locked and tries again otherwise (the usual pattern for
+ * removable lock files). A lock dies with its process, so kill -9 never leaves DIR locked. */
+static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, char **path_out) {
+  char *path = karst_i_path_join(dir, KARST_ENSEMBLE_LOCK_NAME);
+  *fd_out = -1;
+  *path_out = NULL;
+  if (!path) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  for (int attempt = 0; attempt < 100; attempt++) {
+    int fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    if (fd < 0) {
+      karst_error_t err = karst_set_error(ctx, KARST_EIO, "%s: cannot create the lock file: %s",
+                                          path, strerror(errno));
+      free(path);
+      return err;
+    }
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      int e = errno;
+      char pid[32] = "";
+      ssize_t got = e == EWOULDBLOCK ? pread(fd, pid, sizeof pid - 1, 0) : -1;
+      close(fd);
+      karst_error_t err;
+      if (e == EWOULDBLOCK) {
+        pid[got > 0 ? got : 0] = '\0';
+        pid[strspn(pid, "0123456789")] = '\0';
+        err = karst_set_error(ctx, KARST_EBUSY,
+                              "%s is in use by another karst ensemble (pid %s; lock %s); wait "
+                              "for it to finish or use another output directory",
+                              dir, pid[0] ? pid : "unknown", path);
+      } else {
+        err = karst_set_error(ctx, KARST_EIO, "%s: cannot lock: %s", path, strerror(e));
+      }
+      free(path);
+      return err;
+    }
+    struct stat held, named;
+    if (fstat(fd, &held) == 0 && stat(path, &named) == 0 && held.st_dev == named.st_dev &&
+        held.st_ino == named.st_ino) {
+      char pid[32];
+      int len = snprintf(pid, sizeof pid, "%ld\n", (long)getpid());
+      if (ftruncate(fd, 0) != 0 || pwrite(fd, pid, (size_t)len, 0) != len) {
+        /* the pid is only for the message of a refused run; the lock itself holds */
+      }
+      *fd_out = fd;
+      *path_out = path;
+      return KARST_SUCCESS;
+    }
+    close(fd); /* locked a file that was unlinked meanwhile: try the new one */
+  }
+  free(path);
+  return karst_set_error(ctx, KARST_EBUSY, "%s: cannot take the lock %s (it keeps changing)", dir,
+                         KARST_ENSEMBLE_LOCK_NAME);
+}
+
+/* Unlink while still holding the lock, then close (which releases it). */
+static void release_lock(int fd, char *path) {
+  if (fd >= 0) {
+    unlink(path);
+    close(fd);
+  }
+  free(path);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -610,7 +681,9 @@ static karst_error_t check_arguments(karst_ctx_t *ctx, const char *dir,
  * @return KARST_SUCCESS when every member is complete and the collection files
  *         are written; KARST_EINTERRUPTED after an interrupt (finished members
  *         are kept, unfinished ones leave nothing behind); the error of the
- *         lowest failing member otherwise ("realisation I: ...").
+ *         lowest failing member otherwise ("realisation I: ..."); KARST_EBUSY,
+ *         before anything in DIR is touched, when another run holds DIR's lock
+ *         (KARST_ENSEMBLE_LOCK_NAME).
  * Members whose directory DIR/realisations/NNNN exists are not recomputed.
  * Under MPI (karst_ensemble_mpi_start) rank r computes the members i with
  * i mod P = r and rank 0 writes the collection files after all ranks agree.
@@ -624,6 +697,8 @@ karst_error_t karst_ensemble_run(karst_ctx_t *ctx, const char *dir,
   char *real_dir = NULL, *header = NULL;
   karst_int_t *pending = NULL;
   karst_ensemble_summary_t sum;
+  int lock_fd = -1;
+  char *lock_path = NULL;
   double t0 = now_seconds();
   memset(&sum, 0, sizeof sum);
   err = check_arguments(ctx, dir, opt, hooks);
@@ -640,9 +715,12 @@ karst_error_t karst_ensemble_run(karst_ctx_t *ctx, const char *dir,
   err = karst_i_metrics_header(ctx, hooks, &header);
   if (err) goto cleanup;
 
-  /* Rank 0 prepares the directory; the others wait for its verdict. */
+  /* Rank 0 locks and prepares the directory; the others wait for its verdict. The lock comes
+   * before anything else is touched: a second run must not remove the first one's temporaries. */
   if (sum.rank == 0) {
-    err = karst_mkdir_p(ctx, real_dir);
+    err = karst_mkdir_p(ctx, dir);
+    if (!err) err = take_lock(ctx, dir, &lock_fd, &lock_path);
+    if (!err) err = karst_mkdir_p(ctx, real_dir);
     if (!err) err = remove_stale_temporaries(ctx, dir);
     if (!err) err = remove_stale_temporaries(ctx, real_dir);
     if (!err) err = check_or_write_key(ctx, real_dir, opt);
@@ -706,6 +784,7 @@ karst_error_t karst_ensemble_run(karst_ctx_t *ctx, const char *dir,
     if (all && !err) err = karst_set_error(ctx, all, "rank 0 could not write the collection files");
   }
 cleanup:
+  release_lock(lock_fd, lock_path);
   sum.wall_seconds = now_seconds() - t0;
   if (summary) *summary = sum;
   free(pending);

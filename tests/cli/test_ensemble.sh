@@ -82,6 +82,25 @@ if "$KARST" generate "$SCEN" -o "$T/g" --seed "$s1" --quiet >/dev/null 2>&1; the
   cmp -s "$T/g/network.vtp" "$T/a/realisations/0001/network.vtp" && echo "ok: member 1 = karst generate --seed $s1" ||
     { echo "FAIL: member 1 differs from karst generate --seed $s1"; fail=1; }
 fi
+members() { ls "$1/realisations" 2>/dev/null | grep -c '^[0-9][0-9]*$'; }
+# One run at a time per DIR: flock(1) from util-linux holds DIR/.ensemble.lock (with a pid
+# written in it, as karst writes its own) while a second karst ensemble starts on DIR. The
+# second run must exit 1 naming the pid, and touch nothing: not the member temporary of the
+# "running" ensemble, not the finished members, no new member.
+mkdir "$T/a/realisations/.0004.tmp.999999"
+echo 4242 >"$T/a/.ensemble.lock"
+before=$(cd "$T/a" && find . -type f ! -name .ensemble.lock | sort | xargs md5sum)
+flock -n -E 99 "$T/a/.ensemble.lock" "$KARST" ensemble "$SCEN" -n 5 -o "$T/a" -j 1 --seed 11 --quiet >"$T/out" 2>&1
+rc=$?
+if [ $rc != 1 ]; then echo "FAIL: second run on a locked DIR: exit $rc, expected 1"; cat "$T/out"; fail=1; fi
+grep -qF "$T/a is in use by another karst ensemble (pid 4242" "$T/out" && echo "ok: locked DIR refused with the holder's pid" ||
+  { echo "FAIL: locked DIR message"; cat "$T/out"; fail=1; }
+[ -d "$T/a/realisations/.0004.tmp.999999" ] || { echo "FAIL: the refused run removed the other run's temporary"; fail=1; }
+[ "$(cd "$T/a" && find . -type f ! -name .ensemble.lock | sort | xargs md5sum)" = "$before" ] &&
+  echo "ok: the refused run changed no file" || { echo "FAIL: the refused run changed files in $T/a"; fail=1; }
+[ "$(members "$T/a")" = 4 ] || { echo "FAIL: the refused run added members"; fail=1; }
+rm -rf "$T/a/realisations/.0004.tmp.999999" "$T/a/.ensemble.lock"
+
 # Kill mid-run (SIGTERM), re-run, compare with an uninterrupted run.
 check 0 "reference ensemble of 12" "$KARST" ensemble "$SCEN" -n 12 -o "$T/ref" -j 2 --seed 5 --quiet
 "$KARST" ensemble "$SCEN" -n 12 -o "$T/k" -j 2 --seed 5 --quiet &

@@ -7,6 +7,7 @@
  */
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
 #include <setjmp.h>
@@ -17,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -563,6 +565,38 @@ static void test_arguments(void **state) {
   free(d);
 }
 
+/* A second run into a DIR whose lock is held is refused before it touches anything: here the
+ * test holds the flock(2) itself, as a concurrent `karst ensemble` would. */
+static void test_lock(void **state) {
+  (void)state;
+  char *d = make_tmpdir();
+  char lock[1100], real[1100], tmp[1200];
+  fake_t f = fake_default();
+  karst_ctx_t ctx;
+  snprintf(lock, sizeof lock, "%s/%s", d, KARST_ENSEMBLE_LOCK_NAME);
+  snprintf(real, sizeof real, "%s/realisations", d);
+  snprintf(tmp, sizeof tmp, "%s/.0001.tmp.999999", real);
+  assert_int_equal(mkdir(real, 0777), 0);
+  assert_int_equal(mkdir(tmp, 0777), 0); /* "the other run's" member in progress */
+  int fd = open(lock, O_RDWR | O_CREAT, 0666);
+  assert_true(fd >= 0);
+  assert_int_equal(flock(fd, LOCK_EX | LOCK_NB), 0);
+  assert_int_equal(pwrite(fd, "4242\n", 5, 0), 5);
+  assert_int_equal(run_fake(d, 3, 7, 2, &f, NULL, &ctx), KARST_EBUSY);
+  assert_non_null(strstr(ctx.errmsg, "in use by another karst ensemble (pid 4242"));
+  struct stat st;
+  assert_int_equal(stat(tmp, &st), 0);           /* not removed as a leftover */
+  assert_int_equal(count_entries(real, NULL), 0); /* no member, no ensemble.key */
+  assert_int_equal(stat(lock, &st), 0);          /* the holder's lock file is left alone */
+  close(fd);                                     /* the holder ends (without unlinking) */
+  assert_int_equal(run_fake(d, 3, 7, 2, &f, NULL, &ctx), KARST_SUCCESS);
+  assert_int_not_equal(stat(tmp, &st), 0);     /* now a leftover, removed */
+  assert_int_not_equal(stat(lock, &st), 0);    /* removed at the end of the run */
+  assert_int_equal(count_entries(real, NULL), 4); /* 3 members + ensemble.key */
+  rm_rf(d);
+  free(d);
+}
+
 static int progress_calls;
 static double progress_last_done, progress_last_total;
 static void count_progress(void *user, const char *stage, double done, double total) {
@@ -820,6 +854,7 @@ int main(int argc, char **argv) {
       cmocka_unit_test(test_key_guard),
       cmocka_unit_test(test_member_failure),
       cmocka_unit_test(test_arguments),
+      cmocka_unit_test(test_lock),
       cmocka_unit_test(test_progress),
       cmocka_unit_test(test_table_errors),
       cmocka_unit_test(test_parameters_json),
