@@ -122,10 +122,20 @@ karst_error_t karst_ensemble_hooks_pipeline(karst_ctx_t *ctx, karst_ensemble_hoo
 char *karst_ensemble_parameters_json(const karst_scenario_t *sc);
 
 /**
+ * The number of processes a launcher says it started: OMPI_COMM_WORLD_SIZE
+ * (Open MPI's mpirun) or else PMI_SIZE (MPICH's Hydra, Slurm's PMI); 1 when
+ * neither is set to a whole number >= 1. Reads only the environment.
+ */
+int karst_ensemble_launcher_size(void);
+
+/**
  * MPI: when this process was started by mpirun (env OMPI_COMM_WORLD_SIZE or
  * PMI_SIZE) and the library was built with MPI, initialise MPI if needed and
  * return the world size in @p ranks and this rank in @p rank; otherwise 1 and 0.
  * @p initialised receives 1 when this call initialised MPI.
+ * A library built without MPI returns KARST_EUNSUPPORTED when a launcher
+ * started more than one process (karst_ensemble_launcher_size() > 1): each
+ * would compute every member and they would race on the files.
  */
 karst_error_t karst_ensemble_mpi_start(karst_ctx_t *ctx, int *ranks, int *rank, int *initialised);
 /** Finalise MPI when @p initialised (from karst_ensemble_mpi_start) is non-zero. */

@@ -797,17 +797,55 @@ cleanup:
 /* MPI start / finish                                                       */
 /* ------------------------------------------------------------------------ */
 /**
+ * Processes announced by a launcher (see ensemble.h): OMPI_COMM_WORLD_SIZE, else PMI_SIZE;
+ * 1 when neither is a whole number >= 1. Time complexity: O(1).
+ */
+int karst_ensemble_launcher_size(void) {
+  const char *names[] = {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"};
+  for (int k = 0; k < 2; k++) {
+    const char *v = getenv(names[k]);
+    if (!v || *v < '0' || *v > '9') continue;
+    char *end;
+    errno = 0;
+    long n = strtol(v, &end, 10);
+    if (errno == 0 && *end == '\0' && n >= 1 && n <= 1000000000L) return (int)n;
+  }
+  return 1;
+}
+
+/**
+ * Refuse a launch of several processes by a build without MPI (ensemble_internal.h).
+ * Time complexity: O(1).
+ */
+karst_error_t karst_i_ensemble_launcher_check(karst_ctx_t *ctx, int built_with_mpi, int *size) {
+  *size = karst_ensemble_launcher_size();
+  if (*size > 1 && !built_with_mpi)
+    return karst_set_error(
+        ctx, KARST_EUNSUPPORTED,
+        "started by an MPI launcher as one of %d processes (OMPI_COMM_WORLD_SIZE or PMI_SIZE), "
+        "but this karst was built without MPI (CMake found no MPI, or -DKARST_WITH_MPI=OFF): "
+        "each process would compute every realisation and overwrite the others' files; run "
+        "one process without mpirun, or rebuild with MPI (Debian libopenmpi-dev)",
+        *size);
+  return KARST_SUCCESS;
+}
+
+/**
  * Join the MPI world when started by mpirun. Detection: Open MPI sets
  * OMPI_COMM_WORLD_SIZE in every rank (PMI_SIZE for other launchers); a plain
  * start never initialises MPI, so a single process does not need mpirun.
  * @p initialised is set to 1 when this call initialised MPI (pass it to
  * karst_ensemble_mpi_finish).
- * @return KARST_EEXTERNAL when MPI_Init_thread fails.
+ * @return KARST_EEXTERNAL when MPI_Init_thread fails; KARST_EUNSUPPORTED when
+ *         this build has no MPI and a launcher started several processes.
  */
 karst_error_t karst_ensemble_mpi_start(karst_ctx_t *ctx, int *ranks, int *rank, int *initialised) {
   *ranks = 1;
   *rank = 0;
   *initialised = 0;
+  int launched = 1;
+  karst_error_t err = karst_i_ensemble_launcher_check(ctx, KARST_HAVE_MPI, &launched);
+  if (err) return err;
 #if KARST_HAVE_MPI
   if (!getenv("OMPI_COMM_WORLD_SIZE") && !getenv("PMI_SIZE")) return KARST_SUCCESS;
   int init = 0;
@@ -820,8 +858,6 @@ karst_error_t karst_ensemble_mpi_start(karst_ctx_t *ctx, int *ranks, int *rank, 
   }
   MPI_Comm_size(MPI_COMM_WORLD, ranks);
   MPI_Comm_rank(MPI_COMM_WORLD, rank);
-#else
-  (void)ctx;
 #endif
   return KARST_SUCCESS;
 }

@@ -26,6 +26,7 @@
 
 #include <cmocka.h>
 
+#include "ensemble/ensemble_internal.h"
 #include "karst.h"
 #include "test_util.h"
 
@@ -597,6 +598,56 @@ static void test_lock(void **state) {
   free(d);
 }
 
+/* The launcher detection reads OMPI_COMM_WORLD_SIZE, else PMI_SIZE; a build without MPI refuses
+ * a start as one of several processes, a build with MPI accepts it. Expected values are the
+ * variables' contents (and 1 for absent or malformed ones). */
+static void test_launcher_detection(void **state) {
+  (void)state;
+  char *saved_ompi = getenv("OMPI_COMM_WORLD_SIZE"), *saved_pmi = getenv("PMI_SIZE");
+  saved_ompi = saved_ompi ? strdup(saved_ompi) : NULL;
+  saved_pmi = saved_pmi ? strdup(saved_pmi) : NULL;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  int size = 0;
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  unsetenv("PMI_SIZE");
+  assert_int_equal(karst_ensemble_launcher_size(), 1);
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 0, &size), KARST_SUCCESS);
+  assert_int_equal(size, 1);
+  setenv("OMPI_COMM_WORLD_SIZE", "4", 1);
+  assert_int_equal(karst_ensemble_launcher_size(), 4);
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 0, &size), KARST_EUNSUPPORTED);
+  assert_int_equal(size, 4);
+  assert_non_null(strstr(ctx.errmsg, "one of 4 processes"));
+  assert_non_null(strstr(ctx.errmsg, "built without MPI"));
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 1, &size), KARST_SUCCESS);
+  setenv("OMPI_COMM_WORLD_SIZE", "1", 1); /* mpirun -np 1: one process, nothing to race */
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 0, &size), KARST_SUCCESS);
+  const char *malformed[] = {"", "x", "-2", "0", "3x", " 3"};
+  for (size_t k = 0; k < sizeof malformed / sizeof *malformed; k++) {
+    setenv("OMPI_COMM_WORLD_SIZE", malformed[k], 1);
+    assert_int_equal(karst_ensemble_launcher_size(), 1);
+  }
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  setenv("PMI_SIZE", "3", 1); /* MPICH's Hydra, Slurm */
+  assert_int_equal(karst_ensemble_launcher_size(), 3);
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 0, &size), KARST_EUNSUPPORTED);
+  setenv("OMPI_COMM_WORLD_SIZE", "2", 1); /* Open MPI's variable comes first */
+  assert_int_equal(karst_ensemble_launcher_size(), 2);
+#if !KARST_HAVE_MPI
+  /* This build has no MPI: karst_ensemble_mpi_start itself refuses. */
+  int ranks = 0, rank = -1, init = -1;
+  assert_int_equal(karst_ensemble_mpi_start(&ctx, &ranks, &rank, &init), KARST_EUNSUPPORTED);
+  assert_int_equal(init, 0);
+#endif
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  unsetenv("PMI_SIZE");
+  if (saved_ompi) setenv("OMPI_COMM_WORLD_SIZE", saved_ompi, 1);
+  if (saved_pmi) setenv("PMI_SIZE", saved_pmi, 1);
+  free(saved_ompi);
+  free(saved_pmi);
+}
+
 static int progress_calls;
 static double progress_last_done, progress_last_total;
 static void count_progress(void *user, const char *stage, double done, double total) {
@@ -855,6 +906,7 @@ int main(int argc, char **argv) {
       cmocka_unit_test(test_member_failure),
       cmocka_unit_test(test_arguments),
       cmocka_unit_test(test_lock),
+      cmocka_unit_test(test_launcher_detection),
       cmocka_unit_test(test_progress),
       cmocka_unit_test(test_table_errors),
       cmocka_unit_test(test_parameters_json),
