@@ -64,9 +64,9 @@ typedef struct karst_ensemble_hooks {
 
 /** How to run an ensemble. */
 typedef struct karst_ensemble_options {
-  karst_int_t n;               /**< members, within [1, KARST_ENSEMBLE_MAX_MEMBERS] */
+  karst_int_t n;               /**< members, 1 to KARST_ENSEMBLE_MAX_MEMBERS */
   uint64_t seed;               /**< base seed */
-  int nthreads;                /**< worker threads per process, [1, KARST_ENSEMBLE_MAX_THREADS] (default 1) */
+  int nthreads;                /**< threads, 1 to KARST_ENSEMBLE_MAX_THREADS (default 1) */
   int use_mpi;                 /**< 1: split across MPI ranks when MPI is initialised (default 1) */
   const char *scenario_path;   /**< recorded in ensemble.json (may be NULL) */
   const char *scenario_hash;   /**< 16 hex digits (karst_file_hash), guards re-runs (may be NULL) */

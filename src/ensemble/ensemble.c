@@ -592,7 +592,7 @@ static karst_error_t write_collection_files(karst_ctx_t *ctx, const char *dir,
     if (err) goto cleanup;
   }
 
-  /* ensemble.json: one key per line (karst report reads it back line by line). */
+  /* ensemble.json (karst report reads it with the JSON reader of json.h). */
   free(path);
   path = karst_i_path_join(dir, "ensemble.json");
   if (!path) {

@@ -156,4 +156,8 @@ fi
 # Compare and report on the real ensemble with a real survey.
 check 0 "compare with Sakany" "$KARST" compare "$T/ref" --survey "$SRC/datasets/surveys/karstnet/Sakany_nodes.dat"
 check 0 "report" "$KARST" report "$T/ref" --survey "$SRC/datasets/surveys/karstnet/Sakany_nodes.dat" -o "$T/report.html"
+# Every scenario parameter of ensemble.json is in the report, in full (Python's json and
+# html.parser read both sides independently of karst).
+/usr/bin/python3 "$SRC/tests/python/check_report_parameters.py" "$T/report.html" "$T/ref" ||
+  { echo "FAIL: the report does not show every parameter of ensemble.json"; fail=1; }
 exit $fail
