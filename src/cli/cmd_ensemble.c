@@ -183,7 +183,8 @@ const cli_command_t cli_cmd_ensemble = {
     "per realisation: index, seed, every metric of `karst metrics`) and DIR/ensemble.json\n"
     "(scenario hash, parameters, N, timings).\n\n"
     "Interrupting (Ctrl-C, kill) loses nothing: finished realisations are kept, unfinished ones\n"
-    "leave no file; running the same command again computes only the missing ones.\n\n"
+    "leave no file; running the same command again computes only the missing ones.\n"
+    "One run at a time per DIR: a second one is refused while DIR/.ensemble.lock is held.\n\n"
     "Under Open MPI: mpirun -np P karst ensemble ... splits the realisations across the P\n"
     "processes (as root add --allow-run-as-root, beyond the core count --oversubscribe).\n"
     "See docs/ensembles.md.\n"};
