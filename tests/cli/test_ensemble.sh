@@ -150,6 +150,10 @@ elif mpirun --allow-run-as-root --oversubscribe -np 3 -x ASAN_OPTIONS="${ASAN_OP
     "$KARST" ensemble "$SCEN" -n 12 -o "$T/mpi" -j 1 --seed 5 --quiet >"$T/mpi.log" 2>&1; then
   same_tree "$T/ref" "$T/mpi" && echo "ok: mpirun -np 3 = single process" || { echo "FAIL: MPI output differs"; fail=1; }
   no_leftovers "$T/mpi"
+elif grep -q "but this karst was built without MPI" "$T/mpi.log"; then
+  # A build without MPI (-DKARST_WITH_MPI=OFF) must refuse, not let 3 processes race on DIR.
+  [ ! -e "$T/mpi" ] && echo "ok: a build without MPI refuses mpirun -np 3 and creates nothing" ||
+    { echo "FAIL: the refused MPI run created $T/mpi"; fail=1; }
 else
   echo "FAIL: mpirun"; cat "$T/mpi.log"; fail=1
 fi
