@@ -20,6 +20,7 @@
 #include "karst/graph.h"
 #include "karst/implicit.h"
 #include "karst/io.h"
+#include "karst/json.h"
 #include "karst/mesh.h"
 #include "karst/metrics.h"
 #include "karst/network.h"

@@ -33,6 +33,7 @@ typedef int64_t karst_int_t;
   X(KARST_EUNREACHABLE, "a key point cannot be connected")                     \
   X(KARST_EINTERRUPTED, "interrupted")                                         \
   X(KARST_EEXTERNAL, "an external program or library failed")                 \
+  X(KARST_EBUSY, "in use by another process")                                 \
   X(KARST_ENOTIMPL, "not available yet")
 
 typedef enum {

@@ -12,6 +12,7 @@
  *   DIR/realisations/NNNN/metrics.csv   one header line and one row
  *   DIR/realisations/ensemble.key       scenario hash and base seed (guards re-runs)
  *   DIR/ensemble.pvd, DIR/metrics.csv, DIR/ensemble.json (rebuilt at the end)
+ *   DIR/.ensemble.lock                   only while a run works in DIR
  */
 #ifndef KARST_ENSEMBLE_H
 #define KARST_ENSEMBLE_H
@@ -49,11 +50,23 @@ typedef struct karst_ensemble_hooks {
   void *user;
 } karst_ensemble_hooks_t;
 
+/** Most members an ensemble may have: -n beyond this is refused before anything is created
+ *  (member directories are at least 4 digits; 1e8 members is far beyond any real study). */
+#define KARST_ENSEMBLE_MAX_MEMBERS 100000000
+/** Most worker threads per process: -j beyond this is refused (a guard against typos such as
+ *  -j 20000, which would try to start that many threads). */
+#define KARST_ENSEMBLE_MAX_THREADS 1024
+
+/** The lock file of a running ensemble, DIR/.ensemble.lock: held with an exclusive flock(2)
+ *  while karst_ensemble_run works in DIR (a second run into DIR fails with KARST_EBUSY) and
+ *  removed when the run ends. */
+#define KARST_ENSEMBLE_LOCK_NAME ".ensemble.lock"
+
 /** How to run an ensemble. */
 typedef struct karst_ensemble_options {
-  karst_int_t n;               /**< members, >= 1 */
+  karst_int_t n;               /**< members, 1 to KARST_ENSEMBLE_MAX_MEMBERS */
   uint64_t seed;               /**< base seed */
-  int nthreads;                /**< worker threads per process, >= 1 (default 1) */
+  int nthreads;                /**< threads, 1 to KARST_ENSEMBLE_MAX_THREADS (default 1) */
   int use_mpi;                 /**< 1: split across MPI ranks when MPI is initialised (default 1) */
   const char *scenario_path;   /**< recorded in ensemble.json (may be NULL) */
   const char *scenario_hash;   /**< 16 hex digits (karst_file_hash), guards re-runs (may be NULL) */
@@ -109,10 +122,20 @@ karst_error_t karst_ensemble_hooks_pipeline(karst_ctx_t *ctx, karst_ensemble_hoo
 char *karst_ensemble_parameters_json(const karst_scenario_t *sc);
 
 /**
+ * The number of processes a launcher says it started: OMPI_COMM_WORLD_SIZE
+ * (Open MPI's mpirun) or else PMI_SIZE (MPICH's Hydra, Slurm's PMI); 1 when
+ * neither is set to a whole number >= 1. Reads only the environment.
+ */
+int karst_ensemble_launcher_size(void);
+
+/**
  * MPI: when this process was started by mpirun (env OMPI_COMM_WORLD_SIZE or
  * PMI_SIZE) and the library was built with MPI, initialise MPI if needed and
  * return the world size in @p ranks and this rank in @p rank; otherwise 1 and 0.
  * @p initialised receives 1 when this call initialised MPI.
+ * A library built without MPI returns KARST_EUNSUPPORTED when a launcher
+ * started more than one process (karst_ensemble_launcher_size() > 1): each
+ * would compute every member and they would race on the files.
  */
 karst_error_t karst_ensemble_mpi_start(karst_ctx_t *ctx, int *ranks, int *rank, int *initialised);
 /** Finalise MPI when @p initialised (from karst_ensemble_mpi_start) is non-zero. */

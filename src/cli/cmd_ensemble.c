@@ -1,4 +1,5 @@
 /* karst ensemble: N realisations of a scenario, resumable, on threads and MPI ranks. */
+#include <ctype.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
@@ -67,14 +68,22 @@ static int run(int argc, char **argv) {
     const char *a = argv[i];
     int more = i + 1 < argc;
     if (strcmp(a, "-n") == 0 && more) {
-      if (cli_parse_u64(argv[++i], &n) || n < 1)
-        return cli_usage_error("ensemble", "-n needs a positive integer, got '%s'", argv[i]);
+      const char *v = argv[++i];
+      if (!isdigit((unsigned char)v[0]) || cli_parse_u64(v, &n) || n < 1 ||
+          n > KARST_ENSEMBLE_MAX_MEMBERS)
+        return cli_usage_error("ensemble",
+                               "-n must be a whole number of realisations within [1, %d], got '%s'",
+                               KARST_ENSEMBLE_MAX_MEMBERS, v);
       have_n = 1;
     } else if (strcmp(a, "-o") == 0 && more) {
       out = argv[++i];
     } else if (strcmp(a, "-j") == 0 && more) {
-      if (cli_parse_int(argv[++i], &threads) || threads < 1)
-        return cli_usage_error("ensemble", "-j needs a positive integer, got '%s'", argv[i]);
+      const char *v = argv[++i];
+      if (!isdigit((unsigned char)v[0]) || cli_parse_int(v, &threads) || threads < 1 ||
+          threads > KARST_ENSEMBLE_MAX_THREADS)
+        return cli_usage_error("ensemble",
+                               "-j must be a whole number of threads within [1, %d], got '%s'",
+                               KARST_ENSEMBLE_MAX_THREADS, v);
     } else if (strcmp(a, "--seed") == 0 && more) {
       if (cli_parse_u64(argv[++i], &seed))
         return cli_usage_error("ensemble",
@@ -116,12 +125,19 @@ static int run(int argc, char **argv) {
     status = cli_fail("ensemble", &ctx, err);
     goto cleanup;
   }
+  if (!have_n && sc.realisations > KARST_ENSEMBLE_MAX_MEMBERS) {
+    fprintf(stderr, "karst ensemble: %s: random.realisations must be at most %d, got %" PRId64 "\n",
+            scenario, KARST_ENSEMBLE_MAX_MEMBERS, (int64_t)sc.realisations);
+    status = CLI_ERROR;
+    goto cleanup;
+  }
   params = karst_ensemble_parameters_json(&sc);
   karst_ensemble_options_t opt;
   karst_ensemble_options_init(&opt);
   opt.n = have_n ? (karst_int_t)n : sc.realisations;
   opt.seed = have_seed ? seed : sc.seed;
   opt.nthreads = threads > 0 ? threads : ctx.nthreads;
+  if (opt.nthreads > KARST_ENSEMBLE_MAX_THREADS) opt.nthreads = KARST_ENSEMBLE_MAX_THREADS;
   opt.scenario_path = scenario;
   opt.scenario_hash = hash;
   opt.parameters_json = params;
@@ -159,9 +175,9 @@ const cli_command_t cli_cmd_ensemble = {
     "Generates N realisations of the scenario. Realisation i uses only the seed derived from\n"
     "(S, i) (column 'seed' of metrics.csv; `karst generate --seed` with it reproduces the\n"
     "member), so every file is the same whatever -j or the number of MPI processes.\n\n"
-    "  -n N          realisations (default: random.realisations of the scenario)\n"
+    "  -n N          realisations, 1 to 100000000 (default: random.realisations of the scenario)\n"
     "  -o DIR        output directory\n"
-    "  -j THREADS    worker threads (default: the number of processors)\n"
+    "  -j THREADS    worker threads, 1 to 1024 (default: the number of processors)\n"
     "  --seed S      base seed (default: random.seed of the scenario)\n"
     "  --quiet       no progress display\n\n"
     "Writes DIR/realisations/NNNN/{network.vtp,network_nodes.dat,network_links.dat,metrics.csv},\n"
@@ -169,7 +185,8 @@ const cli_command_t cli_cmd_ensemble = {
     "per realisation: index, seed, every metric of `karst metrics`) and DIR/ensemble.json\n"
     "(scenario hash, parameters, N, timings).\n\n"
     "Interrupting (Ctrl-C, kill) loses nothing: finished realisations are kept, unfinished ones\n"
-    "leave no file; running the same command again computes only the missing ones.\n\n"
+    "leave no file; running the same command again computes only the missing ones.\n"
+    "One run at a time per DIR: a second one is refused while DIR/.ensemble.lock is held.\n\n"
     "Under Open MPI: mpirun -np P karst ensemble ... splits the realisations across the P\n"
     "processes (as root add --allow-run-as-root, beyond the core count --oversubscribe).\n"
     "See docs/ensembles.md.\n"};

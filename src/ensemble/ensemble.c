@@ -18,11 +18,13 @@
 
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -122,6 +124,75 @@ static karst_error_t remove_stale_temporaries(karst_ctx_t *ctx, const char *dir)
   }
   closedir(d);
   return err;
+}
+
+/* ------------------------------------------------------------------------ */
+/* The lock: one run at a time in DIR.                                      */
+/* ------------------------------------------------------------------------ */
+/* Take the exclusive, non-blocking flock(2) of DIR/.ensemble.lock and write this process's id
+ * into it. The lock file is unlinked when the run ends (release_lock), so a finished ensemble
+ * holds exactly the files of an uninterrupted run. Because of that unlink, a process may win
+ * the lock on a file that another process has just unlinked; it then checks that the name
+ * still refers to the inode it locked and tries again otherwise (the usual pattern for
+ * removable lock files). A lock dies with its process, so kill -9 never leaves DIR locked. */
+static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, char **path_out) {
+  char *path = karst_i_path_join(dir, KARST_ENSEMBLE_LOCK_NAME);
+  *fd_out = -1;
+  *path_out = NULL;
+  if (!path) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  for (int attempt = 0; attempt < 100; attempt++) {
+    int fd = open(path, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    if (fd < 0) {
+      karst_error_t err = karst_set_error(ctx, KARST_EIO, "%s: cannot create the lock file: %s",
+                                          path, strerror(errno));
+      free(path);
+      return err;
+    }
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      int e = errno;
+      char pid[32] = "";
+      ssize_t got = e == EWOULDBLOCK ? pread(fd, pid, sizeof pid - 1, 0) : -1;
+      close(fd);
+      karst_error_t err;
+      if (e == EWOULDBLOCK) {
+        pid[got > 0 ? got : 0] = '\0';
+        pid[strspn(pid, "0123456789")] = '\0';
+        err = karst_set_error(ctx, KARST_EBUSY,
+                              "%s is in use by another karst ensemble (pid %s; lock %s); wait "
+                              "for it to finish or use another output directory",
+                              dir, pid[0] ? pid : "unknown", path);
+      } else {
+        err = karst_set_error(ctx, KARST_EIO, "%s: cannot lock: %s", path, strerror(e));
+      }
+      free(path);
+      return err;
+    }
+    struct stat held, named;
+    if (fstat(fd, &held) == 0 && stat(path, &named) == 0 && held.st_dev == named.st_dev &&
+        held.st_ino == named.st_ino) {
+      char pid[32];
+      int len = snprintf(pid, sizeof pid, "%ld\n", (long)getpid());
+      if (ftruncate(fd, 0) != 0 || pwrite(fd, pid, (size_t)len, 0) != len) {
+        /* the pid is only for the message of a refused run; the lock itself holds */
+      }
+      *fd_out = fd;
+      *path_out = path;
+      return KARST_SUCCESS;
+    }
+    close(fd); /* locked a file that was unlinked meanwhile: try the new one */
+  }
+  free(path);
+  return karst_set_error(ctx, KARST_EBUSY, "%s: cannot take the lock %s (it keeps changing)", dir,
+                         KARST_ENSEMBLE_LOCK_NAME);
+}
+
+/* Unlink while still holding the lock, then close (which releases it). */
+static void release_lock(int fd, char *path) {
+  if (fd >= 0) {
+    unlink(path);
+    close(fd);
+  }
+  free(path);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -521,7 +592,7 @@ static karst_error_t write_collection_files(karst_ctx_t *ctx, const char *dir,
     if (err) goto cleanup;
   }
 
-  /* ensemble.json: one key per line (karst report reads it back line by line). */
+  /* ensemble.json (karst report reads it with the JSON reader of json.h). */
   free(path);
   path = karst_i_path_join(dir, "ensemble.json");
   if (!path) {
@@ -575,13 +646,14 @@ static karst_error_t check_arguments(karst_ctx_t *ctx, const char *dir,
                                      const karst_ensemble_options_t *opt,
                                      const karst_ensemble_hooks_t *h) {
   if (!dir || !*dir) return karst_set_error(ctx, KARST_EINVAL, "no output directory given");
-  if (opt->n < 1 || opt->n > 100000000)
+  if (opt->n < 1 || opt->n > KARST_ENSEMBLE_MAX_MEMBERS)
     return karst_set_error(ctx, KARST_ERANGE,
-                           "the number of realisations must be within [1, 1e8], got %" PRId64,
-                           opt->n);
-  if (opt->nthreads < 1)
-    return karst_set_error(ctx, KARST_ERANGE, "the number of threads must be >= 1, got %d",
-                           opt->nthreads);
+                           "the number of realisations must be within [1, %d], got %" PRId64,
+                           KARST_ENSEMBLE_MAX_MEMBERS, opt->n);
+  if (opt->nthreads < 1 || opt->nthreads > KARST_ENSEMBLE_MAX_THREADS)
+    return karst_set_error(ctx, KARST_ERANGE,
+                           "the number of threads must be within [1, %d], got %d",
+                           KARST_ENSEMBLE_MAX_THREADS, opt->nthreads);
   if (!h || !h->realise || !h->write)
     return karst_set_error(ctx, KARST_EINVAL, "the ensemble needs realise and write hooks");
   if (h->n_metrics < 0 || (h->n_metrics > 0 && !h->metric_names))
@@ -609,7 +681,9 @@ static karst_error_t check_arguments(karst_ctx_t *ctx, const char *dir,
  * @return KARST_SUCCESS when every member is complete and the collection files
  *         are written; KARST_EINTERRUPTED after an interrupt (finished members
  *         are kept, unfinished ones leave nothing behind); the error of the
- *         lowest failing member otherwise ("realisation I: ...").
+ *         lowest failing member otherwise ("realisation I: ..."); KARST_EBUSY,
+ *         before anything in DIR is touched, when another run holds DIR's lock
+ *         (KARST_ENSEMBLE_LOCK_NAME).
  * Members whose directory DIR/realisations/NNNN exists are not recomputed.
  * Under MPI (karst_ensemble_mpi_start) rank r computes the members i with
  * i mod P = r and rank 0 writes the collection files after all ranks agree.
@@ -623,6 +697,8 @@ karst_error_t karst_ensemble_run(karst_ctx_t *ctx, const char *dir,
   char *real_dir = NULL, *header = NULL;
   karst_int_t *pending = NULL;
   karst_ensemble_summary_t sum;
+  int lock_fd = -1;
+  char *lock_path = NULL;
   double t0 = now_seconds();
   memset(&sum, 0, sizeof sum);
   err = check_arguments(ctx, dir, opt, hooks);
@@ -639,9 +715,12 @@ karst_error_t karst_ensemble_run(karst_ctx_t *ctx, const char *dir,
   err = karst_i_metrics_header(ctx, hooks, &header);
   if (err) goto cleanup;
 
-  /* Rank 0 prepares the directory; the others wait for its verdict. */
+  /* Rank 0 locks and prepares the directory; the others wait for its verdict. The lock comes
+   * before anything else is touched: a second run must not remove the first one's temporaries. */
   if (sum.rank == 0) {
-    err = karst_mkdir_p(ctx, real_dir);
+    err = karst_mkdir_p(ctx, dir);
+    if (!err) err = take_lock(ctx, dir, &lock_fd, &lock_path);
+    if (!err) err = karst_mkdir_p(ctx, real_dir);
     if (!err) err = remove_stale_temporaries(ctx, dir);
     if (!err) err = remove_stale_temporaries(ctx, real_dir);
     if (!err) err = check_or_write_key(ctx, real_dir, opt);
@@ -705,6 +784,7 @@ karst_error_t karst_ensemble_run(karst_ctx_t *ctx, const char *dir,
     if (all && !err) err = karst_set_error(ctx, all, "rank 0 could not write the collection files");
   }
 cleanup:
+  release_lock(lock_fd, lock_path);
   sum.wall_seconds = now_seconds() - t0;
   if (summary) *summary = sum;
   free(pending);
@@ -717,17 +797,55 @@ cleanup:
 /* MPI start / finish                                                       */
 /* ------------------------------------------------------------------------ */
 /**
+ * Processes announced by a launcher (see ensemble.h): OMPI_COMM_WORLD_SIZE, else PMI_SIZE;
+ * 1 when neither is a whole number >= 1. Time complexity: O(1).
+ */
+int karst_ensemble_launcher_size(void) {
+  const char *names[] = {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"};
+  for (int k = 0; k < 2; k++) {
+    const char *v = getenv(names[k]);
+    if (!v || *v < '0' || *v > '9') continue;
+    char *end;
+    errno = 0;
+    long n = strtol(v, &end, 10);
+    if (errno == 0 && *end == '\0' && n >= 1 && n <= 1000000000L) return (int)n;
+  }
+  return 1;
+}
+
+/**
+ * Refuse a launch of several processes by a build without MPI (ensemble_internal.h).
+ * Time complexity: O(1).
+ */
+karst_error_t karst_i_ensemble_launcher_check(karst_ctx_t *ctx, int built_with_mpi, int *size) {
+  *size = karst_ensemble_launcher_size();
+  if (*size > 1 && !built_with_mpi)
+    return karst_set_error(
+        ctx, KARST_EUNSUPPORTED,
+        "started by an MPI launcher as one of %d processes (OMPI_COMM_WORLD_SIZE or PMI_SIZE), "
+        "but this karst was built without MPI (CMake found no MPI, or -DKARST_WITH_MPI=OFF): "
+        "each process would compute every realisation and overwrite the others' files; run "
+        "one process without mpirun, or rebuild with MPI (Debian libopenmpi-dev)",
+        *size);
+  return KARST_SUCCESS;
+}
+
+/**
  * Join the MPI world when started by mpirun. Detection: Open MPI sets
  * OMPI_COMM_WORLD_SIZE in every rank (PMI_SIZE for other launchers); a plain
  * start never initialises MPI, so a single process does not need mpirun.
  * @p initialised is set to 1 when this call initialised MPI (pass it to
  * karst_ensemble_mpi_finish).
- * @return KARST_EEXTERNAL when MPI_Init_thread fails.
+ * @return KARST_EEXTERNAL when MPI_Init_thread fails; KARST_EUNSUPPORTED when
+ *         this build has no MPI and a launcher started several processes.
  */
 karst_error_t karst_ensemble_mpi_start(karst_ctx_t *ctx, int *ranks, int *rank, int *initialised) {
   *ranks = 1;
   *rank = 0;
   *initialised = 0;
+  int launched = 1;
+  karst_error_t err = karst_i_ensemble_launcher_check(ctx, KARST_HAVE_MPI, &launched);
+  if (err) return err;
 #if KARST_HAVE_MPI
   if (!getenv("OMPI_COMM_WORLD_SIZE") && !getenv("PMI_SIZE")) return KARST_SUCCESS;
   int init = 0;
@@ -740,8 +858,6 @@ karst_error_t karst_ensemble_mpi_start(karst_ctx_t *ctx, int *ranks, int *rank, 
   }
   MPI_Comm_size(MPI_COMM_WORLD, ranks);
   MPI_Comm_rank(MPI_COMM_WORLD, rank);
-#else
-  (void)ctx;
 #endif
   return KARST_SUCCESS;
 }

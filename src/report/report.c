@@ -10,6 +10,7 @@
 #include "ensemble/ensemble_internal.h"
 #include "karst/compare.h"
 #include "karst/io.h"
+#include "karst/json.h"
 #include "karst/metrics.h"
 #include "karst/readers.h"
 #include "report/svg_internal.h"
@@ -82,82 +83,65 @@ void karst_report_options_init(karst_report_options_t *opt) {
 }
 
 /* ------------------------------------------------------------------------ */
-/* ensemble.json, read back line by line (the runner writes one key a line) */
+/* ensemble.json, read with the JSON reader and shown in full               */
 /* ------------------------------------------------------------------------ */
-typedef struct kv {
-  char key[96];
-  char value[256];
-  int parameter; /* inside "parameters" */
-} kv_t;
-
-static karst_error_t read_summary(karst_ctx_t *ctx, const char *path, kv_t **out, int *n) {
-  karst_error_t err = KARST_SUCCESS;
-  char *line = NULL;
-  size_t cap = 0;
-  int in_params = 0, lineno = 0, cnt = 0, kcap = 0;
-  kv_t *kv = NULL;
-  FILE *fp = fopen(path, "rb");
-  *out = NULL;
-  *n = 0;
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot read: %s", path, strerror(errno));
-  while (getline(&line, &cap, fp) > 0) {
-    lineno++;
-    char *s = line;
-    while (*s == ' ')
-      s++;
-    if (*s == '}') {
-      in_params = 0;
-      continue;
-    }
-    if (*s != '"') continue;
-    char *q = strchr(s + 1, '"');
-    if (!q || q[1] != ':') {
-      err = karst_set_error(ctx, KARST_EPARSE, "%s:%d: expected \"key\": value", path, lineno);
-      goto cleanup;
-    }
-    *q = '\0';
-    char *v = q + 2;
-    while (*v == ' ')
-      v++;
-    v[strcspn(v, "\r\n")] = '\0';
-    size_t len = strlen(v);
-    if (len && v[len - 1] == ',') v[--len] = '\0';
-    if (strcmp(s + 1, "parameters") == 0) {
-      in_params = 1;
-      continue;
-    }
-    if (len >= 2 && v[0] == '"' && v[len - 1] == '"') {
-      v[len - 1] = '\0';
-      v++;
-    }
-    if (cnt == kcap) {
-      kcap = kcap ? 2 * kcap : 64;
-      kv_t *nk = realloc(kv, (size_t)kcap * sizeof *nk);
-      if (!nk) {
-        err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
-        goto cleanup;
-      }
-      kv = nk;
-    }
-    snprintf(kv[cnt].key, sizeof kv[cnt].key, "%s", s + 1);
-    snprintf(kv[cnt].value, sizeof kv[cnt].value, "%s", v);
-    kv[cnt].parameter = in_params;
-    cnt++;
+/* Text of a scalar as the file has it (a number's literal, a string decoded), or NULL. */
+static const char *json_scalar_text(const karst_json_t *v) {
+  if (!v) return NULL;
+  switch (v->type) {
+  case KARST_JSON_NULL:
+    return "null";
+  case KARST_JSON_FALSE:
+    return "false";
+  case KARST_JSON_TRUE:
+    return "true";
+  case KARST_JSON_NUMBER:
+  case KARST_JSON_STRING:
+    return v->text;
+  default:
+    return NULL;
   }
-  *out = kv;
-  *n = cnt;
-  kv = NULL;
-cleanup:
-  free(kv);
-  free(line);
-  fclose(fp);
-  return err;
 }
 
-static const char *kv_get(const kv_t *kv, int n, const char *key) {
-  for (int i = 0; i < n; i++)
-    if (!kv[i].parameter && strcmp(kv[i].key, key) == 0) return kv[i].value;
-  return NULL;
+/* Every value in full: scalars as text, arrays of scalars inline ("[a, b, c]", strings in
+ * quotes), other arrays and objects as nested tables (one row per element or member). */
+static void html_json(karst_i_buf_t *b, const karst_json_t *v) {
+  if (karst_json_is_scalar(v)) {
+    karst_i_buf_escape(b, json_scalar_text(v));
+    return;
+  }
+  int is_obj = v->type == KARST_JSON_OBJECT;
+  if (v->n == 0) {
+    karst_i_buf_puts(b, is_obj ? "{ }" : "[ ]");
+    return;
+  }
+  int flat = !is_obj;
+  for (karst_int_t i = 0; flat && i < v->n; i++)
+    flat = karst_json_is_scalar(&v->items[i]);
+  if (flat) {
+    karst_i_buf_puts(b, "[");
+    for (karst_int_t i = 0; i < v->n; i++) {
+      const karst_json_t *e = &v->items[i];
+      if (i) karst_i_buf_puts(b, ", ");
+      if (e->type == KARST_JSON_STRING) karst_i_buf_puts(b, "&quot;");
+      karst_i_buf_escape(b, json_scalar_text(e));
+      if (e->type == KARST_JSON_STRING) karst_i_buf_puts(b, "&quot;");
+    }
+    karst_i_buf_puts(b, "]");
+    return;
+  }
+  karst_i_buf_puts(b, "<table class=\"json\">");
+  for (karst_int_t i = 0; i < v->n; i++) {
+    karst_i_buf_puts(b, "<tr><th class=\"l\">");
+    if (is_obj)
+      karst_i_buf_escape(b, v->keys[i]);
+    else
+      karst_i_buf_printf(b, "[%" PRId64 "]", i);
+    karst_i_buf_puts(b, "</th><td class=\"l\">");
+    html_json(b, &v->items[i]);
+    karst_i_buf_puts(b, "</td></tr>");
+  }
+  karst_i_buf_puts(b, "</table>");
 }
 
 /* ------------------------------------------------------------------------ */
@@ -444,7 +428,8 @@ static const char *const css =
     "svg .axis{font-size:11px;fill:#111}svg .note{font-size:10px;fill:#555}"
     ".legend span{display:inline-block;margin-right:1em;font-size:0.85em}"
     ".sw{display:inline-block;width:1.6em;height:0.35em;margin-right:0.3em;vertical-align:middle}"
-    "pre{background:#f7f7f7;padding:0.5em;font-size:0.85em}";
+    "pre{background:#f7f7f7;padding:0.5em;font-size:0.85em}"
+    "table.json table.json{font-size:1em;margin:0}";
 
 static void html_cell_num(karst_i_buf_t *b, double v) {
   char s[64];
@@ -494,8 +479,8 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   karst_published_t pub;
   karst_compare_result_t *res = NULL;
   karst_i_buf_t b;
-  kv_t *kv = NULL;
-  int nkv = 0, n_res = 0, have_pub = 0;
+  karst_json_t *summary = NULL;
+  int n_res = 0, have_pub = 0;
   char *jpath = NULL, *mpath = NULL, *versions = NULL;
   karst_network_t net;
   double rose[180 / ROSE_BIN_DEGREES] = {0}, srose[180 / ROSE_BIN_DEGREES] = {0};
@@ -518,8 +503,15 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
     err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
     goto cleanup;
   }
-  err = read_summary(ctx, jpath, &kv, &nkv);
+  err = karst_json_read_file(ctx, jpath, &summary);
   if (err) goto cleanup;
+  if (summary->type != KARST_JSON_OBJECT) {
+    err = karst_set_error(ctx, KARST_EPARSE,
+                          "%s:%d:%d: expected an object (ensemble.json of "
+                          "karst ensemble), got another JSON value",
+                          jpath, summary->line, summary->col);
+    goto cleanup;
+  }
   err = karst_ensemble_table_read(ctx, mpath, &table);
   if (err) goto cleanup;
 
@@ -556,9 +548,8 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
                        "<title>karst ensemble report</title><style>");
   karst_i_buf_puts(&b, css);
   karst_i_buf_puts(&b, "</style></head><body>\n<h1>karst ensemble report</h1>\n");
-  const char *name = NULL;
-  for (int i = 0; i < nkv; i++)
-    if (kv[i].parameter && strcmp(kv[i].key, "name") == 0) name = kv[i].value;
+  const karst_json_t *params = karst_json_get(summary, "parameters");
+  const char *name = json_scalar_text(karst_json_get(params, "name"));
   karst_i_buf_puts(&b, "<h2>Scenario</h2>\n<table>");
   const char *keys[] = {"scenario", "scenario_hash", "seed", "realisations", "karst_version"};
   const char *labels[] = {"scenario file", "scenario hash (FNV-1a 64)", "base seed", "realisations",
@@ -567,7 +558,7 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   karst_i_buf_escape(&b, name ? name : "–");
   karst_i_buf_puts(&b, "</td></tr>");
   for (int i = 0; i < 5; i++) {
-    const char *v = kv_get(kv, nkv, keys[i]);
+    const char *v = json_scalar_text(karst_json_get(summary, keys[i]));
     karst_i_buf_printf(&b, "<tr><th class=\"l\">%s</th><td class=\"l\">", labels[i]);
     karst_i_buf_escape(&b, v ? v : "–");
     karst_i_buf_puts(&b, "</td></tr>");
@@ -579,16 +570,13 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   karst_i_buf_puts(&b, "<p>Member <i>i</i> is generated from its own seed (column "
                        "<code>seed</code> of metrics.csv), derived from the base seed and "
                        "<i>i</i>; <code>karst generate --seed</code> with that seed reproduces "
-                       "it.</p>\n<details><summary>effective parameters</summary><table>");
-  for (int i = 0; i < nkv; i++) {
-    if (!kv[i].parameter) continue;
-    karst_i_buf_puts(&b, "<tr><th class=\"l\">");
-    karst_i_buf_escape(&b, kv[i].key);
-    karst_i_buf_puts(&b, "</th><td class=\"l\">");
-    karst_i_buf_escape(&b, kv[i].value);
-    karst_i_buf_puts(&b, "</td></tr>");
-  }
-  karst_i_buf_puts(&b, "</table></details>\n");
+                       "it.</p>\n<details><summary>effective parameters (all of them, as "
+                       "ensemble.json records them)</summary>");
+  if (params)
+    html_json(&b, params);
+  else
+    karst_i_buf_puts(&b, "<p>ensemble.json records no parameters.</p>");
+  karst_i_buf_puts(&b, "</details>\n");
 
   /* --- comparison --- */
   karst_i_buf_puts(&b,
@@ -724,7 +712,7 @@ cleanup:
   karst_i_buf_destroy(&b);
   karst_published_destroy(&pub);
   karst_ensemble_table_destroy(&table);
-  free(kv);
+  karst_json_free(summary);
   free(versions);
   free(mpath);
   free(jpath);

@@ -17,8 +17,18 @@ check() { # expected-exit description command...
 # --- usage errors -----------------------------------------------------------------------
 check 2 "ensemble without arguments" "$KARST" ensemble
 check 2 "ensemble without -o" "$KARST" ensemble x.yaml -n 3
-check 2 "ensemble -n 0" "$KARST" ensemble x.yaml -n 0 -o "$T/e"
-check 2 "ensemble -j x" "$KARST" ensemble x.yaml -n 3 -j x -o "$T/e"
+# -n and -j out of range: exit 2, a message naming the option and the value, nothing created.
+# The bounds are KARST_ENSEMBLE_MAX_MEMBERS = 100000000 and KARST_ENSEMBLE_MAX_THREADS = 1024.
+bad_option() { # option value
+  "$KARST" ensemble x.yaml -n 3 "$1" "$2" -o "$T/e" >"$T/out" 2>&1; local got=$?
+  if [ "$got" != 2 ]; then echo "FAIL: ensemble $1 '$2': exit $got, expected 2"; cat "$T/out"; fail=1; return; fi
+  grep -qF -- "$1 must be" "$T/out" && grep -qF -- "got '$2'" "$T/out" ||
+    { echo "FAIL: ensemble $1 '$2': message does not name the option and value"; cat "$T/out"; fail=1; return; }
+  [ ! -e "$T/e" ] || { echo "FAIL: ensemble $1 '$2' created $T/e"; fail=1; return; }
+  echo "ok: ensemble $1 '$2' is a usage error"
+}
+for v in 0 -3 abc 1e8 " 5" "" 100000001 18446744073709551617; do bad_option -n "$v"; done
+for v in 0 -1 x 2.5 1025 99999999999; do bad_option -j "$v"; done
 check 2 "ensemble unknown option" "$KARST" ensemble x.yaml --frob -o "$T/e"
 check 1 "ensemble missing scenario" "$KARST" ensemble /nonexistent.yaml -n 2 -o "$T/e"
 check 2 "compare without directory" "$KARST" compare
@@ -60,28 +70,77 @@ same_tree() { # A B: same files, same bytes (ensemble.json without its timings l
   diff <(grep -v '"timings"' "$1/ensemble.json") <(grep -v '"timings"' "$2/ensemble.json") || d=1
   return $d
 }
+no_leftovers() { # DIR: no hidden member temporaries and no lock file after a finished run
+  local left; left=$(find "$1" -name '.*.tmp.*' -o -name '.ensemble.lock')
+  if [ -n "$left" ]; then echo "FAIL: left in $1 after the run: $left"; fail=1; else echo "ok: nothing left over in $1"; fi
+}
+members() { ls "$1/realisations" 2>/dev/null | grep -c '^[0-9][0-9]*$'; }
+no_leftovers "$T/a"
 check 0 "ensemble -j 2" "$KARST" ensemble "$SCEN" -n 4 -o "$T/b" -j 2 --seed 11 --quiet
 same_tree "$T/a" "$T/b" && echo "ok: -j 1 and -j 2 byte-identical" || { echo "FAIL: -j 1 vs -j 2"; fail=1; }
+no_leftovers "$T/b"
 [ "$(wc -l <"$T/a/metrics.csv")" = 5 ] || { echo "FAIL: metrics.csv rows"; fail=1; }
 for f in ensemble.pvd ensemble.json realisations/0003/network.vtp realisations/0003/network_nodes.dat realisations/0003/network_links.dat; do
   [ -s "$T/a/$f" ] || { echo "FAIL: missing $f"; fail=1; }
 done
 # Member i is `karst generate --seed <its seed>`.
 s1=$(sed -n 3p "$T/a/metrics.csv" | cut -d, -f2)
-if "$KARST" generate "$SCEN" -o "$T/g" --seed "$s1" --quiet >/dev/null 2>&1; then
+if "$KARST" generate "$SCEN" -o "$T/g" --seed "$s1" --quiet >"$T/gen.log" 2>&1; then
   cmp -s "$T/g/network.vtp" "$T/a/realisations/0001/network.vtp" && echo "ok: member 1 = karst generate --seed $s1" ||
     { echo "FAIL: member 1 differs from karst generate --seed $s1"; fail=1; }
+else
+  echo "FAIL: karst generate --seed $s1"; cat "$T/gen.log"; fail=1
 fi
-# Kill mid-run (SIGTERM), re-run, compare with an uninterrupted run.
+
+# One run at a time per DIR: flock(1) from util-linux holds DIR/.ensemble.lock (with a pid
+# written in it, as karst writes its own) while a second karst ensemble starts on DIR. The
+# second run must exit 1 naming the pid, and touch nothing: not the member temporary of the
+# "running" ensemble, not the finished members, no new member.
+mkdir "$T/a/realisations/.0004.tmp.999999"
+echo 4242 >"$T/a/.ensemble.lock"
+before=$(cd "$T/a" && find . -type f ! -name .ensemble.lock | sort | xargs md5sum)
+flock -n -E 99 "$T/a/.ensemble.lock" "$KARST" ensemble "$SCEN" -n 5 -o "$T/a" -j 1 --seed 11 --quiet >"$T/out" 2>&1
+rc=$?
+if [ $rc != 1 ]; then echo "FAIL: second run on a locked DIR: exit $rc, expected 1"; cat "$T/out"; fail=1; fi
+grep -qF "$T/a is in use by another karst ensemble (pid 4242" "$T/out" && echo "ok: locked DIR refused with the holder's pid" ||
+  { echo "FAIL: locked DIR message"; cat "$T/out"; fail=1; }
+[ -d "$T/a/realisations/.0004.tmp.999999" ] || { echo "FAIL: the refused run removed the other run's temporary"; fail=1; }
+[ "$(cd "$T/a" && find . -type f ! -name .ensemble.lock | sort | xargs md5sum)" = "$before" ] &&
+  echo "ok: the refused run changed no file" || { echo "FAIL: the refused run changed files in $T/a"; fail=1; }
+[ "$(members "$T/a")" = 4 ] || { echo "FAIL: the refused run added members"; fail=1; }
+rm -rf "$T/a/realisations/.0004.tmp.999999" "$T/a/.ensemble.lock"
+
+# Kill mid-run, re-run, compare with an uninterrupted run: every file byte-identical (cmp),
+# ensemble.json without its timings line. SIGTERM is handled (members in progress remove their
+# temporaries, exit 1); SIGKILL is not (temporaries and the lock file stay; the re-run removes
+# them). The kill comes once 2 of 12 members are done, so the run cannot have finished: that is
+# asserted (fewer than 12 members, no metrics.csv), not assumed.
 check 0 "reference ensemble of 12" "$KARST" ensemble "$SCEN" -n 12 -o "$T/ref" -j 2 --seed 5 --quiet
-"$KARST" ensemble "$SCEN" -n 12 -o "$T/k" -j 2 --seed 5 --quiet &
-pid=$!
-for _ in $(seq 1 400); do [ "$(ls "$T/k/realisations" 2>/dev/null | wc -l)" -ge 3 ] && break; sleep 0.05; done
-kill -TERM $pid; wait $pid; rc=$?
-echo "interrupted run exited with $rc; $(ls "$T/k/realisations" | wc -l) entries kept"
-[ -z "$(find "$T/k" -name '.*.tmp.*')" ] || { echo "FAIL: temporary files left after SIGTERM"; find "$T/k" -name '.*.tmp.*'; fail=1; }
-check 0 "re-run after kill" "$KARST" ensemble "$SCEN" -n 12 -o "$T/k" -j 1 --seed 5 --quiet
-same_tree "$T/ref" "$T/k" && echo "ok: killed + re-run = uninterrupted" || { echo "FAIL: killed + re-run differs"; fail=1; }
+no_leftovers "$T/ref"
+for sig in TERM KILL; do
+  K="$T/k$sig"
+  "$KARST" ensemble "$SCEN" -n 12 -o "$K" -j 2 --seed 5 --quiet 2>"$T/kill.err" &
+  pid=$!
+  for _ in $(seq 1 1200); do [ "$(members "$K")" -ge 2 ] && break; sleep 0.05; done
+  kill -$sig $pid; wait $pid; rc=$?
+  kept=$(members "$K")
+  if [ $sig = TERM ]; then
+    [ $rc = 1 ] && grep -q "interrupted" "$T/kill.err" && echo "ok: SIGTERM: exit 1, says interrupted" ||
+      { echo "FAIL: SIGTERM: exit $rc, expected 1 with 'interrupted'"; cat "$T/kill.err"; fail=1; }
+    [ -z "$(find "$K" -name '.*.tmp.*')" ] && echo "ok: no temporary left after SIGTERM" ||
+      { echo "FAIL: temporary files left after SIGTERM"; find "$K" -name '.*.tmp.*'; fail=1; }
+  else
+    [ $rc = 137 ] || { echo "FAIL: SIGKILL: exit $rc, expected 137"; fail=1; }
+  fi
+  if [ "$kept" -ge 2 ] && [ "$kept" -lt 12 ] && [ ! -e "$K/metrics.csv" ]; then
+    echo "ok: SIG$sig stopped the run with $kept of 12 members"
+  else
+    echo "FAIL: SIG$sig: $kept members kept, metrics.csv $([ -e "$K/metrics.csv" ] && echo present || echo absent)"; fail=1
+  fi
+  check 0 "re-run after SIG$sig" "$KARST" ensemble "$SCEN" -n 12 -o "$K" -j 1 --seed 5 --quiet
+  same_tree "$T/ref" "$K" && echo "ok: SIG$sig + re-run = uninterrupted" || { echo "FAIL: SIG$sig + re-run differs"; fail=1; }
+  no_leftovers "$K"
+done
 # MPI with 3 processes writes the same files. In sanitizer builds LeakSanitizer reports Open MPI's
 # own allocations at exit (its plugins, ompi_op_base_op_select), not karst's: leak detection is
 # off for this one run (karst's leaks are checked by every other run of this script).
@@ -90,10 +149,19 @@ if ! command -v mpirun >/dev/null 2>&1; then
 elif mpirun --allow-run-as-root --oversubscribe -np 3 -x ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" \
     "$KARST" ensemble "$SCEN" -n 12 -o "$T/mpi" -j 1 --seed 5 --quiet >"$T/mpi.log" 2>&1; then
   same_tree "$T/ref" "$T/mpi" && echo "ok: mpirun -np 3 = single process" || { echo "FAIL: MPI output differs"; fail=1; }
+  no_leftovers "$T/mpi"
+elif grep -q "but this karst was built without MPI" "$T/mpi.log"; then
+  # A build without MPI (-DKARST_WITH_MPI=OFF) must refuse, not let 3 processes race on DIR.
+  [ ! -e "$T/mpi" ] && echo "ok: a build without MPI refuses mpirun -np 3 and creates nothing" ||
+    { echo "FAIL: the refused MPI run created $T/mpi"; fail=1; }
 else
   echo "FAIL: mpirun"; cat "$T/mpi.log"; fail=1
 fi
 # Compare and report on the real ensemble with a real survey.
 check 0 "compare with Sakany" "$KARST" compare "$T/ref" --survey "$SRC/datasets/surveys/karstnet/Sakany_nodes.dat"
 check 0 "report" "$KARST" report "$T/ref" --survey "$SRC/datasets/surveys/karstnet/Sakany_nodes.dat" -o "$T/report.html"
+# Every scenario parameter of ensemble.json is in the report, in full (Python's json and
+# html.parser read both sides independently of karst).
+/usr/bin/python3 "$SRC/tests/python/check_report_parameters.py" "$T/report.html" "$T/ref" ||
+  { echo "FAIL: the report does not show every parameter of ensemble.json"; fail=1; }
 exit $fail

@@ -7,6 +7,7 @@
  */
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <math.h>
 #include <setjmp.h>
@@ -17,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -24,6 +26,7 @@
 
 #include <cmocka.h>
 
+#include "ensemble/ensemble_internal.h"
 #include "karst.h"
 #include "test_util.h"
 
@@ -532,9 +535,16 @@ static void test_arguments(void **state) {
   opt.n = 0;
   assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_ERANGE);
   assert_non_null(strstr(ctx.errmsg, "got 0"));
+  opt.n = KARST_ENSEMBLE_MAX_MEMBERS + (karst_int_t)1;
+  assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_ERANGE);
+  assert_non_null(strstr(ctx.errmsg, "got 100000001"));
   opt.n = 2;
   opt.nthreads = 0;
   assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_ERANGE);
+  opt.nthreads = KARST_ENSEMBLE_MAX_THREADS + 1;
+  assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_ERANGE);
+  assert_non_null(strstr(ctx.errmsg, "got 1025"));
+  assert_int_equal(count_entries(d, NULL), 0); /* refused before anything was created */
   opt.nthreads = 1;
   h.realise = NULL;
   assert_int_equal(karst_ensemble_run(&ctx, d, &opt, &h, NULL), KARST_EINVAL);
@@ -554,6 +564,88 @@ static void test_arguments(void **state) {
   assert_int_equal(s.complete, 1);
   rm_rf(d);
   free(d);
+}
+
+/* A second run into a DIR whose lock is held is refused before it touches anything: here the
+ * test holds the flock(2) itself, as a concurrent `karst ensemble` would. */
+static void test_lock(void **state) {
+  (void)state;
+  char *d = make_tmpdir();
+  char lock[1100], real[1100], tmp[1200];
+  fake_t f = fake_default();
+  karst_ctx_t ctx;
+  snprintf(lock, sizeof lock, "%s/%s", d, KARST_ENSEMBLE_LOCK_NAME);
+  snprintf(real, sizeof real, "%s/realisations", d);
+  snprintf(tmp, sizeof tmp, "%s/.0001.tmp.999999", real);
+  assert_int_equal(mkdir(real, 0777), 0);
+  assert_int_equal(mkdir(tmp, 0777), 0); /* "the other run's" member in progress */
+  int fd = open(lock, O_RDWR | O_CREAT, 0666);
+  assert_true(fd >= 0);
+  assert_int_equal(flock(fd, LOCK_EX | LOCK_NB), 0);
+  assert_int_equal(pwrite(fd, "4242\n", 5, 0), 5);
+  assert_int_equal(run_fake(d, 3, 7, 2, &f, NULL, &ctx), KARST_EBUSY);
+  assert_non_null(strstr(ctx.errmsg, "in use by another karst ensemble (pid 4242"));
+  struct stat st;
+  assert_int_equal(stat(tmp, &st), 0);           /* not removed as a leftover */
+  assert_int_equal(count_entries(real, NULL), 0); /* no member, no ensemble.key */
+  assert_int_equal(stat(lock, &st), 0);          /* the holder's lock file is left alone */
+  close(fd);                                     /* the holder ends (without unlinking) */
+  assert_int_equal(run_fake(d, 3, 7, 2, &f, NULL, &ctx), KARST_SUCCESS);
+  assert_int_not_equal(stat(tmp, &st), 0);     /* now a leftover, removed */
+  assert_int_not_equal(stat(lock, &st), 0);    /* removed at the end of the run */
+  assert_int_equal(count_entries(real, NULL), 4); /* 3 members + ensemble.key */
+  rm_rf(d);
+  free(d);
+}
+
+/* The launcher detection reads OMPI_COMM_WORLD_SIZE, else PMI_SIZE; a build without MPI refuses
+ * a start as one of several processes, a build with MPI accepts it. Expected values are the
+ * variables' contents (and 1 for absent or malformed ones). */
+static void test_launcher_detection(void **state) {
+  (void)state;
+  char *saved_ompi = getenv("OMPI_COMM_WORLD_SIZE"), *saved_pmi = getenv("PMI_SIZE");
+  saved_ompi = saved_ompi ? strdup(saved_ompi) : NULL;
+  saved_pmi = saved_pmi ? strdup(saved_pmi) : NULL;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  int size = 0;
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  unsetenv("PMI_SIZE");
+  assert_int_equal(karst_ensemble_launcher_size(), 1);
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 0, &size), KARST_SUCCESS);
+  assert_int_equal(size, 1);
+  setenv("OMPI_COMM_WORLD_SIZE", "4", 1);
+  assert_int_equal(karst_ensemble_launcher_size(), 4);
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 0, &size), KARST_EUNSUPPORTED);
+  assert_int_equal(size, 4);
+  assert_non_null(strstr(ctx.errmsg, "one of 4 processes"));
+  assert_non_null(strstr(ctx.errmsg, "built without MPI"));
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 1, &size), KARST_SUCCESS);
+  setenv("OMPI_COMM_WORLD_SIZE", "1", 1); /* mpirun -np 1: one process, nothing to race */
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 0, &size), KARST_SUCCESS);
+  const char *malformed[] = {"", "x", "-2", "0", "3x", " 3"};
+  for (size_t k = 0; k < sizeof malformed / sizeof *malformed; k++) {
+    setenv("OMPI_COMM_WORLD_SIZE", malformed[k], 1);
+    assert_int_equal(karst_ensemble_launcher_size(), 1);
+  }
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  setenv("PMI_SIZE", "3", 1); /* MPICH's Hydra, Slurm */
+  assert_int_equal(karst_ensemble_launcher_size(), 3);
+  assert_int_equal(karst_i_ensemble_launcher_check(&ctx, 0, &size), KARST_EUNSUPPORTED);
+  setenv("OMPI_COMM_WORLD_SIZE", "2", 1); /* Open MPI's variable comes first */
+  assert_int_equal(karst_ensemble_launcher_size(), 2);
+#if !KARST_HAVE_MPI
+  /* This build has no MPI: karst_ensemble_mpi_start itself refuses. */
+  int ranks = 0, rank = -1, init = -1;
+  assert_int_equal(karst_ensemble_mpi_start(&ctx, &ranks, &rank, &init), KARST_EUNSUPPORTED);
+  assert_int_equal(init, 0);
+#endif
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  unsetenv("PMI_SIZE");
+  if (saved_ompi) setenv("OMPI_COMM_WORLD_SIZE", saved_ompi, 1);
+  if (saved_pmi) setenv("PMI_SIZE", saved_pmi, 1);
+  free(saved_ompi);
+  free(saved_pmi);
 }
 
 static int progress_calls;
@@ -813,6 +905,8 @@ int main(int argc, char **argv) {
       cmocka_unit_test(test_key_guard),
       cmocka_unit_test(test_member_failure),
       cmocka_unit_test(test_arguments),
+      cmocka_unit_test(test_lock),
+      cmocka_unit_test(test_launcher_detection),
       cmocka_unit_test(test_progress),
       cmocka_unit_test(test_table_errors),
       cmocka_unit_test(test_parameters_json),

@@ -120,7 +120,25 @@ static int setup(void **state) {
   opt.nthreads = 2;
   opt.scenario_path = "datasets/scenarios/branchwork <test>.yaml";
   opt.scenario_hash = "00112233aabbccdd";
-  opt.parameters_json = "    \"name\": \"branchwork & co\",\n    \"skeleton.gamma\": 2\n";
+  /* Nested objects and arrays over several lines, as karst_generate_write_parameters writes
+   * them, and a string longer than any fixed buffer: the report must show all of it. */
+  static char params[2048];
+  char longtext[301];
+  for (int i = 0; i < 300; i++)
+    longtext[i] = (char)('a' + i % 26);
+  longtext[300] = '\0';
+  snprintf(params, sizeof params,
+           "    \"name\": \"branchwork & co\",\n    \"skeleton.gamma\": 2,\n"
+           "    \"domain_min\": [0, -0.5e2, 1e-3],\n"
+           "    \"key_points\": [\n      {\"name\": \"sink <A>\", \"type\": \"sink\", "
+           "\"position\": [1, 2, 3]},\n      {\"name\": \"spring\", \"type\": \"spring\", "
+           "\"position\": [4, 5, 6]}],\n"
+           "    \"permeability\": {\"background\": 1, \"tree\": null},\n"
+           "    \"horizons\": [],\n    \"terrain\": {},\n"
+           "    \"flags\": [true, false, null, \"x\"],\n"
+           "    \"long\": \"%s\"\n",
+           longtext);
+  opt.parameters_json = params;
   karst_ensemble_hooks_t h = {fake_realise, fake_write, fake_measure, NULL, 4, fake_names, NULL};
   return karst_ensemble_run(&ctx, ens_dir, &opt, &h, NULL) == KARST_SUCCESS ? 0 : -1;
 }
@@ -203,6 +221,27 @@ static void test_report_content(void **state) {
   assert_non_null(strstr(html, "branchwork &lt;test&gt;.yaml"));
   assert_non_null(strstr(html, "<td class=\"l\">2021</td>"));
   assert_non_null(strstr(html, "00112233aabbccdd"));
+  /* Every parameter in full, nested objects and arrays as nested tables. */
+  assert_non_null(strstr(html, "<tr><th class=\"l\">key_points</th><td class=\"l\"><table "
+                               "class=\"json\"><tr><th class=\"l\">[0]</th><td class=\"l\"><table "
+                               "class=\"json\"><tr><th class=\"l\">name</th><td class=\"l\">sink "
+                               "&lt;A&gt;</td></tr><tr><th class=\"l\">type</th><td "
+                               "class=\"l\">sink</td></tr><tr><th class=\"l\">position</th><td "
+                               "class=\"l\">[1, 2, 3]</td></tr></table></td></tr>"));
+  assert_non_null(strstr(html, "<th class=\"l\">domain_min</th><td class=\"l\">[0, -0.5e2, 1e-3]"));
+  assert_non_null(strstr(html, "<th class=\"l\">tree</th><td class=\"l\">null</td>"));
+  assert_non_null(strstr(html, "<th class=\"l\">horizons</th><td class=\"l\">[ ]</td>"));
+  assert_non_null(strstr(html, "<th class=\"l\">terrain</th><td class=\"l\">{ }</td>"));
+  assert_non_null(strstr(html, "[true, false, null, &quot;x&quot;]"));
+  assert_non_null(strstr(html, "xyzabcdefghijklmn</td>")); /* characters 284-300 of "long" */
+  {
+    /* Independent reading: Python's json and html.parser agree value by value. */
+    char pcmd[2600];
+    snprintf(pcmd, sizeof pcmd,
+             "/usr/bin/python3 '%s/tests/python/check_report_parameters.py' '%s' '%s'",
+             KARST_SOURCE_DIR, out, ens_dir);
+    assert_int_equal(system(pcmd), 0);
+  }
   /* The comparison: aspl flagged, its 34-cave range (ASPL, published table) shown. */
   assert_non_null(strstr(html, "Grotte &lt;survey&gt;.3d"));
   assert_int_equal(count(html, "outside the 5–95 % band"), 1);
