@@ -1,7 +1,8 @@
 /* Surface-only polygonization of a 1-Lipschitz field: marching tetrahedra on
  * the Kuhn split of a regular grid (a simplicial complex, so the piecewise
  * linear zero set is a closed 2-manifold when no grid value is exactly zero;
- * zero counts as outside, which is the same as a positive perturbation),
+ * zero counts as outside, which is the same as a positive perturbation;
+ * vertices keep a margin from the grid points so that no triangle collapses),
  * with empty blocks skipped by the Lipschitz bound, in parallel tiles merged
  * in a fixed order. See include/karst/mesh.h. */
 #include <math.h>
@@ -282,6 +283,10 @@ static int edge_vertex(tile_work_t *w, karst_int_t ci, karst_int_t cj, karst_int
   karst_int_t key = ((gk * (g->n[1] + 1) + gj) * (g->n[0] + 1) + gi) * 8 + d;
   double fl = val[lo], fh = val[hi];
   double t = fl / (fl - fh);
+  /* keep the vertex off the grid points: where the field is 0 (or tiny) at
+   * a grid point, the vertices of all its edges would coincide and make
+   * zero-area triangles (mesh.h, KARST_MESH_EDGE_MARGIN) */
+  t = fmin(fmax(t, KARST_MESH_EDGE_MARGIN), 1 - KARST_MESH_EDGE_MARGIN);
   double p[3] = {g->origin[0] + ((double)gi + t * (d & 1)) * g->h,
                  g->origin[1] + ((double)gj + t * ((d >> 1) & 1)) * g->h,
                  g->origin[2] + ((double)gk + t * ((d >> 2) & 1)) * g->h};

@@ -17,8 +17,20 @@
 #include "mesh/mesh_internal.h"
 #include "test_util.h"
 
-/* Closed, manifold, consistently and outward oriented, by both checks, and
- * CGAL's volume equal to ours (both are the divergence theorem on the same
+/* Shortest triangle side of a mesh, in metres. */
+static double shortest_side(const karst_mesh_t *m) {
+  double best = INFINITY;
+  for (karst_int_t i = 0; i < m->n_triangles; i++)
+    for (int k = 0; k < 3; k++) {
+      const double *p = m->xyz + 3 * m->tri[3 * i + k], *q = m->xyz + 3 * m->tri[3 * i + (k + 1) % 3];
+      best = fmin(best, sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                             (p[2] - q[2]) * (p[2] - q[2])));
+    }
+  return best;
+}
+
+/* Closed, manifold, consistently and outward oriented, by both checks, no
+ * triangle with a zero side (KARST_MESH_EDGE_MARGIN), and CGAL's volume equal to ours (both are the divergence theorem on the same
  * triangles: they agree to rounding, 1e-9 relative). Returns the volume. */
 static double assert_good_mesh(const karst_mesh_t *m) {
   karst_ctx_t ctx;
@@ -28,6 +40,7 @@ static double assert_good_mesh(const karst_mesh_t *m) {
   assert_int_equal(chk.boundary_edges, 0);
   assert_int_equal(chk.nonmanifold_edges, 0);
   assert_int_equal(chk.degenerate, 0);
+  assert_true(shortest_side(m) > 0);
   karst_i_cgal_report_t rep;
   char err[256] = "";
   assert_int_equal(
@@ -319,7 +332,9 @@ static void test_network_mesh(void **state) {
   double vr = assert_good_mesh(&r);
   /* rock = (clip box below z = 4) minus the caves; the caves lie below z = 4
    * except where they reach the surface, so vr ≈ slab - vc within the voxel bands */
-  double slab = (37 - 0.25) * (44 - 0.25) * (4 + 8 - 0.125);
+  /* the ground z = 4 lies on grid points (field 0, counted as air): its
+   * vertices sit KARST_MESH_EDGE_MARGIN of a voxel below it */
+  double slab = (37 - 0.25) * (44 - 0.25) * (4 + 8 - 0.125 - KARST_MESH_EDGE_MARGIN * 0.25);
   printf("network: caves %.1f m3 (%lld triangles), rock %.1f m3, slab %.1f m3\n", vc,
          (long long)m.n_triangles, vr, slab);
   assert_rel(vr, slab - vc, 0.01);
@@ -327,6 +342,37 @@ static void test_network_mesh(void **state) {
   karst_mesh_destroy(&r);
   karst_sdf_free(t);
   karst_network_destroy(&net);
+}
+
+/* A sphere of radius 3 m centred on a grid point of a 0.25 m grid passes
+ * exactly through grid points (±3 m = 12 voxels along each axis), where all
+ * edges meeting there used to put their vertex: 300 of 15 840 triangles had a
+ * zero side. With the margin, two vertices on edges sharing a grid point are
+ * at least m h sin 35.26° apart (the smallest angle between Kuhn edges, face
+ * and body diagonals: cos = 2/√6), and vertices on opposite edges of a
+ * tetrahedron are farther: bound 0.01 × 0.25 × 0.577 = 1.44 mm. */
+static void test_no_collapsed_triangles(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_sdf_t *t;
+  karst_sdf_create(&ctx, &t);
+  const double c[3] = {0, 0, 0}, h = 0.25;
+  karst_int_t id;
+  karst_sdf_sphere(&ctx, t, c, 3, KARST_TUNNEL_TUBE, &id);
+  karst_sdf_set_root(&ctx, t, id);
+  double box[6] = {-4, -4, -4, 4, 4, 4};
+  karst_mesh_t m;
+  karst_mesh_init(&m);
+  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, h, &m, NULL), KARST_SUCCESS);
+  assert_good_mesh(&m);
+  double bound = KARST_MESH_EDGE_MARGIN * h * sqrt(1 - 4.0 / 6.0);
+  double s = shortest_side(&m);
+  printf("sphere on grid points: %lld triangles, shortest side %.3g m (bound %.3g m)\n",
+         (long long)m.n_triangles, s, bound);
+  assert_true(s >= bound * (1 - 1e-9));
+  karst_mesh_destroy(&m);
+  karst_sdf_free(t);
 }
 
 /* PLY and STL files: sizes and contents read back; unknown extension fails;
@@ -459,6 +505,7 @@ int main(void) {
       cmocka_unit_test(test_clip_closed), cmocka_unit_test(test_deterministic),
       cmocka_unit_test(test_skipping),    cmocka_unit_test(test_network_mesh),
       cmocka_unit_test(test_writers),     cmocka_unit_test(test_errors),
+      cmocka_unit_test(test_no_collapsed_triangles),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
