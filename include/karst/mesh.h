@@ -87,8 +87,27 @@ karst_error_t karst_mesh_write_sdf(karst_ctx_t *ctx, const char *path, const kar
 karst_error_t karst_mesh_write(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m);
 /** Binary little-endian PLY: double x, y, z; int vertex indices; int tunnel_type per face. */
 karst_error_t karst_mesh_write_ply(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m);
-/** Binary STL (float32 coordinates by the format: far from the origin, precision drops). */
+/**
+ * Binary STL. The format stores float32 only (24-bit mantissa: 6 cm steps at
+ * a UTM easting of 6e5 m, 0.5 m at a northing of 5e6 m), so far from the
+ * origin the vertices are written minus karst_mesh_stl_origin; the header
+ * starts "karst origin x=X y=Y z=Z" (metres) for the reader to add back.
+ */
 karst_error_t karst_mesh_write_stl(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m);
+
+/** Coordinates within ±this many metres are written to STL as they are
+ *  (float32 rounds them by at most 2^-24 × 1000 m = 0.06 mm). */
+#define KARST_MESH_STL_SMALL 1000.0
+/** STL origins are multiples of this many metres (readable, exact in text). */
+#define KARST_MESH_STL_ORIGIN_STEP 100.0
+/**
+ * The origin karst_mesh_write_stl subtracts: per axis, 0 when every
+ * coordinate lies within ±KARST_MESH_STL_SMALL, else the smallest coordinate
+ * rounded down to a multiple of KARST_MESH_STL_ORIGIN_STEP. Along a shifted
+ * axis the written coordinates lie in [0, extent + 100 m) and are rounded by
+ * at most 2^-24 × that (0.07 mm for a 1 km mesh). Empty mesh: (0, 0, 0).
+ */
+void karst_mesh_stl_origin(const karst_mesh_t *m, double origin[3]);
 
 /** Enclosed volume by the divergence theorem (positive for outward orientation). */
 double karst_mesh_volume(const karst_mesh_t *m);

@@ -154,19 +154,30 @@ static int run(int argc, char **argv) {
   if ((err = karst_mesh_polygonize(&ctx, sdf, box, voxel, &mesh, &pst))) goto fail;
   double t2 = now_s();
   if ((err = karst_mesh_write(&ctx, out, &mesh))) goto fail;
+  if (strcasecmp(ext, ".stl") == 0) {
+    /* float32 STL far from the origin: the vertices are shifted (mesh.h); the
+     * user needs the shift to put the mesh back in place, even with --quiet */
+    double o[3];
+    karst_mesh_stl_origin(&mesh, o);
+    if (o[0] != 0 || o[1] != 0 || o[2] != 0)
+      fprintf(stderr,
+              "karst mesh: %s: vertices are relative to the origin x=%.0f y=%.0f z=%.0f m "
+              "(float32 STL; also in its header): add it to get the true coordinates\n",
+              out, o[0], o[1], o[2]);
+  }
   if (sdf_path && (err = karst_mesh_write_sdf(&ctx, sdf_path, sdf, box, voxel))) goto fail;
   if (!quiet) {
     karst_sdf_stats_t ss;
     karst_sdf_stats(sdf, &ss);
-    printf("%s: %lld triangles, %lld vertices, voxel %g m, box %g,%g,%g,%g,%g,%g; tree of %lld "
-           "nodes (%lld sweeps, %lld revolved, %lld spheres, %lld ellipsoids, %.1f MB) built in "
-           "%.2f s, "
-           "polygonized in %.2f s on %d threads%s\n",
-           out, (long long)mesh.n_triangles, (long long)mesh.n_vertices, voxel, box[0], box[1],
-           box[2], box[3], box[4], box[5], (long long)ss.n_nodes,
-           (long long)ss.by_kind[KARST_SDF_SWEEP], (long long)ss.by_kind[KARST_SDF_REVOLVE],
-           (long long)ss.by_kind[KARST_SDF_SPHERE], (long long)ss.by_kind[KARST_SDF_ELLIPSOID],
-           ss.memory_bytes / 1e6, t1 - t0, t2 - t1, ctx.nthreads, carve ? ", terrain carved" : "");
+    printf(
+        "%s: %lld triangles, %lld vertices, voxel %g m, box %.10g,%.10g,%.10g,%.10g,%.10g,%.10g; "
+        "tree of %lld nodes (%lld sweeps, %lld revolved, %lld spheres, %lld ellipsoids, "
+        "%.1f MB) built in %.2f s, polygonized in %.2f s on %d threads%s\n",
+        out, (long long)mesh.n_triangles, (long long)mesh.n_vertices, voxel, box[0], box[1], box[2],
+        box[3], box[4], box[5], (long long)ss.n_nodes, (long long)ss.by_kind[KARST_SDF_SWEEP],
+        (long long)ss.by_kind[KARST_SDF_REVOLVE], (long long)ss.by_kind[KARST_SDF_SPHERE],
+        (long long)ss.by_kind[KARST_SDF_ELLIPSOID], ss.memory_bytes / 1e6, t1 - t0, t2 - t1,
+        ctx.nthreads, carve ? ", terrain carved" : "");
   }
   goto done;
 fail:
@@ -191,7 +202,8 @@ const cli_command_t cli_cmd_mesh = {
     "oriented triangle mesh labelled by tunnel type (-1: terrain or box). NETWORK may also be\n"
     "any survey format karst reads (Karstnet, .pl, .sql, .3d, .svx): edges without a radius\n"
     "get --radius, edges without a tunnel type are tubes.\n\n"
-    "  -o FILE        output mesh; .vtp (ParaView), .ply (binary) or .stl (binary) by extension\n"
+    "  -o FILE        output mesh; .vtp (ParaView), .ply (binary) or .stl (binary) by extension;\n"
+    "                 STL far from the origin is shifted by the origin printed and in its header\n"
     "  --voxel H      grid spacing in metres (default 0.5)\n"
     "  --box ...      region to mesh; the mesh is closed where the solid leaves it (default:\n"
     "                 the scenario's domain with --scenario, else the conduits plus 2 voxels)\n"
