@@ -39,6 +39,20 @@ static double now_s(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+/* Check that @p path can be written, before any work, and add it to the
+ * outputs committed together; its temporary keeps the extension, by which
+ * the writers choose the format. */
+static karst_error_t add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
+                                const char **tmp) {
+  karst_error_t err = karst_check_writable(ctx, path);
+  if (err) return err;
+  char *t = karst_temp_name_ext(path);
+  if (!t) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+  err = karst_fileset_add(ctx, outs, path, t, tmp);
+  free(t);
+  return err;
+}
+
 static int run(int argc, char **argv) {
   const char *in = NULL, *out = NULL, *scen_path = NULL, *sdf_path = NULL;
   double voxel = 0.5, box[6];
@@ -129,8 +143,15 @@ static int run(int argc, char **argv) {
   karst_sdf_t *sdf = NULL;
   karst_mesh_t mesh;
   karst_mesh_init(&mesh);
+  karst_fileset_t outs;
+  karst_fileset_init(&outs);
   int status = CLI_OK;
   karst_error_t err;
+  /* every output is checked before any work, written to a temporary, and
+   * renamed into place only when all of them were written */
+  const char *tmp_out = NULL, *tmp_sdf = NULL, *writing = NULL;
+  if ((err = add_output(&ctx, &outs, out, &tmp_out))) goto fail;
+  if (sdf_path && (err = add_output(&ctx, &outs, sdf_path, &tmp_sdf))) goto fail;
   double t0 = now_s();
   if ((err = karst_read_network(&ctx, in, KARST_FORMAT_AUTO, &net))) goto fail;
   if (scen_path && (err = karst_scenario_load(&ctx, scen_path, &sc))) goto fail;
@@ -153,7 +174,11 @@ static int run(int argc, char **argv) {
   karst_polygonize_stats_t pst;
   if ((err = karst_mesh_polygonize(&ctx, sdf, box, voxel, &mesh, &pst))) goto fail;
   double t2 = now_s();
-  if ((err = karst_mesh_write(&ctx, out, &mesh))) goto fail;
+  writing = out;
+  if ((err = karst_mesh_write(&ctx, tmp_out, &mesh))) goto fail_write;
+  writing = sdf_path;
+  if (sdf_path && (err = karst_mesh_write_sdf(&ctx, tmp_sdf, sdf, box, voxel))) goto fail_write;
+  if ((err = karst_fileset_commit(&ctx, &outs))) goto fail;
   if (strcasecmp(ext, ".stl") == 0) {
     /* float32 STL far from the origin: the vertices are shifted (mesh.h); the
      * user needs the shift to put the mesh back in place, even with --quiet */
@@ -165,7 +190,6 @@ static int run(int argc, char **argv) {
               "(float32 STL; also in its header): add it to get the true coordinates\n",
               out, o[0], o[1], o[2]);
   }
-  if (sdf_path && (err = karst_mesh_write_sdf(&ctx, sdf_path, sdf, box, voxel))) goto fail;
   if (!quiet) {
     karst_sdf_stats_t ss;
     karst_sdf_stats(sdf, &ss);
@@ -180,9 +204,17 @@ static int run(int argc, char **argv) {
         ctx.nthreads, carve ? ", terrain carved" : "");
   }
   goto done;
+fail_write:
+  /* the writers' messages name the temporary; say which output it was */
+  if (ctx.errmsg[0]) {
+    char msg[KARST_ERRMSG_MAX];
+    snprintf(msg, sizeof msg, "%s", ctx.errmsg);
+    karst_set_error(&ctx, err, "writing %s: %s; no output was kept", writing, msg);
+  }
 fail:
   status = cli_fail("mesh", &ctx, err);
 done:
+  karst_fileset_abort(&outs);
   karst_mesh_destroy(&mesh);
   karst_sdf_free(sdf);
   karst_scenario_destroy(&sc);

@@ -32,6 +32,20 @@ grep -q "/nonexistent/x.pl" "$TMP/err" && ok "missing file named" || bad "missin
 check 1 "box thinner than two voxels" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/a.ply" --voxel 2 --box 0,0,0,3,3,3
 [ ! -e "$TMP/a.ply" ] && ok "no output after failure" || bad "output left after failure"
 
+# All outputs are checked before any work (the network is not even read: the message is about the
+# directory, not about the missing network), written to temporaries and renamed together: a
+# failure leaves neither the mesh nor a temporary.
+check 1 "--sdf into a missing directory" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/c.ply" --sdf "$TMP/nodir/c.vti" --quiet
+grep -q "c.vti: cannot write: directory '.*/nodir' does not exist" "$TMP/err" && ok "missing directory named" || { bad "missing directory not named"; cat "$TMP/err"; }
+[ ! -e "$TMP/c.ply" ] && ok "no mesh left" || bad "mesh left although --sdf cannot be written"
+check 1 "outputs checked before the input is read" "$KARST" mesh "$TMP/none.pl" -o "$TMP/c.ply" --sdf "$TMP/nodir/c.vti"
+grep -q "nodir" "$TMP/err" && ! grep -q "none.pl" "$TMP/err" && ok "failed fast, on the output" || { bad "not checked first"; cat "$TMP/err"; }
+mkdir "$TMP/dir.vtp"
+check 1 "output is a directory" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/dir.vtp" --quiet
+grep -q "dir.vtp: cannot write: it is a directory" "$TMP/err" && ok "directory named" || { bad "directory output message"; cat "$TMP/err"; }
+rmdir "$TMP/dir.vtp"
+ls -A "$TMP" | grep -q '\.tmp\.' && bad "temporary left: $(ls -A "$TMP")" || ok "no temporary left"
+
 check 0 "mesh a survey to PLY" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon.ply" --voxel 0.5 --radius 0.8 -j 2 --quiet
 check 0 "mesh a survey to STL" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon.stl" --voxel 0.5 --radius 0.8 -j 1 --quiet
 "$PY" - "$TMP/mon.ply" "$TMP/mon.stl" <<'EOF' && ok "PLY closed and oriented, STL matches" || bad "PLY/STL content"

@@ -2,6 +2,7 @@
  * oriented meshes (own combinatorial check and CGAL's, independently), volumes
  * against closed forms, determinism across thread counts, Lipschitz skipping,
  * the PLY / STL files. */
+#include <dirent.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -9,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmocka.h>
@@ -647,6 +649,89 @@ static void test_errors(void **state) {
   karst_sdf_free(t);
 }
 
+/* Names in directory @p dir other than "." and "..", counted. */
+static int count_entries(const char *dir) {
+  DIR *d = opendir(dir);
+  assert_non_null(d);
+  int n = 0;
+  struct dirent *e;
+  while ((e = readdir(d)))
+    if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) n++;
+  closedir(d);
+  return n;
+}
+
+static void write_text(const char *path, const char *text) {
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs(text, f);
+  fclose(f);
+}
+
+/* What karst mesh does with its outputs (karst/io.h): each path is checked
+ * before any work (nothing is left behind by the check), its temporary keeps
+ * the extension, and the set is committed together: when the second rename
+ * fails (its target became a directory after the check), the first output
+ * is put back to its previous version and no temporary remains. */
+static void test_output_checks(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  char dir[] = "/tmp/karst_outset_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  char a[256], b[256], missing[256], file_as_dir[300];
+  snprintf(a, sizeof a, "%s/cave.ply", dir);
+  snprintf(b, sizeof b, "%s/cave.vti", dir);
+  snprintf(missing, sizeof missing, "%s/nodir/cave.vti", dir);
+  snprintf(file_as_dir, sizeof file_as_dir, "%s/x.ply", a);
+
+  assert_int_equal(karst_check_writable(&ctx, a), KARST_SUCCESS);
+  assert_int_equal(count_entries(dir), 0);
+  assert_int_equal(karst_check_writable(&ctx, missing), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "nodir' does not exist"));
+  assert_int_equal(karst_check_writable(&ctx, dir), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "is a directory"));
+  assert_int_equal(karst_check_writable(&ctx, ""), KARST_EINVAL);
+  write_text(a, "old mesh\n");
+  assert_int_equal(karst_check_writable(&ctx, file_as_dir), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "is not a directory"));
+
+  char *ta = karst_temp_name_ext(a), *tb = karst_temp_name_ext(b);
+  assert_non_null(ta);
+  assert_non_null(tb);
+  assert_string_equal(ta + strlen(ta) - 4, ".ply");
+  assert_string_equal(tb + strlen(tb) - 4, ".vti");
+  assert_ptr_equal(strstr(ta, dir), ta); /* beside the target */
+
+  karst_fileset_t fs;
+  karst_fileset_init(&fs);
+  const char *wa, *wb;
+  assert_int_equal(karst_fileset_add(&ctx, &fs, a, ta, &wa), KARST_SUCCESS);
+  assert_int_equal(karst_fileset_add(&ctx, &fs, b, tb, &wb), KARST_SUCCESS);
+  write_text(wa, "new mesh\n");
+  write_text(wb, "field\n");
+  char sub[300];
+  snprintf(sub, sizeof sub, "%s/x", b);
+  assert_int_equal(mkdir(b, 0777), 0);
+  write_text(sub, "x\n"); /* a non-empty directory: rename onto it fails */
+  assert_int_equal(karst_fileset_commit(&ctx, &fs), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "cave.vti"));
+  karst_fileset_abort(&fs);
+  FILE *f = fopen(a, "r");
+  assert_non_null(f);
+  char line[64] = "";
+  assert_non_null(fgets(line, sizeof line, f));
+  fclose(f);
+  assert_string_equal(line, "old mesh\n");
+  assert_int_equal(count_entries(dir), 2); /* the old mesh and the directory in the way */
+  free(ta);
+  free(tb);
+  remove(sub);
+  rmdir(b);
+  remove(a);
+  rmdir(dir);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_tube_volume),
@@ -659,6 +744,7 @@ int main(void) {
       cmocka_unit_test(test_errors),
       cmocka_unit_test(test_no_collapsed_triangles),
       cmocka_unit_test(test_far_from_origin),
+      cmocka_unit_test(test_output_checks),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
