@@ -71,6 +71,17 @@ karst_error_t karst_mesh_polygonize(karst_ctx_t *ctx, const karst_sdf_t *sdf, co
                                     karst_polygonize_stats_t *stats);
 
 /**
+ * The grid karst_mesh_polygonize and karst_mesh_sample use for @p box and
+ * @p voxel, without any field evaluation, so that sizes can be checked
+ * before the work: @p cells receives ceil(length / voxel) per axis (grid
+ * points: cells + 1). @return KARST_SUCCESS; KARST_EINVAL (bad box or voxel);
+ * KARST_ERANGE (box thinner than two voxels, or more than 2^21 cells along
+ * an axis or 2^46 in all).
+ */
+karst_error_t karst_mesh_grid(karst_ctx_t *ctx, const double box[6], double voxel,
+                              karst_int_t cells[3]);
+
+/**
  * Sample the field of the root of @p sdf, intersected with the box as in
  * karst_mesh_polygonize, at the grid points of the same grid; @p values
  * (allocated, caller frees) is x fastest. At most KARST_MESH_SAMPLE_MAX points.

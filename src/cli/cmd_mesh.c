@@ -53,6 +53,44 @@ static karst_error_t add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const c
   return err;
 }
 
+static double grid_points(const karst_int_t c[3]) {
+  return (double)(c[0] + 1) * (double)(c[1] + 1) * (double)(c[2] + 1);
+}
+
+/* The region meshed at @p voxel: @p base widened by @p margin voxels. */
+static void widen(const double base[6], double margin, double voxel, double box[6]) {
+  for (int a = 0; a < 3; a++)
+    box[a] = base[a] - margin * voxel, box[a + 3] = base[a + 3] + margin * voxel;
+}
+
+/* --sdf samples every grid point (KARST_MESH_SAMPLE_MAX at most): say so
+ * before the polygonization rather than after it, with the smallest voxel,
+ * in two significant digits, that would fit (the default box grows with the
+ * voxel: @p base plus @p margin voxels). */
+static karst_error_t check_sdf_size(karst_ctx_t *ctx, const char *path, const double base[6],
+                                    double margin, double voxel) {
+  karst_int_t c[3];
+  double box[6];
+  widen(base, margin, voxel, box);
+  karst_error_t err = karst_mesh_grid(ctx, box, voxel, c);
+  if (err) return err;
+  double pts = grid_points(c), lim = (double)KARST_MESH_SAMPLE_MAX;
+  if (pts <= lim) return KARST_SUCCESS;
+  double v = voxel * cbrt(pts / lim), p10 = pow(10, floor(log10(v)) - 1);
+  v = ceil(v / p10) * p10;
+  for (int i = 0; i < 1000; i++, v += p10) {
+    karst_int_t d[3];
+    widen(base, margin, v, box);
+    if (karst_mesh_grid(NULL, box, v, d) == KARST_SUCCESS && grid_points(d) <= lim) break;
+  }
+  return karst_set_error(ctx, KARST_ERANGE,
+                         "--sdf %s: the grid of %lld x %lld x %lld cells (%.0f points at --voxel "
+                         "%g) exceeds the limit of %.0f points (2^28); use --voxel %g or larger, "
+                         "or a smaller --box",
+                         path, (long long)c[0], (long long)c[1], (long long)c[2], pts, voxel, lim,
+                         v);
+}
+
 static int run(int argc, char **argv) {
   const char *in = NULL, *out = NULL, *scen_path = NULL, *sdf_path = NULL;
   double voxel = 0.5, box[6];
@@ -160,17 +198,19 @@ static int run(int argc, char **argv) {
   if ((err = karst_implicit_build(&ctx, &net, &par, carve ? &sc.terrain : NULL, sdf, &bst)))
     goto fail;
   double t1 = now_s();
-  if (!have_box) {
-    if (scen_path) {
-      for (int a = 0; a < 3; a++)
-        box[a] = sc.domain_min[a], box[a + 3] = sc.domain_max[a];
-    } else {
-      /* the conduits' bounding box, two voxels of margin */
-      karst_sdf_node_box(sdf, karst_sdf_root(sdf), box);
-      for (int a = 0; a < 3; a++)
-        box[a] -= 2 * voxel, box[a + 3] += 2 * voxel;
-    }
+  double base[6], margin = 0;
+  if (have_box) {
+    memcpy(base, box, sizeof base);
+  } else if (scen_path) {
+    for (int a = 0; a < 3; a++)
+      base[a] = sc.domain_min[a], base[a + 3] = sc.domain_max[a];
+  } else {
+    /* the conduits' bounding box, two voxels of margin */
+    karst_sdf_node_box(sdf, karst_sdf_root(sdf), base);
+    margin = 2;
   }
+  widen(base, margin, voxel, box);
+  if (sdf_path && (err = check_sdf_size(&ctx, sdf_path, base, margin, voxel))) goto fail;
   karst_polygonize_stats_t pst;
   if ((err = karst_mesh_polygonize(&ctx, sdf, box, voxel, &mesh, &pst))) goto fail;
   double t2 = now_s();

@@ -46,6 +46,14 @@ grep -q "dir.vtp: cannot write: it is a directory" "$TMP/err" && ok "directory n
 rmdir "$TMP/dir.vtp"
 ls -A "$TMP" | grep -q '\.tmp\.' && bad "temporary left: $(ls -A "$TMP")" || ok "no temporary left"
 
+# The --sdf grid is checked before the polygonization. By hand: a 100 x 100 x 30 m box at 0.1 m
+# is 1000 x 1000 x 300 cells, 1001² × 301 = 301602301 points > 2^28 = 268435456; the smallest
+# two-digit voxel that fits is 0.11 m (911² × 274 = 227398354 points; 0.1039 m is the cube root).
+check 1 "--sdf grid too large" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/g.ply" --sdf "$TMP/g.vti" --voxel 0.1 --box 0,0,0,100,100,30
+grep -q -- "--sdf .*g.vti: the grid of 1000 x 1000 x 300 cells (301602301 points at --voxel 0.1) exceeds the limit of 268435456 points (2^28); use --voxel 0.11 or larger, or a smaller --box" "$TMP/err" \
+  && ok "cells, limit and a larger voxel given" || { bad "--sdf size message"; cat "$TMP/err"; }
+[ ! -s "$TMP/out" ] && [ ! -e "$TMP/g.ply" ] && [ ! -e "$TMP/g.vti" ] && ok "nothing written" || bad "output after the --sdf size error"
+
 check 0 "mesh a survey to PLY" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon.ply" --voxel 0.5 --radius 0.8 -j 2 --quiet
 check 0 "mesh a survey to STL" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon.stl" --voxel 0.5 --radius 0.8 -j 1 --quiet
 "$PY" - "$TMP/mon.ply" "$TMP/mon.stl" <<'EOF' && ok "PLY closed and oriented, STL matches" || bad "PLY/STL content"

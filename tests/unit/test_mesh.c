@@ -646,6 +646,21 @@ static void test_errors(void **state) {
   assert_close(v[0], sqrt(3.0) - 0.4,
                1e-6); /* corner: the sphere's value beats the clip box's 0.43 */
   free(v);
+  /* the grid without the field: ceil(length / voxel) cells, by hand; sampling
+   * past 2^28 points is refused before any evaluation, naming the cells */
+  karst_int_t cells[3];
+  double big[6] = {0, 0, 0, 100, 100, 30};
+  assert_int_equal(karst_mesh_grid(&ctx, big, 0.1, cells), KARST_SUCCESS);
+  assert_int_equal(cells[0], 1000);
+  assert_int_equal(cells[1], 1000);
+  assert_int_equal(cells[2], 300);
+  assert_int_equal(karst_mesh_grid(&ctx, big, 0.3, cells), KARST_SUCCESS);
+  assert_int_equal(cells[0], 334);
+  assert_int_equal(karst_mesh_grid(&ctx, big, 20, cells), KARST_ERANGE);
+  v = NULL;
+  assert_int_equal(karst_mesh_sample(&ctx, t, big, 0.1, dims, origin, &v), KARST_ERANGE);
+  assert_non_null(strstr(ctx.errmsg, "1000 x 1000 x 300 cells (301602301 points"));
+  assert_null(v);
   karst_sdf_free(t);
 }
 
