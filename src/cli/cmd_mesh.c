@@ -218,6 +218,11 @@ static int run(int argc, char **argv) {
   if ((err = karst_mesh_write(&ctx, tmp_out, &mesh))) goto fail_write;
   writing = sdf_path;
   if (sdf_path && (err = karst_mesh_write_sdf(&ctx, tmp_sdf, sdf, box, voxel))) goto fail_write;
+  /* the writers do not poll the interrupt: a Ctrl-C while they ran keeps nothing */
+  if (karst_interrupted(&ctx)) {
+    err = karst_set_error(&ctx, KARST_EINTERRUPTED, "interrupted; no output was kept");
+    goto fail;
+  }
   if ((err = karst_fileset_commit(&ctx, &outs))) goto fail;
   if (strcasecmp(ext, ".stl") == 0) {
     /* float32 STL far from the origin: the vertices are shifted (mesh.h); the
