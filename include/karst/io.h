@@ -71,6 +71,22 @@ karst_error_t karst_fileset_commit(karst_ctx_t *ctx, karst_fileset_t *fs);
 /** Remove every temporary and empty the set (safe after a commit, or twice). */
 void karst_fileset_abort(karst_fileset_t *fs);
 
+/**
+ * Check, before any work, that @p path can be written: its directory exists
+ * and is a directory, @p path is not a directory, and a new file can be
+ * created beside it (probed by creating and removing a temporary file, which
+ * also catches read-only file systems). @return KARST_SUCCESS, KARST_EINVAL
+ * (empty name), KARST_EIO with a message naming the path and the reason.
+ */
+karst_error_t karst_check_writable(karst_ctx_t *ctx, const char *path);
+
+/**
+ * karst_temp_name(path) followed by the extension of @p path
+ * ("<dir>/.<base>.tmp.<pid>.<counter>.<ext>"), for writers that choose the
+ * format by extension. Caller frees.
+ */
+char *karst_temp_name_ext(const char *path);
+
 /** Write @p s as a JSON string literal with the escapes JSON requires (NULL: null). */
 void karst_json_string(FILE *fp, const char *s);
 

@@ -39,6 +39,58 @@ static double now_s(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+/* Check that @p path can be written, before any work, and add it to the
+ * outputs committed together; its temporary keeps the extension, by which
+ * the writers choose the format. */
+static karst_error_t add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
+                                const char **tmp) {
+  karst_error_t err = karst_check_writable(ctx, path);
+  if (err) return err;
+  char *t = karst_temp_name_ext(path);
+  if (!t) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+  err = karst_fileset_add(ctx, outs, path, t, tmp);
+  free(t);
+  return err;
+}
+
+static double grid_points(const karst_int_t c[3]) {
+  return (double)(c[0] + 1) * (double)(c[1] + 1) * (double)(c[2] + 1);
+}
+
+/* The region meshed at @p voxel: @p base widened by @p margin voxels. */
+static void widen(const double base[6], double margin, double voxel, double box[6]) {
+  for (int a = 0; a < 3; a++)
+    box[a] = base[a] - margin * voxel, box[a + 3] = base[a + 3] + margin * voxel;
+}
+
+/* --sdf samples every grid point (KARST_MESH_SAMPLE_MAX at most): say so
+ * before the polygonization rather than after it, with the smallest voxel,
+ * in two significant digits, that would fit (the default box grows with the
+ * voxel: @p base plus @p margin voxels). */
+static karst_error_t check_sdf_size(karst_ctx_t *ctx, const char *path, const double base[6],
+                                    double margin, double voxel) {
+  karst_int_t c[3];
+  double box[6];
+  widen(base, margin, voxel, box);
+  karst_error_t err = karst_mesh_grid(ctx, box, voxel, c);
+  if (err) return err;
+  double pts = grid_points(c), lim = (double)KARST_MESH_SAMPLE_MAX;
+  if (pts <= lim) return KARST_SUCCESS;
+  double v = voxel * cbrt(pts / lim), p10 = pow(10, floor(log10(v)) - 1);
+  v = ceil(v / p10) * p10;
+  for (int i = 0; i < 1000; i++, v += p10) {
+    karst_int_t d[3];
+    widen(base, margin, v, box);
+    if (karst_mesh_grid(NULL, box, v, d) == KARST_SUCCESS && grid_points(d) <= lim) break;
+  }
+  return karst_set_error(ctx, KARST_ERANGE,
+                         "--sdf %s: the grid of %lld x %lld x %lld cells (%.0f points at --voxel "
+                         "%g) exceeds the limit of %.0f points (2^28); use --voxel %g or larger, "
+                         "or a smaller --box",
+                         path, (long long)c[0], (long long)c[1], (long long)c[2], pts, voxel, lim,
+                         v);
+}
+
 static int run(int argc, char **argv) {
   const char *in = NULL, *out = NULL, *scen_path = NULL, *sdf_path = NULL;
   double voxel = 0.5, box[6];
@@ -129,8 +181,15 @@ static int run(int argc, char **argv) {
   karst_sdf_t *sdf = NULL;
   karst_mesh_t mesh;
   karst_mesh_init(&mesh);
+  karst_fileset_t outs;
+  karst_fileset_init(&outs);
   int status = CLI_OK;
   karst_error_t err;
+  /* every output is checked before any work, written to a temporary, and
+   * renamed into place only when all of them were written */
+  const char *tmp_out = NULL, *tmp_sdf = NULL, *writing = NULL;
+  if ((err = add_output(&ctx, &outs, out, &tmp_out))) goto fail;
+  if (sdf_path && (err = add_output(&ctx, &outs, sdf_path, &tmp_sdf))) goto fail;
   double t0 = now_s();
   if ((err = karst_read_network(&ctx, in, KARST_FORMAT_AUTO, &net))) goto fail;
   if (scen_path && (err = karst_scenario_load(&ctx, scen_path, &sc))) goto fail;
@@ -139,39 +198,68 @@ static int run(int argc, char **argv) {
   if ((err = karst_implicit_build(&ctx, &net, &par, carve ? &sc.terrain : NULL, sdf, &bst)))
     goto fail;
   double t1 = now_s();
-  if (!have_box) {
-    if (scen_path) {
-      for (int a = 0; a < 3; a++)
-        box[a] = sc.domain_min[a], box[a + 3] = sc.domain_max[a];
-    } else {
-      /* the conduits' bounding box, two voxels of margin */
-      karst_sdf_node_box(sdf, karst_sdf_root(sdf), box);
-      for (int a = 0; a < 3; a++)
-        box[a] -= 2 * voxel, box[a + 3] += 2 * voxel;
-    }
+  double base[6], margin = 0;
+  if (have_box) {
+    memcpy(base, box, sizeof base);
+  } else if (scen_path) {
+    for (int a = 0; a < 3; a++)
+      base[a] = sc.domain_min[a], base[a + 3] = sc.domain_max[a];
+  } else {
+    /* the conduits' bounding box, two voxels of margin */
+    karst_sdf_node_box(sdf, karst_sdf_root(sdf), base);
+    margin = 2;
   }
+  widen(base, margin, voxel, box);
+  if (sdf_path && (err = check_sdf_size(&ctx, sdf_path, base, margin, voxel))) goto fail;
   karst_polygonize_stats_t pst;
   if ((err = karst_mesh_polygonize(&ctx, sdf, box, voxel, &mesh, &pst))) goto fail;
   double t2 = now_s();
-  if ((err = karst_mesh_write(&ctx, out, &mesh))) goto fail;
-  if (sdf_path && (err = karst_mesh_write_sdf(&ctx, sdf_path, sdf, box, voxel))) goto fail;
+  writing = out;
+  if ((err = karst_mesh_write(&ctx, tmp_out, &mesh))) goto fail_write;
+  writing = sdf_path;
+  if (sdf_path && (err = karst_mesh_write_sdf(&ctx, tmp_sdf, sdf, box, voxel))) goto fail_write;
+  /* the writers do not poll the interrupt: a Ctrl-C while they ran keeps nothing */
+  if (karst_interrupted(&ctx)) {
+    err = karst_set_error(&ctx, KARST_EINTERRUPTED, "interrupted; no output was kept");
+    goto fail;
+  }
+  if ((err = karst_fileset_commit(&ctx, &outs))) goto fail;
+  if (strcasecmp(ext, ".stl") == 0) {
+    /* float32 STL far from the origin: the vertices are shifted (mesh.h); the
+     * user needs the shift to put the mesh back in place, even with --quiet */
+    double o[3];
+    karst_mesh_stl_origin(&mesh, o);
+    if (o[0] != 0 || o[1] != 0 || o[2] != 0)
+      fprintf(stderr,
+              "karst mesh: %s: vertices are relative to the origin x=%.0f y=%.0f z=%.0f m "
+              "(float32 STL; also in its header): add it to get the true coordinates\n",
+              out, o[0], o[1], o[2]);
+  }
   if (!quiet) {
     karst_sdf_stats_t ss;
     karst_sdf_stats(sdf, &ss);
-    printf("%s: %lld triangles, %lld vertices, voxel %g m, box %g,%g,%g,%g,%g,%g; tree of %lld "
-           "nodes (%lld sweeps, %lld revolved, %lld spheres, %lld ellipsoids, %.1f MB) built in "
-           "%.2f s, "
-           "polygonized in %.2f s on %d threads%s\n",
-           out, (long long)mesh.n_triangles, (long long)mesh.n_vertices, voxel, box[0], box[1],
-           box[2], box[3], box[4], box[5], (long long)ss.n_nodes,
-           (long long)ss.by_kind[KARST_SDF_SWEEP], (long long)ss.by_kind[KARST_SDF_REVOLVE],
-           (long long)ss.by_kind[KARST_SDF_SPHERE], (long long)ss.by_kind[KARST_SDF_ELLIPSOID],
-           ss.memory_bytes / 1e6, t1 - t0, t2 - t1, ctx.nthreads, carve ? ", terrain carved" : "");
+    printf(
+        "%s: %lld triangles, %lld vertices, voxel %g m, box %.10g,%.10g,%.10g,%.10g,%.10g,%.10g; "
+        "tree of %lld nodes (%lld sweeps, %lld revolved, %lld spheres, %lld ellipsoids, "
+        "%.1f MB) built in %.2f s, polygonized in %.2f s on %d threads%s\n",
+        out, (long long)mesh.n_triangles, (long long)mesh.n_vertices, voxel, box[0], box[1], box[2],
+        box[3], box[4], box[5], (long long)ss.n_nodes, (long long)ss.by_kind[KARST_SDF_SWEEP],
+        (long long)ss.by_kind[KARST_SDF_REVOLVE], (long long)ss.by_kind[KARST_SDF_SPHERE],
+        (long long)ss.by_kind[KARST_SDF_ELLIPSOID], ss.memory_bytes / 1e6, t1 - t0, t2 - t1,
+        ctx.nthreads, carve ? ", terrain carved" : "");
   }
   goto done;
+fail_write:
+  /* the writers' messages name the temporary; say which output it was */
+  if (ctx.errmsg[0]) {
+    char msg[KARST_ERRMSG_MAX];
+    snprintf(msg, sizeof msg, "%s", ctx.errmsg);
+    karst_set_error(&ctx, err, "writing %s: %s; no output was kept", writing, msg);
+  }
 fail:
   status = cli_fail("mesh", &ctx, err);
 done:
+  karst_fileset_abort(&outs);
   karst_mesh_destroy(&mesh);
   karst_sdf_free(sdf);
   karst_scenario_destroy(&sc);
@@ -191,7 +279,8 @@ const cli_command_t cli_cmd_mesh = {
     "oriented triangle mesh labelled by tunnel type (-1: terrain or box). NETWORK may also be\n"
     "any survey format karst reads (Karstnet, .pl, .sql, .3d, .svx): edges without a radius\n"
     "get --radius, edges without a tunnel type are tubes.\n\n"
-    "  -o FILE        output mesh; .vtp (ParaView), .ply (binary) or .stl (binary) by extension\n"
+    "  -o FILE        output mesh; .vtp (ParaView), .ply (binary) or .stl (binary) by extension;\n"
+    "                 STL far from the origin is shifted by the origin printed and in its header\n"
     "  --voxel H      grid spacing in metres (default 0.5)\n"
     "  --box ...      region to mesh; the mesh is closed where the solid leaves it (default:\n"
     "                 the scenario's domain with --scenario, else the conduits plus 2 voxels)\n"

@@ -2,6 +2,7 @@
 #include "karst/io.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -241,4 +242,54 @@ cleanup:
   free(bak);
   karst_fileset_abort(fs); /* removes the temporaries not renamed */
   return err;
+}
+
+karst_error_t karst_check_writable(karst_ctx_t *ctx, const char *path) {
+  if (!path || !*path) return karst_set_error(ctx, KARST_EINVAL, "no output file name given");
+  const char *slash = strrchr(path, '/');
+  char *dir = slash ? strndup(path, slash == path ? 1 : (size_t)(slash - path)) : strdup(".");
+  if (!dir) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+  karst_error_t err = KARST_SUCCESS;
+  struct stat st;
+  if (stat(dir, &st) != 0) {
+    int e = errno;
+    err = e == ENOENT
+              ? karst_set_error(ctx, KARST_EIO, "%s: cannot write: directory '%s' does not exist",
+                                path, dir)
+              : karst_set_error(ctx, KARST_EIO, "%s: cannot write: directory '%s': %s", path, dir,
+                                strerror(e));
+  } else if (!S_ISDIR(st.st_mode)) {
+    err = karst_set_error(ctx, KARST_EIO, "%s: cannot write: '%s' is not a directory", path, dir);
+  } else if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+    err = karst_set_error(ctx, KARST_EIO, "%s: cannot write: it is a directory", path);
+  } else {
+    char *probe = karst_temp_name(path);
+    int fd = probe ? open(probe, O_WRONLY | O_CREAT | O_EXCL, 0666) : -1;
+    if (!probe) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+    } else if (fd < 0) {
+      int e = errno;
+      err = karst_set_error(ctx, KARST_EIO, "%s: cannot write in directory '%s': %s", path, dir,
+                            strerror(e));
+    } else {
+      close(fd);
+      remove(probe);
+    }
+    free(probe);
+  }
+  free(dir);
+  return err;
+}
+
+char *karst_temp_name_ext(const char *path) {
+  const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
+  const char *ext = dot && (!slash || dot > slash) ? dot : "";
+  char *base = karst_temp_name(path);
+  char *t = base ? malloc(strlen(base) + strlen(ext) + 1) : NULL;
+  if (t) {
+    strcpy(t, base);
+    strcat(t, ext);
+  }
+  free(base);
+  return t;
 }

@@ -87,10 +87,37 @@ karst_error_t karst_mesh_write_ply(karst_ctx_t *ctx, const char *path, const kar
 }
 
 /**
+ * Origin subtracted from the coordinates of a binary STL (see mesh.h): per
+ * axis, 0 when every coordinate lies within ±KARST_MESH_STL_SMALL, else the
+ * smallest coordinate rounded down to a multiple of
+ * KARST_MESH_STL_ORIGIN_STEP. Time complexity: O(V).
+ */
+void karst_mesh_stl_origin(const karst_mesh_t *m, double origin[3]) {
+  origin[0] = origin[1] = origin[2] = 0;
+  if (!m || m->n_vertices <= 0 || !m->xyz) return;
+  for (int c = 0; c < 3; c++) {
+    double lo = m->xyz[c], hi = m->xyz[c];
+    for (karst_int_t i = 1; i < m->n_vertices; i++) {
+      double x = m->xyz[3 * i + c];
+      if (x < lo) lo = x;
+      if (x > hi) hi = x;
+    }
+    if (!isfinite(lo) || !isfinite(hi)) continue;
+    if (fmax(fabs(lo), fabs(hi)) <= KARST_MESH_STL_SMALL) continue;
+    origin[c] = floor(lo / KARST_MESH_STL_ORIGIN_STEP) * KARST_MESH_STL_ORIGIN_STEP;
+  }
+}
+
+/**
  * Binary STL: 80-byte header, uint32 count, per triangle the unit normal, the
  * three vertices (float32, the format's only type) and a zero attribute.
- * Written atomically. @return KARST_SUCCESS, KARST_EINVAL, KARST_ERANGE
- * (more than 2^32-1 triangles), KARST_EIO. Time complexity: O(T).
+ * Far from the origin (UTM: 6e5 m, where float32 steps are 6 cm) the
+ * vertices are written relative to karst_mesh_stl_origin, so they keep
+ * float32's relative precision over the mesh's own extent; the origin is
+ * the header's first words, "karst origin x=600000 y=5123400 z=0", for the
+ * reader to add back. Written atomically.
+ * @return KARST_SUCCESS, KARST_EINVAL, KARST_ERANGE (more than 2^32-1
+ *         triangles), KARST_EIO. Time complexity: O(V + T).
  */
 karst_error_t karst_mesh_write_stl(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m) {
   karst_error_t err = check_mesh_arrays(ctx, path, m);
@@ -100,9 +127,16 @@ karst_error_t karst_mesh_write_stl(karst_ctx_t *ctx, const char *path, const kar
                            (long long)m->n_triangles);
   karst_atomic_file_t f;
   if ((err = karst_atomic_open(ctx, &f, path, "wb"))) return err;
+  double o[3];
+  karst_mesh_stl_origin(m, o);
   unsigned char head[84];
   memset(head, 0, sizeof head);
-  snprintf((char *)head, 80, "karst %s binary STL", karst_version());
+  /* the origin first, so that it survives the 80-byte limit; multiples of
+   * 100 m print exactly with %.0f */
+  char text[128];
+  snprintf(text, sizeof text, "karst origin x=%.0f y=%.0f z=%.0f; karst %s binary STL", o[0], o[1],
+           o[2], karst_version());
+  memcpy(head, text, strlen(text) < 80 ? strlen(text) : 80);
   le32(head + 80, (uint32_t)m->n_triangles);
   fwrite(head, 1, 84, f.fp);
   for (karst_int_t i = 0; i < m->n_triangles; i++) {
@@ -122,7 +156,7 @@ karst_error_t karst_mesh_write_stl(karst_ctx_t *ctx, const char *path, const kar
       lef32(r + 4 * c, (float)(l > 0 ? n[c] / l : 0));
     for (int k = 0; k < 3; k++)
       for (int c = 0; c < 3; c++)
-        lef32(r + 12 + 12 * k + 4 * c, (float)p[k][c]);
+        lef32(r + 12 + 12 * k + 4 * c, (float)(p[k][c] - o[c]));
     fwrite(r, 1, 50, f.fp);
   }
   return karst_atomic_commit(ctx, &f);

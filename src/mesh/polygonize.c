@@ -1,7 +1,8 @@
 /* Surface-only polygonization of a 1-Lipschitz field: marching tetrahedra on
  * the Kuhn split of a regular grid (a simplicial complex, so the piecewise
  * linear zero set is a closed 2-manifold when no grid value is exactly zero;
- * zero counts as outside, which is the same as a positive perturbation),
+ * zero counts as outside, which is the same as a positive perturbation;
+ * vertices keep a margin from the grid points so that no triangle collapses),
  * with empty blocks skipped by the Lipschitz bound, in parallel tiles merged
  * in a fixed order. See include/karst/mesh.h. */
 #include <math.h>
@@ -144,14 +145,15 @@ static double field(const grid_t *g, const double p[3], int *label) {
   return f;
 }
 
-static karst_error_t grid_setup(karst_ctx_t *ctx, const karst_sdf_t *sdf, const double box[6],
-                                double voxel, grid_t *g) {
-  memset(g, 0, sizeof *g);
-  if (!sdf || sdf->root < 0)
-    return karst_set_error(ctx, KARST_EINVAL, "polygonize: the construction tree has no root");
+/**
+ * The grid of karst_mesh_polygonize and karst_mesh_sample: ceil(length /
+ * voxel) cells along each axis of @p box (see mesh.h). Time complexity: O(1).
+ */
+karst_error_t karst_mesh_grid(karst_ctx_t *ctx, const double box[6], double voxel,
+                              karst_int_t cells[3]) {
   if (!(voxel > 0) || !isfinite(voxel))
     return karst_set_error(ctx, KARST_EINVAL, "polygonize: voxel size %g must be > 0", voxel);
-  double cells = 1;
+  double total = 1;
   for (int a = 0; a < 3; a++) {
     if (!isfinite(box[a]) || !isfinite(box[a + 3]) || !(box[a] < box[a + 3]))
       return karst_set_error(ctx, KARST_EINVAL, "polygonize: box axis %d is [%g, %g]", a, box[a],
@@ -166,16 +168,28 @@ static karst_error_t grid_setup(karst_ctx_t *ctx, const karst_sdf_t *sdf, const 
       return karst_set_error(ctx, KARST_ERANGE,
                              "polygonize: %.0f cells along axis %d (voxel %g m) exceed %lld", n, a,
                              voxel, (long long)MAX_AXIS_CELLS);
-    g->n[a] = (karst_int_t)n;
+    cells[a] = (karst_int_t)n;
+    total *= n;
+  }
+  if (total > MAX_CELLS)
+    return karst_set_error(ctx, KARST_ERANGE, "polygonize: %.3g cells exceed the limit %.3g", total,
+                           MAX_CELLS);
+  return KARST_SUCCESS;
+}
+
+static karst_error_t grid_setup(karst_ctx_t *ctx, const karst_sdf_t *sdf, const double box[6],
+                                double voxel, grid_t *g) {
+  memset(g, 0, sizeof *g);
+  if (!sdf || sdf->root < 0)
+    return karst_set_error(ctx, KARST_EINVAL, "polygonize: the construction tree has no root");
+  karst_error_t err = karst_mesh_grid(ctx, box, voxel, g->n);
+  if (err) return err;
+  for (int a = 0; a < 3; a++) {
     g->nt[a] = (g->n[a] + TILE - 1) / TILE;
-    cells *= n;
     g->origin[a] = box[a];
     g->clip[a] = box[a] + 0.5 * voxel;
     g->clip[a + 3] = box[a + 3] - 0.5 * voxel;
   }
-  if (cells > MAX_CELLS)
-    return karst_set_error(ctx, KARST_ERANGE, "polygonize: %.3g cells exceed the limit %.3g", cells,
-                           MAX_CELLS);
   g->sdf = sdf;
   g->root = sdf->root;
   g->h = voxel;
@@ -282,6 +296,10 @@ static int edge_vertex(tile_work_t *w, karst_int_t ci, karst_int_t cj, karst_int
   karst_int_t key = ((gk * (g->n[1] + 1) + gj) * (g->n[0] + 1) + gi) * 8 + d;
   double fl = val[lo], fh = val[hi];
   double t = fl / (fl - fh);
+  /* keep the vertex off the grid points: where the field is 0 (or tiny) at
+   * a grid point, the vertices of all its edges would coincide and make
+   * zero-area triangles (mesh.h, KARST_MESH_EDGE_MARGIN) */
+  t = fmin(fmax(t, KARST_MESH_EDGE_MARGIN), 1 - KARST_MESH_EDGE_MARGIN);
   double p[3] = {g->origin[0] + ((double)gi + t * (d & 1)) * g->h,
                  g->origin[1] + ((double)gj + t * ((d >> 1) & 1)) * g->h,
                  g->origin[2] + ((double)gk + t * ((d >> 2) & 1)) * g->h};
@@ -688,9 +706,11 @@ karst_error_t karst_mesh_sample(karst_ctx_t *ctx, const karst_sdf_t *sdf, const 
   double pts = (double)(g.n[0] + 1) * (double)(g.n[1] + 1) * (double)(g.n[2] + 1);
   if (pts > (double)KARST_MESH_SAMPLE_MAX)
     return karst_set_error(ctx, KARST_ERANGE,
-                           "sampling: %.0f grid points (voxel %g m) exceed %lld; use a larger "
-                           "voxel or a smaller box",
-                           pts, voxel, (long long)KARST_MESH_SAMPLE_MAX);
+                           "sampling: the grid of %lld x %lld x %lld cells (%.0f points, voxel %g "
+                           "m) exceeds the limit of %lld points; use a larger voxel or a smaller "
+                           "box",
+                           (long long)g.n[0], (long long)g.n[1], (long long)g.n[2], pts, voxel,
+                           (long long)KARST_MESH_SAMPLE_MAX);
   float *v = malloc((size_t)pts * sizeof *v);
   if (!v) return karst_set_error(ctx, KARST_ENOMEM, "sampling: out of memory for %.0f points", pts);
   int nth = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;

@@ -32,6 +32,28 @@ grep -q "/nonexistent/x.pl" "$TMP/err" && ok "missing file named" || bad "missin
 check 1 "box thinner than two voxels" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/a.ply" --voxel 2 --box 0,0,0,3,3,3
 [ ! -e "$TMP/a.ply" ] && ok "no output after failure" || bad "output left after failure"
 
+# All outputs are checked before any work (the network is not even read: the message is about the
+# directory, not about the missing network), written to temporaries and renamed together: a
+# failure leaves neither the mesh nor a temporary.
+check 1 "--sdf into a missing directory" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/c.ply" --sdf "$TMP/nodir/c.vti" --quiet
+grep -q "c.vti: cannot write: directory '.*/nodir' does not exist" "$TMP/err" && ok "missing directory named" || { bad "missing directory not named"; cat "$TMP/err"; }
+[ ! -e "$TMP/c.ply" ] && ok "no mesh left" || bad "mesh left although --sdf cannot be written"
+check 1 "outputs checked before the input is read" "$KARST" mesh "$TMP/none.pl" -o "$TMP/c.ply" --sdf "$TMP/nodir/c.vti"
+grep -q "nodir" "$TMP/err" && ! grep -q "none.pl" "$TMP/err" && ok "failed fast, on the output" || { bad "not checked first"; cat "$TMP/err"; }
+mkdir "$TMP/dir.vtp"
+check 1 "output is a directory" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/dir.vtp" --quiet
+grep -q "dir.vtp: cannot write: it is a directory" "$TMP/err" && ok "directory named" || { bad "directory output message"; cat "$TMP/err"; }
+rmdir "$TMP/dir.vtp"
+ls -A "$TMP" | grep -q '\.tmp\.' && bad "temporary left: $(ls -A "$TMP")" || ok "no temporary left"
+
+# The --sdf grid is checked before the polygonization. By hand: a 100 x 100 x 30 m box at 0.1 m
+# is 1000 x 1000 x 300 cells, 1001² × 301 = 301602301 points > 2^28 = 268435456; the smallest
+# two-digit voxel that fits is 0.11 m (911² × 274 = 227398354 points; 0.1039 m is the cube root).
+check 1 "--sdf grid too large" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/g.ply" --sdf "$TMP/g.vti" --voxel 0.1 --box 0,0,0,100,100,30
+grep -q -- "--sdf .*g.vti: the grid of 1000 x 1000 x 300 cells (301602301 points at --voxel 0.1) exceeds the limit of 268435456 points (2^28); use --voxel 0.11 or larger, or a smaller --box" "$TMP/err" \
+  && ok "cells, limit and a larger voxel given" || { bad "--sdf size message"; cat "$TMP/err"; }
+[ ! -s "$TMP/out" ] && [ ! -e "$TMP/g.ply" ] && [ ! -e "$TMP/g.vti" ] && ok "nothing written" || bad "output after the --sdf size error"
+
 check 0 "mesh a survey to PLY" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon.ply" --voxel 0.5 --radius 0.8 -j 2 --quiet
 check 0 "mesh a survey to STL" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon.stl" --voxel 0.5 --radius 0.8 -j 1 --quiet
 "$PY" - "$TMP/mon.ply" "$TMP/mon.stl" <<'EOF' && ok "PLY closed and oriented, STL matches" || bad "PLY/STL content"
@@ -61,6 +83,59 @@ EOF
 # above, and two runs give the same bytes
 check 0 "mesh again with 1 thread" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon1.ply" --voxel 0.5 --radius 0.8 -j 1 --quiet
 cmp -s "$TMP/mon.ply" "$TMP/mon1.ply" && ok "same file with 1 and 2 threads" || bad "output depends on the thread count"
+
+# Far from the origin (Monachou moved to UTM-like coordinates, easting +600 000 m, northing
+# +5 123 000 m, where float32 steps are 6 cm and 0.5 m): the STL is written relative to an origin
+# that is printed on stderr and stored in the header; header origin + float32 vertices give the
+# PLY's float64 vertices (same network, same triangle order) to 1 mm, and no triangle collapses.
+"$PY" - "$DATA/Monachou.pl" "$TMP/far.pl" <<'EOF'
+import sys
+out = []
+for line in open(sys.argv[1]):
+    f = line.split()
+    if f and f[0] in ('VRTX', 'PVRTX'):
+        f[2] = repr(float(f[2]) + 600000.0)
+        f[3] = repr(float(f[3]) + 5123000.0)
+        line = ' '.join(f) + '\n'
+    out.append(line)
+open(sys.argv[2], 'w').writelines(out)
+EOF
+check 0 "mesh a survey far from the origin to STL" "$KARST" mesh "$TMP/far.pl" -o "$TMP/far.stl" --voxel 0.5 --radius 0.8 --quiet
+cp "$TMP/err" "$TMP/far.err"
+check 0 "... and to PLY" "$KARST" mesh "$TMP/far.pl" -o "$TMP/far.ply" --voxel 0.5 --radius 0.8 --quiet
+"$PY" - "$TMP/far.stl" "$TMP/far.ply" "$TMP/far.err" <<'EOF' && ok "STL origin printed and in the header; vertices to 1 mm, none collapsed" || bad "STL far from the origin"
+import re, struct, sys
+stl = open(sys.argv[1], 'rb').read()
+m = re.match(rb'karst origin x=(-?\d+) y=(-?\d+) z=(-?\d+)', stl[:80])
+assert m, stl[:80]
+o = [float(v) for v in m.groups()]
+err = open(sys.argv[3]).read()
+assert 'origin x=%d y=%d z=%d' % tuple(o) in err, err
+assert o[0] % 100 == 0 and o[1] % 100 == 0, o
+assert 599800 <= o[0] <= 600000 and 5122800 <= o[1] <= 5123000 and o[2] == 0, o
+ply = open(sys.argv[2], 'rb').read()
+end = ply.index(b'end_header\n') + len(b'end_header\n')
+head = ply[:end].decode().split('\n')
+nv = int([l for l in head if l.startswith('element vertex')][0].split()[2])
+nf = int([l for l in head if l.startswith('element face')][0].split()[2])
+xyz = list(struct.iter_unpack('<3d', ply[end:end + 24 * nv]))
+faces = list(struct.iter_unpack('<Biiii', ply[end + 24 * nv:end + 24 * nv + 17 * nf]))
+n = struct.unpack('<I', stl[80:84])[0]
+assert n == nf > 1000, (n, nf)
+worst = 0
+for t in range(n):
+    rec = struct.unpack('<12f', stl[84 + 50 * t:84 + 50 * t + 48])
+    p = [[rec[3 + 3 * k + a] + o[a] for a in range(3)] for k in range(3)]
+    for k in range(3):
+        q = xyz[faces[t][1 + k]]
+        worst = max(worst, max(abs(p[k][a] - q[a]) for a in range(3)))
+    u = [p[1][a] - p[0][a] for a in range(3)]
+    v = [p[2][a] - p[0][a] for a in range(3)]
+    cr = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+    assert cr != (0.0, 0.0, 0.0), 'triangle %d collapsed' % t
+assert worst < 1e-3, worst
+print('origin', o, 'worst vertex error %.2g m' % worst)
+EOF
 
 # VTK output read back by VTK itself: closed (no boundary or non-manifold edge by vtkFeatureEdges),
 # the tunnel_type cell array present; the sampled field as image data with values of both signs.

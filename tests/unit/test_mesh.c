@@ -2,6 +2,7 @@
  * oriented meshes (own combinatorial check and CGAL's, independently), volumes
  * against closed forms, determinism across thread counts, Lipschitz skipping,
  * the PLY / STL files. */
+#include <dirent.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -9,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmocka.h>
@@ -17,9 +19,23 @@
 #include "mesh/mesh_internal.h"
 #include "test_util.h"
 
-/* Closed, manifold, consistently and outward oriented, by both checks, and
- * CGAL's volume equal to ours (both are the divergence theorem on the same
- * triangles: they agree to rounding, 1e-9 relative). Returns the volume. */
+/* Shortest triangle side of a mesh, in metres. */
+static double shortest_side(const karst_mesh_t *m) {
+  double best = INFINITY;
+  for (karst_int_t i = 0; i < m->n_triangles; i++)
+    for (int k = 0; k < 3; k++) {
+      const double *p = m->xyz + 3 * m->tri[3 * i + k],
+                   *q = m->xyz + 3 * m->tri[3 * i + (k + 1) % 3];
+      best = fmin(best, sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                             (p[2] - q[2]) * (p[2] - q[2])));
+    }
+  return best;
+}
+
+/* Closed, manifold, consistently and outward oriented, by both checks, no
+ * triangle with a zero side (KARST_MESH_EDGE_MARGIN), and CGAL's volume equal to ours (both are the
+ * divergence theorem on the same triangles: they agree to rounding, 1e-9 relative). Returns the
+ * volume. */
 static double assert_good_mesh(const karst_mesh_t *m) {
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
@@ -28,6 +44,7 @@ static double assert_good_mesh(const karst_mesh_t *m) {
   assert_int_equal(chk.boundary_edges, 0);
   assert_int_equal(chk.nonmanifold_edges, 0);
   assert_int_equal(chk.degenerate, 0);
+  assert_true(shortest_side(m) > 0);
   karst_i_cgal_report_t rep;
   char err[256] = "";
   assert_int_equal(
@@ -319,7 +336,9 @@ static void test_network_mesh(void **state) {
   double vr = assert_good_mesh(&r);
   /* rock = (clip box below z = 4) minus the caves; the caves lie below z = 4
    * except where they reach the surface, so vr ≈ slab - vc within the voxel bands */
-  double slab = (37 - 0.25) * (44 - 0.25) * (4 + 8 - 0.125);
+  /* the ground z = 4 lies on grid points (field 0, counted as air): its
+   * vertices sit KARST_MESH_EDGE_MARGIN of a voxel below it */
+  double slab = (37 - 0.25) * (44 - 0.25) * (4 + 8 - 0.125 - KARST_MESH_EDGE_MARGIN * 0.25);
   printf("network: caves %.1f m3 (%lld triangles), rock %.1f m3, slab %.1f m3\n", vc,
          (long long)m.n_triangles, vr, slab);
   assert_rel(vr, slab - vc, 0.01);
@@ -327,6 +346,37 @@ static void test_network_mesh(void **state) {
   karst_mesh_destroy(&r);
   karst_sdf_free(t);
   karst_network_destroy(&net);
+}
+
+/* A sphere of radius 3 m centred on a grid point of a 0.25 m grid passes
+ * exactly through grid points (±3 m = 12 voxels along each axis), where all
+ * edges meeting there used to put their vertex: 300 of 15 840 triangles had a
+ * zero side. With the margin, two vertices on edges sharing a grid point are
+ * at least m h sin 35.26° apart (the smallest angle between Kuhn edges, face
+ * and body diagonals: cos = 2/√6), and vertices on opposite edges of a
+ * tetrahedron are farther: bound 0.01 × 0.25 × 0.577 = 1.44 mm. */
+static void test_no_collapsed_triangles(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_sdf_t *t;
+  karst_sdf_create(&ctx, &t);
+  const double c[3] = {0, 0, 0}, h = 0.25;
+  karst_int_t id;
+  karst_sdf_sphere(&ctx, t, c, 3, KARST_TUNNEL_TUBE, &id);
+  karst_sdf_set_root(&ctx, t, id);
+  double box[6] = {-4, -4, -4, 4, 4, 4};
+  karst_mesh_t m;
+  karst_mesh_init(&m);
+  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, h, &m, NULL), KARST_SUCCESS);
+  assert_good_mesh(&m);
+  double bound = KARST_MESH_EDGE_MARGIN * h * sqrt(1 - 4.0 / 6.0);
+  double s = shortest_side(&m);
+  printf("sphere on grid points: %lld triangles, shortest side %.3g m (bound %.3g m)\n",
+         (long long)m.n_triangles, s, bound);
+  assert_true(s >= bound * (1 - 1e-9));
+  karst_mesh_destroy(&m);
+  karst_sdf_free(t);
 }
 
 /* PLY and STL files: sizes and contents read back; unknown extension fails;
@@ -409,6 +459,152 @@ static void test_writers(void **state) {
   karst_sdf_free(t);
 }
 
+/* The float32 vertices of a binary STL file, relative to the origin its
+ * header declares ("karst origin x=.. y=.. z=.."); returns the triangle count. */
+static long read_stl(const char *path, double origin[3], float **xyz) {
+  FILE *f = fopen(path, "rb");
+  assert_non_null(f);
+  unsigned char head[84];
+  assert_int_equal(fread(head, 1, 84, f), 84);
+  char text[81];
+  memcpy(text, head, 80);
+  text[80] = '\0';
+  assert_int_equal(
+      sscanf(text, "karst origin x=%lf y=%lf z=%lf", &origin[0], &origin[1], &origin[2]), 3);
+  long n = (long)(head[80] | head[81] << 8 | head[82] << 16 | (uint32_t)head[83] << 24);
+  *xyz = malloc((size_t)n * 9 * sizeof **xyz);
+  assert_non_null(*xyz);
+  for (long t = 0; t < n; t++) {
+    unsigned char r[50];
+    assert_int_equal(fread(r, 1, 50, f), 50);
+    memcpy(*xyz + 9 * t, r + 12, 36); /* little-endian host */
+  }
+  assert_int_equal(fgetc(f), EOF);
+  fclose(f);
+  return n;
+}
+
+/* Triangles of float32 corners (plus @p origin, in double) that are
+ * degenerate: two corners equal, or a zero cross product. */
+static long degenerate_float_triangles(const float *xyz, long n, const double origin[3]) {
+  long bad = 0;
+  for (long t = 0; t < n; t++) {
+    double p[3][3];
+    for (int k = 0; k < 3; k++)
+      for (int c = 0; c < 3; c++)
+        p[k][c] = (double)xyz[9 * t + 3 * k + c] + origin[c];
+    double u[3], v[3];
+    for (int c = 0; c < 3; c++)
+      u[c] = p[1][c] - p[0][c], v[c] = p[2][c] - p[0][c];
+    double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
+           z = u[0] * v[1] - u[1] * v[0];
+    if (x == 0 && y == 0 && z == 0) bad++;
+  }
+  return bad;
+}
+
+/* A mesh at UTM-like coordinates (easting 6e5 m, northing 5.1e6 m, where
+ * float32 steps are 6 cm and 0.5 m): the STL declares the origin in its
+ * header, expected by hand from the sphere's bounding box: x ≥ 600120.37 →
+ * 600100, y ≥ 5123453.71 → 5123400, z within ±1000 m → 0; written vertices
+ * plus that origin give the float64 vertices to 1 mm (the bound of the
+ * brief; float32 over a 100 m range rounds by 4 µm at most), and no triangle
+ * collapses. The same vertices cast to float32 without the origin would
+ * fail both checks (asserted, so that the test can tell). The PLY stores
+ * doubles: its vertices come back bit for bit. */
+static void test_far_from_origin(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_sdf_t *t;
+  karst_sdf_create(&ctx, &t);
+  const double c[3] = {600123.37, 5123456.71, 432.19}, r = 3;
+  karst_int_t id;
+  karst_sdf_sphere(&ctx, t, c, r, KARST_TUNNEL_TUBE, &id);
+  karst_sdf_set_root(&ctx, t, id);
+  double box[6];
+  for (int a = 0; a < 3; a++)
+    box[a] = c[a] - 4, box[a + 3] = c[a] + 4;
+  karst_mesh_t m;
+  karst_mesh_init(&m);
+  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.25, &m, NULL), KARST_SUCCESS);
+  assert_true(m.n_triangles > 1000);
+  double o[3];
+  karst_mesh_stl_origin(&m, o);
+  assert_close(o[0], 600100, 0);
+  assert_close(o[1], 5123400, 0);
+  assert_close(o[2], 0, 0);
+
+  char dir[] = "/tmp/karst_mesh_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  char stl[256], ply[256];
+  snprintf(stl, sizeof stl, "%s/far.stl", dir);
+  snprintf(ply, sizeof ply, "%s/far.ply", dir);
+  assert_int_equal(karst_mesh_write(&ctx, stl, &m), KARST_SUCCESS);
+  assert_int_equal(karst_mesh_write(&ctx, ply, &m), KARST_SUCCESS);
+
+  double fo[3];
+  float *fx;
+  long n = read_stl(stl, fo, &fx);
+  assert_int_equal(n, m.n_triangles);
+  for (int a = 0; a < 3; a++)
+    assert_close(fo[a], o[a], 0);
+  double worst = 0, worst_naive = 0;
+  for (long i = 0; i < n; i++)
+    for (int k = 0; k < 3; k++)
+      for (int a = 0; a < 3; a++) {
+        double x = m.xyz[3 * m.tri[3 * i + k] + a];
+        worst = fmax(worst, fabs((double)fx[9 * i + 3 * k + a] + fo[a] - x));
+        worst_naive = fmax(worst_naive, fabs((double)(float)x - x));
+      }
+  printf("STL at UTM coordinates: worst vertex error %.2g m with the origin, %.2g m without\n",
+         worst, worst_naive);
+  assert_true(worst < 1e-3);
+  assert_int_equal(degenerate_float_triangles(fx, n, fo), 0);
+  /* the same file without the origin: what the check above guards against */
+  for (long i = 0; i < 9 * n; i++) {
+    int a = (int)(i % 3);
+    fx[i] = (float)((double)fx[i] + fo[a]);
+  }
+  const double zero[3] = {0, 0, 0};
+  assert_true(worst_naive > 1e-3);
+  assert_true(degenerate_float_triangles(fx, n, zero) > 0);
+  free(fx);
+
+  /* PLY: double coordinates, exact */
+  FILE *f = fopen(ply, "rb");
+  assert_non_null(f);
+  char line[256];
+  while (fgets(line, sizeof line, f) && strcmp(line, "end_header\n") != 0) {
+  }
+  for (karst_int_t i = 0; i < m.n_vertices; i++) {
+    double xyz[3];
+    assert_int_equal(fread(xyz, 8, 3, f), 3);
+    for (int a = 0; a < 3; a++)
+      assert_close(xyz[a], m.xyz[3 * i + a], 0);
+  }
+  fclose(f);
+
+  /* a mesh near the origin keeps its coordinates: origin 0 */
+  karst_mesh_t near;
+  karst_mesh_init(&near);
+  double nxyz[9] = {-999, 0, 0, 1000, 0, 0, 0, 1, 0};
+  karst_int_t ntri[3] = {0, 1, 2};
+  near.xyz = nxyz, near.tri = ntri, near.n_vertices = 3, near.n_triangles = 1;
+  karst_mesh_stl_origin(&near, o);
+  assert_close(o[0], 0, 0);
+  nxyz[0] = -1000.5; /* beyond ±1000 m: rounded down to -1100 */
+  karst_mesh_stl_origin(&near, o);
+  assert_close(o[0], -1100, 0);
+  assert_close(o[1], 0, 0);
+
+  remove(stl);
+  remove(ply);
+  rmdir(dir);
+  karst_mesh_destroy(&m);
+  karst_sdf_free(t);
+}
+
 /* Bad arguments are errors naming the value; the output mesh is left empty. */
 static void test_errors(void **state) {
   (void)state;
@@ -450,15 +646,120 @@ static void test_errors(void **state) {
   assert_close(v[0], sqrt(3.0) - 0.4,
                1e-6); /* corner: the sphere's value beats the clip box's 0.43 */
   free(v);
+  /* the grid without the field: ceil(length / voxel) cells, by hand; sampling
+   * past 2^28 points is refused before any evaluation, naming the cells */
+  karst_int_t cells[3];
+  double big[6] = {0, 0, 0, 100, 100, 30};
+  assert_int_equal(karst_mesh_grid(&ctx, big, 0.1, cells), KARST_SUCCESS);
+  assert_int_equal(cells[0], 1000);
+  assert_int_equal(cells[1], 1000);
+  assert_int_equal(cells[2], 300);
+  assert_int_equal(karst_mesh_grid(&ctx, big, 0.3, cells), KARST_SUCCESS);
+  assert_int_equal(cells[0], 334);
+  assert_int_equal(karst_mesh_grid(&ctx, big, 20, cells), KARST_ERANGE);
+  v = NULL;
+  assert_int_equal(karst_mesh_sample(&ctx, t, big, 0.1, dims, origin, &v), KARST_ERANGE);
+  assert_non_null(strstr(ctx.errmsg, "1000 x 1000 x 300 cells (301602301 points"));
+  assert_null(v);
   karst_sdf_free(t);
+}
+
+/* Names in directory @p dir other than "." and "..", counted. */
+static int count_entries(const char *dir) {
+  DIR *d = opendir(dir);
+  assert_non_null(d);
+  int n = 0;
+  struct dirent *e;
+  while ((e = readdir(d)))
+    if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) n++;
+  closedir(d);
+  return n;
+}
+
+static void write_text(const char *path, const char *text) {
+  FILE *f = fopen(path, "w");
+  assert_non_null(f);
+  fputs(text, f);
+  fclose(f);
+}
+
+/* What karst mesh does with its outputs (karst/io.h): each path is checked
+ * before any work (nothing is left behind by the check), its temporary keeps
+ * the extension, and the set is committed together: when the second rename
+ * fails (its target became a directory after the check), the first output
+ * is put back to its previous version and no temporary remains. */
+static void test_output_checks(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  char dir[] = "/tmp/karst_outset_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  char a[256], b[256], missing[256], file_as_dir[300];
+  snprintf(a, sizeof a, "%s/cave.ply", dir);
+  snprintf(b, sizeof b, "%s/cave.vti", dir);
+  snprintf(missing, sizeof missing, "%s/nodir/cave.vti", dir);
+  snprintf(file_as_dir, sizeof file_as_dir, "%s/x.ply", a);
+
+  assert_int_equal(karst_check_writable(&ctx, a), KARST_SUCCESS);
+  assert_int_equal(count_entries(dir), 0);
+  assert_int_equal(karst_check_writable(&ctx, missing), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "nodir' does not exist"));
+  assert_int_equal(karst_check_writable(&ctx, dir), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "is a directory"));
+  assert_int_equal(karst_check_writable(&ctx, ""), KARST_EINVAL);
+  write_text(a, "old mesh\n");
+  assert_int_equal(karst_check_writable(&ctx, file_as_dir), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "is not a directory"));
+
+  char *ta = karst_temp_name_ext(a), *tb = karst_temp_name_ext(b);
+  assert_non_null(ta);
+  assert_non_null(tb);
+  assert_string_equal(ta + strlen(ta) - 4, ".ply");
+  assert_string_equal(tb + strlen(tb) - 4, ".vti");
+  assert_ptr_equal(strstr(ta, dir), ta); /* beside the target */
+
+  karst_fileset_t fs;
+  karst_fileset_init(&fs);
+  const char *wa, *wb;
+  assert_int_equal(karst_fileset_add(&ctx, &fs, a, ta, &wa), KARST_SUCCESS);
+  assert_int_equal(karst_fileset_add(&ctx, &fs, b, tb, &wb), KARST_SUCCESS);
+  write_text(wa, "new mesh\n");
+  write_text(wb, "field\n");
+  char sub[300];
+  snprintf(sub, sizeof sub, "%s/x", b);
+  assert_int_equal(mkdir(b, 0777), 0);
+  write_text(sub, "x\n"); /* a non-empty directory: rename onto it fails */
+  assert_int_equal(karst_fileset_commit(&ctx, &fs), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "cave.vti"));
+  karst_fileset_abort(&fs);
+  FILE *f = fopen(a, "r");
+  assert_non_null(f);
+  char line[64] = "";
+  assert_non_null(fgets(line, sizeof line, f));
+  fclose(f);
+  assert_string_equal(line, "old mesh\n");
+  assert_int_equal(count_entries(dir), 2); /* the old mesh and the directory in the way */
+  free(ta);
+  free(tb);
+  remove(sub);
+  rmdir(b);
+  remove(a);
+  rmdir(dir);
 }
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_tube_volume), cmocka_unit_test(test_sphere_volume),
-      cmocka_unit_test(test_clip_closed), cmocka_unit_test(test_deterministic),
-      cmocka_unit_test(test_skipping),    cmocka_unit_test(test_network_mesh),
-      cmocka_unit_test(test_writers),     cmocka_unit_test(test_errors),
+      cmocka_unit_test(test_tube_volume),
+      cmocka_unit_test(test_sphere_volume),
+      cmocka_unit_test(test_clip_closed),
+      cmocka_unit_test(test_deterministic),
+      cmocka_unit_test(test_skipping),
+      cmocka_unit_test(test_network_mesh),
+      cmocka_unit_test(test_writers),
+      cmocka_unit_test(test_errors),
+      cmocka_unit_test(test_no_collapsed_triangles),
+      cmocka_unit_test(test_far_from_origin),
+      cmocka_unit_test(test_output_checks),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
