@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory_internal.h"
 #include "core/parallel_internal.h"
 #include "cost/cost_internal.h"
 #include "graph/graph_internal.h"
@@ -367,7 +368,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
   int k = sc->sampling.k < n - 1 ? sc->sampling.k : (int)(n > 0 ? n - 1 : 0);
   if (k > 0) {
     int nchunks = nth < SCATTER_MAX_CHUNKS ? nth : SCATTER_MAX_CHUNKS;
-    nbr = malloc(sizeof(int32_t) * (size_t)n * (size_t)k);
+    nbr = karst_i_alloc_large(sizeof(int32_t) * (size_t)n * (size_t)k);
     kidx = malloc(sizeof(int32_t) * (size_t)n);
     kd2 = malloc(sizeof(double) * (size_t)n);
     inside = malloc((size_t)n);
@@ -392,7 +393,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
       g.offsets[v + 1] = g.offsets[v] + at + own[v];
     }
     g.n_arcs = g.offsets[n];
-    g.adj = malloc(sizeof(karst_int_t) * (size_t)g.n_arcs);
+    g.adj = karst_i_alloc_large(sizeof(karst_int_t) * (size_t)g.n_arcs);
     if (!g.adj) goto nomem;
     karst_i_parallel_run(nth, task_scatter, &B);
     free(cnt), free(kidx), free(kd2);
@@ -402,7 +403,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
     nbr = NULL, own = NULL;
     for (int t = 0; t < KARST_I_MAX_THREADS; t++)
       if (B.failed[t]) goto nomem;
-    g.cost = malloc(sizeof(double) * (size_t)g.n_arcs);
+    g.cost = karst_i_alloc_large(sizeof(double) * (size_t)g.n_arcs);
     if (!g.cost) goto nomem;
     karst_progress(ctx, "edge costs", 0, 1);
     /* Several chunks per thread balance the costlier regions (near

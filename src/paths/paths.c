@@ -8,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory_internal.h"
+
 /*
  * Per-vertex search state. What every arc relaxation reads (g and whether
  * this search has reached the vertex) is one 16-byte record, so relaxing an
@@ -132,10 +134,12 @@ karst_error_t karst_search_create(karst_ctx_t *ctx, const karst_graph_t *g, kars
   if (!s) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory");
   size_t n = (size_t)(g->n > 0 ? g->n : 1);
   s->g = g;
-  s->node = calloc(n, sizeof *s->node);
-  s->h = malloc(n * sizeof *s->h);
-  s->pred = malloc(n * sizeof *s->pred);
-  s->settled = calloc(n, sizeof *s->settled);
+  s->node = karst_i_alloc_large(n * sizeof *s->node);
+  s->h = karst_i_alloc_large(n * sizeof *s->h);
+  s->pred = karst_i_alloc_large(n * sizeof *s->pred);
+  s->settled = karst_i_alloc_large(n * sizeof *s->settled);
+  if (s->node) memset(s->node, 0, n * sizeof *s->node);
+  if (s->settled) memset(s->settled, 0, n * sizeof *s->settled);
   if (!s->node || !s->h || !s->pred || !s->settled || heap_alloc(s, n)) {
     karst_search_free(s);
     return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory for %lld vertices",
@@ -254,6 +258,18 @@ static float float_below(double x) {
  * arithmetic, nothing is ever re-opened). Stops when @p target is settled, or
  * when @p stop_after vertices marked in @p is_target are settled.
  */
+/* Ask for the arc list of u (probably the next vertex popped: the heap's top before v's arcs
+ * are relaxed) while v's arcs are relaxed. */
+static inline void prefetch_arcs(const karst_int_t *off, const karst_int_t *adj, const double *cost,
+                                 karst_int_t u) {
+  const char *pa = (const char *)(adj + off[u]), *pe = (const char *)(adj + off[u + 1]);
+  const char *pc = (const char *)(cost + off[u]);
+  for (; pa < pe; pa += 64, pc += 64) {
+    __builtin_prefetch(pa);
+    __builtin_prefetch(pc);
+  }
+}
+
 static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
                                 const karst_int_t *sources, karst_int_t target, double lb,
                                 const unsigned char *blocked, const unsigned char *is_target,
@@ -296,6 +312,7 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
       if (last_target) *last_target = v;
       if (stop_after > 0 && ++found >= stop_after) break;
     }
+    if (s->hn > 0) prefetch_arcs(off, adj, cost, s->heap[0].v);
     for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
       karst_int_t w = adj[a];
       double c = cost[a];
@@ -496,6 +513,7 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
                                (long long)source);
     }
     if (v == target) break;
+    if (s->hn > 0) prefetch_arcs(off, adj, cost, s->heap[0].v);
     for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
       karst_int_t w = adj[a];
       double c = cost[a];
@@ -554,6 +572,7 @@ karst_error_t karst_paths_lower_distances(karst_ctx_t *ctx, karst_search_t *s,
   }
   while (s->hn > 0) {
     heap_entry_t e = heap_pop(s);
+    if (s->hn > 0) prefetch_arcs(g->offsets, g->adj, g->cost, s->heap[0].v);
     for (karst_int_t a = g->offsets[e.v]; a < g->offsets[e.v + 1]; a++) {
       karst_int_t w = g->adj[a];
       double nd = e.key + g->cost[a];

@@ -1,0 +1,19 @@
+/* Allocation of the large arrays (graph arcs, neighbour tables, search
+ * records): on Linux they are asked to be backed by 2 MiB pages. A search
+ * over a 1.5-million-vertex graph walks 2.5 GB of arcs in heap order, so
+ * with 4 KiB pages nearly every arc list costs a TLB miss, and first
+ * touching the arrays costs one page fault per 4 KiB. */
+#ifndef KARST_MEMORY_INTERNAL_H
+#define KARST_MEMORY_INTERNAL_H
+
+#include <stddef.h>
+
+/**
+ * Like malloc(bytes) (release with free()), but an array of 4 MiB or more
+ * is aligned to 2 MiB and advised as a transparent-huge-page candidate
+ * (madvise MADV_HUGEPAGE; the advice is only a hint and its failure is
+ * ignored). Returns NULL when out of memory, as malloc does.
+ */
+void *karst_i_alloc_large(size_t bytes);
+
+#endif
