@@ -23,6 +23,9 @@
 #include "karst/io.h"
 #include "karst/vtk.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cinttypes>
 #include <cmath>
@@ -32,6 +35,8 @@
 #include <cstring>
 #include <exception>
 #include <new>
+#include <ostream>
+#include <streambuf>
 #include <string>
 
 #include <vtkAbstractArray.h>
@@ -278,41 +283,133 @@ karst_error_t make_attr_array(karst_ctx_t *ctx, const char *path, const char *wh
 }
 
 /*
+ * The output buffer the XML writers write through. VTK 9.1's
+ * vtkXMLUnstructuredDataWriter deletes its position arrays twice when its
+ * stream fails in the middle of a piece (a full disk, a quota): karst crashed
+ * instead of reporting the error. This buffer never reports a failure to its
+ * stream: it writes with pwrite(2) at its own logical position (VTK seeks
+ * back to fill in compression headers), keeps the first error (errno), and
+ * discards what follows; write_atomically checks it once VTK returns.
+ */
+class PositionedBuf : public std::streambuf {
+public:
+  explicit PositionedBuf(int fd) : fd_(fd) { setp(buf_, buf_ + sizeof buf_); }
+  /** Write what is buffered; the first error (an errno value), or 0. */
+  int finish() {
+    drain();
+    return err_;
+  }
+
+protected:
+  int_type overflow(int_type c) override {
+    drain();
+    if (!traits_type::eq_int_type(c, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(c);
+      pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  int sync() override {
+    drain();
+    return 0;
+  }
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override {
+    drain();
+    off_type base = dir == std::ios_base::beg ? 0 : dir == std::ios_base::cur ? pos_ : end_;
+    if (base + off < 0) return pos_type(off_type(-1));
+    pos_ = base + off;
+    return pos_type(pos_);
+  }
+  pos_type seekpos(pos_type sp, std::ios_base::openmode which) override {
+    return seekoff(off_type(sp), std::ios_base::beg, which);
+  }
+
+private:
+  void drain() {
+    const char *p = pbase();
+    size_t n = (size_t)(pptr() - pbase());
+    off_t at = (off_t)pos_;
+    while (n > 0 && err_ == 0) {
+      ssize_t w = pwrite(fd_, p, n, at);
+      if (w < 0 && errno == EINTR) continue;
+      if (w <= 0) {
+        err_ = w < 0 ? errno : EIO;
+        break;
+      }
+      p += w, n -= (size_t)w, at += w;
+    }
+    pos_ += pptr() - pbase();
+    if (pos_ > end_) end_ = pos_;
+    setp(buf_, buf_ + sizeof buf_);
+  }
+  int fd_;
+  int err_ = 0;
+  off_type pos_ = 0, end_ = 0;
+  char buf_[1 << 16];
+};
+
+/* A VTK XML writer that writes to a stream of ours (vtkXMLWriter::Stream is
+ * protected; when set, the writer uses it instead of opening FileName). */
+template <class W> class StreamedWriter : public W {
+public:
+  static StreamedWriter *New() {
+    StreamedWriter *w = new StreamedWriter;
+    w->InitializeObjectBase();
+    return w;
+  }
+  void UseStream(std::ostream *os) { this->Stream = os; }
+};
+
+/*
  * Write @p data with @p writer to a temporary name beside @p path, then rename
  * it into place. On any failure no file is left behind and the message names
- * @p path and says what VTK reported.
+ * @p path and says what VTK or the system reported.
  */
-karst_error_t write_atomically(karst_ctx_t *ctx, const char *path, vtkXMLWriter *writer,
+template <class W>
+karst_error_t write_atomically(karst_ctx_t *ctx, const char *path, StreamedWriter<W> *writer,
                                vtkDataObject *data) {
   if (karst_interrupted(ctx))
     return karst_set_error(ctx, KARST_EINTERRUPTED, "%s: interrupted before writing", path);
   char *tmp = karst_temp_name(path);
   if (!tmp) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
-  vtkNew<ErrorCatcher> catcher;
-  catcher->watch(writer);
-  catcher->watch(writer->GetExecutive());
-  writer->SetInputData(data);
-  writer->SetFileName(tmp);
-  writer->SetDataModeToBinary(); /* inline binary; see the file comment */
-  writer->SetCompressorTypeToZLib();
-  writer->SetHeaderTypeToUInt64(); /* arrays larger than 4 GiB stay readable */
-  catcher->watch(writer->GetCompressor());
-  karst_error_t err = KARST_SUCCESS;
-  errno = 0;
-  int ok = writer->Write();
-  int e = errno;
-  if (!ok || catcher->errors > 0 || writer->GetErrorCode() != vtkErrorCode::NoError) {
-    std::string why =
-        catcher->errors > 0 ? catcher->message() : error_code_text(writer->GetErrorCode());
-    if (e != 0) why += std::string(" (") + std::strerror(e) + ")";
-    std::remove(tmp);
-    err = karst_set_error(ctx, KARST_EIO, "%s: cannot write: %s", path, why.c_str());
-  } else {
-    if (catcher->warnings > 0)
-      karst_log(ctx, KARST_LOG_WARNING, "%s: VTK: %s", path, catcher->first_warning.c_str());
-    err = karst_rename_into_place(ctx, tmp, path);
+  int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    int e = errno;
+    std::free(tmp);
+    return karst_set_error(ctx, KARST_EIO, "%s: cannot write: %s", path, std::strerror(e));
   }
-  writer->SetInputData(nullptr);
+  karst_error_t err = KARST_SUCCESS;
+  {
+    PositionedBuf buf(fd);
+    std::ostream os(&buf);
+    vtkNew<ErrorCatcher> catcher;
+    catcher->watch(writer);
+    catcher->watch(writer->GetExecutive());
+    writer->SetInputData(data);
+    writer->SetFileName(tmp);
+    writer->UseStream(&os);
+    writer->SetDataModeToBinary(); /* inline binary; see the file comment */
+    writer->SetCompressorTypeToZLib();
+    writer->SetHeaderTypeToUInt64(); /* arrays larger than 4 GiB stay readable */
+    catcher->watch(writer->GetCompressor());
+    int ok = writer->Write();
+    writer->UseStream(nullptr); /* VTK clears it after a write; do not rely on it */
+    int e = buf.finish();
+    if (close(fd) != 0 && e == 0) e = errno;
+    if (!ok || catcher->errors > 0 || writer->GetErrorCode() != vtkErrorCode::NoError || e != 0) {
+      std::string why = e != 0               ? std::string(std::strerror(e))
+                        : catcher->errors > 0 ? catcher->message()
+                                              : error_code_text(writer->GetErrorCode());
+      err = karst_set_error(ctx, KARST_EIO, "%s: cannot write: %s", path, why.c_str());
+    } else if (catcher->warnings > 0) {
+      karst_log(ctx, KARST_LOG_WARNING, "%s: VTK: %s", path, catcher->first_warning.c_str());
+    }
+    writer->SetInputData(nullptr);
+  }
+  if (err)
+    std::remove(tmp);
+  else
+    err = karst_rename_into_place(ctx, tmp, path);
   std::free(tmp);
   return err;
 }
@@ -374,8 +471,8 @@ karst_error_t write_network(karst_ctx_t *ctx, const char *path, const karst_netw
   if (net->title) fd->AddArray(string_array("title", 1, &net->title));
   add_lookup_tables(fd);
 
-  vtkNew<vtkXMLPolyDataWriter> writer;
-  return write_atomically(ctx, path, writer, pd);
+  vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
+  return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
 
 karst_error_t write_samples(karst_ctx_t *ctx, const char *path, const karst_samples_t *s) {
@@ -414,8 +511,8 @@ karst_error_t write_samples(karst_ctx_t *ctx, const char *path, const karst_samp
   nkey->InsertNextValue(s->n_key_points);
   fd->AddArray(nkey);
 
-  vtkNew<vtkXMLPolyDataWriter> writer;
-  return write_atomically(ctx, path, writer, pd);
+  vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
+  return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
 
 karst_error_t write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m) {
@@ -445,8 +542,8 @@ karst_error_t write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t 
     pd->GetCellData()->SetActiveScalars(name);
     if (std::strcmp(name, "tunnel_type") == 0) add_lookup_tables(pd->GetFieldData());
   }
-  vtkNew<vtkXMLPolyDataWriter> writer;
-  return write_atomically(ctx, path, writer, pd);
+  vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
+  return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
 
 karst_error_t write_image(karst_ctx_t *ctx, const char *path, const int dims[3],
@@ -488,8 +585,8 @@ karst_error_t write_image(karst_ctx_t *ctx, const char *path, const int dims[3],
    * avoid copying a grid that may hold hundreds of millions of values. */
   arr->SetArray(const_cast<float *>(values), (vtkIdType)n, 1);
   img->GetPointData()->SetScalars(arr);
-  vtkNew<vtkXMLImageDataWriter> writer;
-  return write_atomically(ctx, path, writer, img);
+  vtkNew<StreamedWriter<vtkXMLImageDataWriter>> writer;
+  return write_atomically(ctx, path, writer.GetPointer(), img);
 }
 
 /* ------------------------------------------------------------------------ */

@@ -161,4 +161,18 @@ assert lo < 0 < hi, (lo, hi)
 print(pd.GetNumberOfPolys(), 'triangles; image', im.GetDimensions())
 EOF
 
+
+# Writes that the file system refuses (a full disk; here ulimit -f with SIGXFSZ ignored, so
+# write(2) fails with EFBIG): exit 1, a message naming the output and the reason, no file left.
+# VTK 9.1's XML writer used to crash when its stream failed in the middle of a .vtp.
+for ext in vtp ply stl; do
+  rm -rf "$TMP/full" && mkdir "$TMP/full"
+  ( trap '' XFSZ; ulimit -f 64; exec "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/full/cave.$ext" --voxel 0.5 --quiet ) 2>"$TMP/err"
+  rc=$?
+  if [ $rc -ne 1 ]; then bad "write failure .$ext: exit $rc, expected 1"; cat "$TMP/err"
+  elif ! grep -q "writing $TMP/full/cave.$ext: .*File too large; no output was kept" "$TMP/err"; then bad "write failure .$ext: message"; cat "$TMP/err"
+  elif [ -n "$(ls -A "$TMP/full")" ]; then bad "write failure .$ext left $(ls -A "$TMP/full")"
+  else ok "write failure .$ext: exit 1, named, nothing left"; fi
+done
+
 exit $fail
