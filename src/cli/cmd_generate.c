@@ -66,6 +66,7 @@ static int run(int argc, char **argv) {
   karst_fileset_t files;
   karst_fileset_init(&files);
   char *path = NULL, *prefix = NULL;
+  char writing[4096] = "";
   int status = CLI_OK;
   karst_error_t err;
   if ((err = karst_scenario_load(&ctx, scenario, &sc))) goto fail;
@@ -80,7 +81,8 @@ static int run(int argc, char **argv) {
   const char *tmp;
   if (!(path = join(outdir, "network.vtp"))) goto nomem;
   if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
-  if ((err = karst_vtk_write_network(&ctx, tmp, &net))) goto fail;
+  snprintf(writing, sizeof writing, "%s", path);
+  if ((err = karst_vtk_write_network(&ctx, tmp, &net))) goto fail_write;
   free(path);
   /* Karstnet's writer takes a prefix: temporaries PREFIX_nodes.dat and PREFIX_links.dat. */
   if (!(path = join(outdir, "network")) || !(prefix = karst_temp_name(path))) goto nomem;
@@ -95,19 +97,22 @@ static int run(int argc, char **argv) {
     free(t);
     if (err) goto fail;
   }
-  if ((err = karst_write_karstnet(&ctx, prefix, &net))) goto fail;
+  snprintf(writing, sizeof writing, "%s_nodes.dat and %s_links.dat", path, path);
+  if ((err = karst_write_karstnet(&ctx, prefix, &net))) goto fail_write;
   free(path);
   if (!(path = join(outdir, "samples.vtp"))) goto nomem;
   if (want_samples) {
     if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
-    if ((err = karst_vtk_write_samples(&ctx, tmp, &samples))) goto fail;
+    snprintf(writing, sizeof writing, "%s", path);
+    if ((err = karst_vtk_write_samples(&ctx, tmp, &samples))) goto fail_write;
   } else if ((err = karst_fileset_add_stale(&ctx, &files, path))) {
     goto fail;
   }
   free(path);
   if (!(path = join(outdir, "run.json"))) goto nomem;
   if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
-  if ((err = karst_generate_write_run(&ctx, tmp, &sc, seed, 0, &stats))) goto fail;
+  snprintf(writing, sizeof writing, "%s", path);
+  if ((err = karst_generate_write_run(&ctx, tmp, &sc, seed, 0, &stats))) goto fail_write;
   if ((err = karst_fileset_commit(&ctx, &files))) goto fail;
   if (!quiet)
     printf("%s: seed %llu: %lld samples, %lld key points, %lld skeleton paths, network of %lld "
@@ -118,6 +123,14 @@ static int run(int argc, char **argv) {
   goto cleanup;
 nomem:
   err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
+  goto fail;
+fail_write:
+  /* the writers' messages name the temporary file; say which output it was */
+  if (ctx.errmsg[0]) {
+    char msg[KARST_ERRMSG_MAX];
+    snprintf(msg, sizeof msg, "%s", ctx.errmsg);
+    karst_set_error(&ctx, err, "writing %s: %s; no output was kept", writing, msg);
+  }
 fail:
   status = cli_fail("generate", &ctx, err);
 cleanup:
