@@ -134,7 +134,12 @@ int karst_cost_segment_in_bedrock(const karst_scenario_t *sc, const double a[3],
 int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double a[3],
                                         const double b[3]) {
   const karst_terrain_t *t = &sc->terrain;
-  if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) return 1;
+  if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) {
+    /* A flat ground: with both ends at or below it, the points between them are strictly below
+     * unless both ends lie on it (the segment would run along the surface). */
+    double h = t->elevation;
+    return !(a[2] >= h && b[2] >= h);
+  }
   double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   line_iter_t ix, iy;
   line_iter_init(&ix, a[0], d[0], t->xll, t->cellsize, t->ncols);

@@ -399,6 +399,29 @@ static void test_segments_from_the_ground(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* The same rule on a flat ground at 40 m (hand-checked: a segment is linear, so with both ends
+ * at or below 40 its inside is strictly below unless both ends are at 40): ground to ground is
+ * out, ground to below and below to below are in. */
+static void test_segments_from_flat_ground(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  sc.domain_min[0] = 0, sc.domain_max[0] = 100;
+  sc.domain_min[1] = 0, sc.domain_max[1] = 100;
+  sc.domain_min[2] = 0, sc.domain_max[2] = 50;
+  sc.terrain.is_grid = 0;
+  sc.terrain.elevation = 40;
+  const double g1[3] = {10, 5, 40}, g2[3] = {60, 5, 40}, b1[3] = {20, 5, 30}, b2[3] = {30, 9, 39.5};
+  assert_false(karst_cost_segment_in_bedrock(&sc, g1, g2));
+  assert_false(karst_cost_segment_in_bedrock(&sc, g2, g1));
+  assert_true(karst_cost_segment_in_bedrock(&sc, g1, b1));
+  assert_true(karst_cost_segment_in_bedrock(&sc, b1, g2));
+  assert_true(karst_cost_segment_in_bedrock(&sc, b1, b2));
+  assert_true(isinf(karst_cost_edge(&sc, g1, g2)));
+  assert_true(isfinite(karst_cost_edge(&sc, g1, b1)));
+  karst_scenario_destroy(&sc);
+}
+
 /* Two key points at one position: refused, naming both and their lines. */
 static void test_coincident_key_points(void **state) {
   (void)state;
@@ -531,6 +554,7 @@ int main(void) {
       cmocka_unit_test(test_keypoint_on_flat_ground),
       cmocka_unit_test(test_keypoint_on_heightfield_ground),
       cmocka_unit_test(test_segments_from_the_ground),
+      cmocka_unit_test(test_segments_from_flat_ground),
       cmocka_unit_test(test_coincident_key_points),
       cmocka_unit_test(test_close_key_points),
       cmocka_unit_test(test_unreachable_message),
