@@ -11,10 +11,30 @@
 
 #include "karst/io.h"
 
+/* Length of the well-formed UTF-8 sequence at @p p (Unicode 15, table 3-7:
+ * no overlong forms, no surrogates, nothing above U+10FFFF), or 0. */
+static int utf8_sequence(const unsigned char *p) {
+  unsigned c = p[0];
+  if (c < 0x80) return 1;
+  int n = c >= 0xC2 && c <= 0xDF ? 2 : c >= 0xE0 && c <= 0xEF ? 3 : c >= 0xF0 && c <= 0xF4 ? 4 : 0;
+  if (n == 0) return 0;
+  unsigned lo = 0x80, hi = 0xBF; /* allowed range of the second byte */
+  if (c == 0xE0) lo = 0xA0;
+  if (c == 0xED) hi = 0x9F;
+  if (c == 0xF0) lo = 0x90;
+  if (c == 0xF4) hi = 0x8F;
+  if (p[1] < lo || p[1] > hi) return 0;
+  for (int i = 2; i < n; i++)
+    if (p[i] < 0x80 || p[i] > 0xBF) return 0;
+  return n;
+}
+
 /**
  * Write @p s as a JSON string literal (RFC 8259 §7): quotes, backslashes and
- * control characters escaped, other bytes (UTF-8 included) as they are; NULL
- * is written as null. O(length).
+ * control characters escaped, well-formed UTF-8 as it is; a byte that is not
+ * part of well-formed UTF-8 (a path in Latin-1, say) is written as the code
+ * point of the same value (\u00XX), so the file stays valid JSON and the
+ * reader accepts it; NULL is written as null. O(length).
  */
 void karst_json_string(FILE *fp, const char *s) {
   if (!s) {
@@ -29,8 +49,15 @@ void karst_json_string(FILE *fp, const char *s) {
       fputs("\\n", fp);
     else if (*p < 0x20)
       fprintf(fp, "\\u%04x", *p);
-    else
-      fputc(*p, fp);
+    else {
+      int n = utf8_sequence(p);
+      if (n == 0) {
+        fprintf(fp, "\\u%04x", *p);
+      } else {
+        fwrite(p, 1, (size_t)n, fp);
+        p += n - 1;
+      }
+    }
   }
   fputc('"', fp);
 }

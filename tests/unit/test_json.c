@@ -169,11 +169,43 @@ static void test_read_file(void **state) {
   unlink(path);
 }
 
+/* The writer (karst_json_string) and the reader agree on every byte string: well-formed UTF-8
+ * comes back as it is; a byte outside well-formed UTF-8 (a Latin-1 path "h\xf6hle", an overlong
+ * "\xc0\xaf", a surrogate "\xed\xa0\x80", a lone continuation byte) is written as \u00XX and
+ * read back as the UTF-8 of U+00XX (hand-encoded: U+00F6 = C3 B6, U+00C0 = C3 80, ...). */
+static void test_writer_round_trip(void **state) {
+  (void)state;
+  static const struct {
+    const char *in, *out;
+  } cases[] = {
+      {"/data/h\xc3\xb6hle/s.yaml", "/data/h\xc3\xb6hle/s.yaml"},
+      {"/data/h\xf6hle/s.yaml", "/data/h\xc3\xb6hle/s.yaml"},
+      {"a\xc0\xaf", "a\xc3\x80\xc2\xaf"},
+      {"\xed\xa0\x80", "\xc3\xad\xc2\xa0\xc2\x80"},
+      {"\xf0\x9f\x98\x80 q\"\\\n\x01", "\xf0\x9f\x98\x80 q\"\\\n\x01"},
+      {"x\xe2\x82", "x\xc3\xa2\xc2\x82"},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *fp = open_memstream(&buf, &len);
+    assert_non_null(fp);
+    karst_json_string(fp, cases[i].in);
+    fclose(fp);
+    karst_json_t *v = parse_ok(buf);
+    assert_int_equal(v->type, KARST_JSON_STRING);
+    assert_string_equal(v->text, cases[i].out);
+    karst_json_free(v);
+    free(buf);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_document),
       cmocka_unit_test(test_malformed),
       cmocka_unit_test(test_read_file),
+      cmocka_unit_test(test_writer_round_trip),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
