@@ -78,11 +78,20 @@ static karst_error_t check_sdf_size(karst_ctx_t *ctx, const char *path, const do
   if (pts <= lim) return KARST_SUCCESS;
   double v = voxel * cbrt(pts / lim), p10 = pow(10, floor(log10(v)) - 1);
   v = ceil(v / p10) * p10;
-  for (int i = 0; i < 1000; i++, v += p10) {
+  int found = 0;
+  for (int i = 0; i < 1000 && !found; i++, v += p10) {
     karst_int_t d[3];
     widen(base, margin, v, box);
-    if (karst_mesh_grid(NULL, box, v, d) == KARST_SUCCESS && grid_points(d) <= lim) break;
+    found = karst_mesh_grid(NULL, box, v, d) == KARST_SUCCESS && grid_points(d) <= lim;
   }
+  if (!found) /* the box is too thin for any voxel that would fit: only a smaller box helps */
+    return karst_set_error(ctx, KARST_ERANGE,
+                           "--sdf %s: the grid of %lld x %lld x %lld cells (%.0f points at "
+                           "--voxel %g) exceeds the limit of %.0f points (2^28), and no coarser "
+                           "voxel fits this box; use a smaller --box",
+                           path, (long long)c[0], (long long)c[1], (long long)c[2], pts, voxel,
+                           lim);
+  v -= p10; /* the loop stepped past the voxel that fits */
   return karst_set_error(ctx, KARST_ERANGE,
                          "--sdf %s: the grid of %lld x %lld x %lld cells (%.0f points at --voxel "
                          "%g) exceeds the limit of %.0f points (2^28); use --voxel %g or larger, "

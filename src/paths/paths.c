@@ -262,11 +262,11 @@ static float float_below(double x) {
  * are relaxed) while v's arcs are relaxed. */
 static inline void prefetch_arcs(const karst_int_t *off, const karst_int_t *adj, const double *cost,
                                  karst_int_t u) {
-  const char *pa = (const char *)(adj + off[u]), *pe = (const char *)(adj + off[u + 1]);
-  const char *pc = (const char *)(cost + off[u]);
-  for (; pa < pe; pa += 64, pc += 64) {
-    __builtin_prefetch(pa);
-    __builtin_prefetch(pc);
+  const char *pa = (const char *)(adj + off[u]), *pc = (const char *)(cost + off[u]);
+  size_t bytes = (size_t)(off[u + 1] - off[u]) * sizeof *adj; /* = the costs' (8-byte each) */
+  for (size_t b = 0; b < bytes; b += 64) {
+    __builtin_prefetch(pa + b);
+    __builtin_prefetch(pc + b);
   }
 }
 
