@@ -221,13 +221,13 @@ static void test_report_content(void **state) {
   assert_non_null(strstr(html, "branchwork &lt;test&gt;.yaml"));
   assert_non_null(strstr(html, "<td class=\"l\">2021</td>"));
   assert_non_null(strstr(html, "00112233aabbccdd"));
-  /* Every parameter in full, nested objects and arrays as nested tables. */
+  /* Every parameter in full, nested objects and arrays as nested tables (arrays of
+   * same-keyed objects as one table each: test_report_parameter_rows). */
   assert_non_null(strstr(html, "<tr><th class=\"l\">key_points</th><td class=\"l\"><table "
-                               "class=\"json\"><tr><th class=\"l\">[0]</th><td class=\"l\"><table "
-                               "class=\"json\"><tr><th class=\"l\">name</th><td class=\"l\">sink "
-                               "&lt;A&gt;</td></tr><tr><th class=\"l\">type</th><td "
-                               "class=\"l\">sink</td></tr><tr><th class=\"l\">position</th><td "
-                               "class=\"l\">[1, 2, 3]</td></tr></table></td></tr>"));
+                               "class=\"json rows\"><tr><th class=\"l\">name</th><th "
+                               "class=\"l\">type</th><th class=\"l\">position</th></tr><tr><td "
+                               "class=\"l\">sink &lt;A&gt;</td><td class=\"l\">sink</td><td "
+                               "class=\"l\">[1, 2, 3]</td></tr>"));
   assert_non_null(strstr(html, "<th class=\"l\">domain_min</th><td class=\"l\">[0, -0.5e2, 1e-3]"));
   assert_non_null(strstr(html, "<th class=\"l\">tree</th><td class=\"l\">null</td>"));
   assert_non_null(strstr(html, "<th class=\"l\">horizons</th><td class=\"l\">[ ]</td>"));
