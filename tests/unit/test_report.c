@@ -495,10 +495,8 @@ static void test_report_chromium(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_report_content),
-      cmocka_unit_test(test_report_parameter_rows),
-      cmocka_unit_test(test_report_degraded),
-      cmocka_unit_test(test_report_real_files),
+      cmocka_unit_test(test_report_content),  cmocka_unit_test(test_report_parameter_rows),
+      cmocka_unit_test(test_report_degraded), cmocka_unit_test(test_report_real_files),
       cmocka_unit_test(test_report_chromium),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
