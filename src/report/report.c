@@ -103,8 +103,66 @@ static const char *json_scalar_text(const karst_json_t *v) {
   }
 }
 
+/* Whether @p v is a non-empty array of objects that all have the same, non-empty set of
+ * distinct member names (in any order): such an array is shown as one table, one row per
+ * element and one column per name. An object with a repeated name, or elements whose names
+ * differ, make it 0 (every element is then shown as its own table).
+ * Time complexity: O(n k^2) for n elements of k members. */
+static int json_same_keyed_objects(const karst_json_t *v) {
+  if (v->type != KARST_JSON_ARRAY || v->n == 0) return 0;
+  const karst_json_t *first = &v->items[0];
+  if (first->type != KARST_JSON_OBJECT || first->n == 0) return 0;
+  for (karst_int_t i = 0; i < v->n; i++) {
+    const karst_json_t *e = &v->items[i];
+    if (e->type != KARST_JSON_OBJECT || e->n != first->n) return 0;
+    /* Same count and every name of the first element exactly once in e (the first element's
+     * names distinct, checked at i = 0): then e has exactly the first element's names. */
+    for (karst_int_t k = 0; k < first->n; k++) {
+      int seen = 0;
+      for (karst_int_t m = 0; m < e->n; m++)
+        seen += strcmp(first->keys[k], e->keys[m]) == 0;
+      if (seen != 1) return 0;
+    }
+  }
+  return 1;
+}
+
+/* The member @p key of object @p obj (which has it exactly once). */
+static const karst_json_t *json_member(const karst_json_t *obj, const char *key) {
+  for (karst_int_t m = 0; m < obj->n; m++)
+    if (strcmp(obj->keys[m], key) == 0) return &obj->items[m];
+  return NULL;
+}
+
+static void html_json(karst_i_buf_t *b, const karst_json_t *v);
+
+/* An array of same-keyed objects (json_same_keyed_objects) as one table: a header row with the
+ * first element's member names in its order, then one row per element; each cell is rendered
+ * by html_json (scalars and arrays of scalars inline, e.g. a position "[1, 2, 3]"). */
+static void html_json_rows(karst_i_buf_t *b, const karst_json_t *v) {
+  const karst_json_t *first = &v->items[0];
+  karst_i_buf_puts(b, "<table class=\"json rows\"><tr>");
+  for (karst_int_t k = 0; k < first->n; k++) {
+    karst_i_buf_puts(b, "<th class=\"l\">");
+    karst_i_buf_escape(b, first->keys[k]);
+    karst_i_buf_puts(b, "</th>");
+  }
+  karst_i_buf_puts(b, "</tr>");
+  for (karst_int_t i = 0; i < v->n; i++) {
+    karst_i_buf_puts(b, "<tr>");
+    for (karst_int_t k = 0; k < first->n; k++) {
+      karst_i_buf_puts(b, "<td class=\"l\">");
+      html_json(b, json_member(&v->items[i], first->keys[k]));
+      karst_i_buf_puts(b, "</td>");
+    }
+    karst_i_buf_puts(b, "</tr>");
+  }
+  karst_i_buf_puts(b, "</table>");
+}
+
 /* Every value in full: scalars as text, arrays of scalars inline ("[a, b, c]", strings in
- * quotes), other arrays and objects as nested tables (one row per element or member). */
+ * quotes), arrays of same-keyed objects as one table (html_json_rows), other arrays and
+ * objects as nested tables (one row per element or member). */
 static void html_json(karst_i_buf_t *b, const karst_json_t *v) {
   if (karst_json_is_scalar(v)) {
     karst_i_buf_escape(b, json_scalar_text(v));
@@ -128,6 +186,10 @@ static void html_json(karst_i_buf_t *b, const karst_json_t *v) {
       if (e->type == KARST_JSON_STRING) karst_i_buf_puts(b, "&quot;");
     }
     karst_i_buf_puts(b, "]");
+    return;
+  }
+  if (json_same_keyed_objects(v)) {
+    html_json_rows(b, v);
     return;
   }
   karst_i_buf_puts(b, "<table class=\"json\">");
@@ -429,7 +491,7 @@ static const char *const css =
     ".legend span{display:inline-block;margin-right:1em;font-size:0.85em}"
     ".sw{display:inline-block;width:1.6em;height:0.35em;margin-right:0.3em;vertical-align:middle}"
     "pre{background:#f7f7f7;padding:0.5em;font-size:0.85em}"
-    "table.json table.json{font-size:1em;margin:0}";
+    "table.json table.json{font-size:1em;margin:0}table.rows td{vertical-align:top}";
 
 static void html_cell_num(karst_i_buf_t *b, double v) {
   char s[64];

@@ -61,4 +61,11 @@ fi
   --members 2 || { echo "FAIL: karst report"; exit 1; }
 nmetrics=$(head -1 "$out/ens/metrics.csv" | tr ',' '\n' | tail -n +3 | wc -l)
 # histograms + rose + degree distribution + 2 members x (plan, section)
-check_report "$out/report.html" $((nmetrics + 2 + 4))
+check_report "$out/report.html" $((nmetrics + 2 + 4)) || exit 1
+# The real parameters (17 key points, fracture families, horizons: each one table) are all
+# shown with their values, read back independently.
+/usr/bin/python3 "$SRC/tests/python/check_report_parameters.py" "$out/report.html" "$out/ens" ||
+  { echo "FAIL: the parameters of the page differ from ensemble.json"; exit 1; }
+n=$(grep -o '<table class="json rows">' "$out/report.html" | wc -l)
+if [ "$n" -lt 3 ]; then echo "FAIL: $n one-table arrays, expected at least 3"; exit 1; fi
+echo "ok: $n arrays of same-keyed objects shown as one table each"

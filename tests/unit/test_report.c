@@ -107,6 +107,9 @@ static karst_error_t fake_measure(karst_ctx_t *ctx, void *user, const karst_netw
 
 static char *ens_dir;
 
+/* Key points of the test scenario, as many as branchwork has. */
+#define REPORT_TEST_KEY_POINTS 17
+
 static int setup(void **state) {
   (void)state;
   char tmpl[] = "/tmp/karst_test_report_XXXXXX";
@@ -121,23 +124,38 @@ static int setup(void **state) {
   opt.scenario_path = "datasets/scenarios/branchwork <test>.yaml";
   opt.scenario_hash = "00112233aabbccdd";
   /* Nested objects and arrays over several lines, as karst_generate_write_parameters writes
-   * them, and a string longer than any fixed buffer: the report must show all of it. */
-  static char params[2048];
+   * them, and a string longer than any fixed buffer: the report must show all of it.
+   * Arrays of same-keyed objects (17 key points as in branchwork, fracture families with
+   * their members in another order, one lens with an escaped name and a nested object) are
+   * shown as one table each; arrays whose elements differ in names ("mixed") are not. */
+  static char params[8192];
   char longtext[301];
   for (int i = 0; i < 300; i++)
     longtext[i] = (char)('a' + i % 26);
   longtext[300] = '\0';
+  char keypoints[4096] = "";
+  for (int i = 2; i < REPORT_TEST_KEY_POINTS; i++) {
+    size_t len = strlen(keypoints);
+    snprintf(keypoints + len, sizeof keypoints - len,
+             ",\n      {\"name\": \"waypoint %d\", \"type\": \"waypoint\", "
+             "\"position\": [%d, %d.5, -%de1]}",
+             i, 10 * i, i, i);
+  }
   snprintf(params, sizeof params,
            "    \"name\": \"branchwork & co\",\n    \"skeleton.gamma\": 2,\n"
            "    \"domain_min\": [0, -0.5e2, 1e-3],\n"
            "    \"key_points\": [\n      {\"name\": \"sink <A>\", \"type\": \"sink\", "
            "\"position\": [1, 2, 3]},\n      {\"name\": \"spring\", \"type\": \"spring\", "
-           "\"position\": [4, 5, 6]}],\n"
+           "\"position\": [4, 5, 6]}%s],\n"
+           "    \"fractures\": [{\"dip_direction\": 120, \"dip\": 80, \"weight\": 1}, "
+           "{\"weight\": 0.5, \"dip\": 60, \"dip_direction\": 30}],\n"
+           "    \"lenses\": [{\"z<0 & \\\"q\\\"\": 1, \"shape\": {\"r\": 2, \"h\": [1, 2]}}],\n"
+           "    \"mixed\": [{\"a\": 1}, {\"b\": 2}],\n"
            "    \"permeability\": {\"background\": 1, \"tree\": null},\n"
            "    \"horizons\": [],\n    \"terrain\": {},\n"
            "    \"flags\": [true, false, null, \"x\"],\n"
            "    \"long\": \"%s\"\n",
-           longtext);
+           keypoints, longtext);
   opt.parameters_json = params;
   karst_ensemble_hooks_t h = {fake_realise, fake_write, fake_measure, NULL, 4, fake_names, NULL};
   return karst_ensemble_run(&ctx, ens_dir, &opt, &h, NULL) == KARST_SUCCESS ? 0 : -1;
@@ -221,13 +239,13 @@ static void test_report_content(void **state) {
   assert_non_null(strstr(html, "branchwork &lt;test&gt;.yaml"));
   assert_non_null(strstr(html, "<td class=\"l\">2021</td>"));
   assert_non_null(strstr(html, "00112233aabbccdd"));
-  /* Every parameter in full, nested objects and arrays as nested tables. */
+  /* Every parameter in full, nested objects and arrays as nested tables (arrays of
+   * same-keyed objects as one table each: test_report_parameter_rows). */
   assert_non_null(strstr(html, "<tr><th class=\"l\">key_points</th><td class=\"l\"><table "
-                               "class=\"json\"><tr><th class=\"l\">[0]</th><td class=\"l\"><table "
-                               "class=\"json\"><tr><th class=\"l\">name</th><td class=\"l\">sink "
-                               "&lt;A&gt;</td></tr><tr><th class=\"l\">type</th><td "
-                               "class=\"l\">sink</td></tr><tr><th class=\"l\">position</th><td "
-                               "class=\"l\">[1, 2, 3]</td></tr></table></td></tr>"));
+                               "class=\"json rows\"><tr><th class=\"l\">name</th><th "
+                               "class=\"l\">type</th><th class=\"l\">position</th></tr><tr><td "
+                               "class=\"l\">sink &lt;A&gt;</td><td class=\"l\">sink</td><td "
+                               "class=\"l\">[1, 2, 3]</td></tr>"));
   assert_non_null(strstr(html, "<th class=\"l\">domain_min</th><td class=\"l\">[0, -0.5e2, 1e-3]"));
   assert_non_null(strstr(html, "<th class=\"l\">tree</th><td class=\"l\">null</td>"));
   assert_non_null(strstr(html, "<th class=\"l\">horizons</th><td class=\"l\">[ ]</td>"));
@@ -267,6 +285,107 @@ static void test_report_content(void **state) {
   assert_int_equal(system(cmd), 0);
   free(html);
   karst_report_survey_destroy(&sv);
+}
+
+/* The table that follows @p label in @p html, up to its first "</table>" (the whole table when
+ * no other table is nested in it), as a new string; NULL when there is none. */
+static char *table_after(const char *html, const char *label) {
+  const char *p = strstr(html, label);
+  if (!p) return NULL;
+  p += strlen(label);
+  const char *end = strstr(p, "</table>");
+  if (strncmp(p, "<table", 6) != 0 || !end) return NULL;
+  size_t n = (size_t)(end - p) + strlen("</table>");
+  char *t = malloc(n + 1);
+  memcpy(t, p, n);
+  t[n] = '\0';
+  return t;
+}
+
+/* An array of objects that all have the same member names is ONE table: a header row with
+ * the names in the first element's order, then one row per element (cells in header order
+ * even when an element lists its members in another order), nested values inside the cells;
+ * an array whose elements differ in names keeps one table per element. */
+static void test_report_parameter_rows(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_report_options_t opt;
+  karst_report_options_init(&opt);
+  opt.published_path = KARST_SOURCE_DIR "/datasets/published_metrics.csv";
+  opt.read_network = fake_read;
+  char out[1200];
+  snprintf(out, sizeof out, "%s/rows.html", ens_dir);
+  assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
+  char *html = read_all(out);
+  assert_non_null(html);
+  /* key_points, fractures and lenses; not mixed. */
+  assert_int_equal(count(html, "<table class=\"json rows\">"), 3);
+
+  char *kp = table_after(html, "<th class=\"l\">key_points</th><td class=\"l\">");
+  assert_non_null(kp);
+  assert_true(strncmp(kp,
+                      "<table class=\"json rows\"><tr><th class=\"l\">name</th><th "
+                      "class=\"l\">type</th><th class=\"l\">position</th></tr><tr><td",
+                      strlen("<table class=\"json rows\"><tr><th class=\"l\">name</th><th "
+                             "class=\"l\">type</th><th class=\"l\">position</th></tr><tr><td")) ==
+              0);
+  assert_int_equal(count(kp, "<table"), 1); /* no table per element */
+  assert_int_equal(count(kp, "<tr>"), 1 + REPORT_TEST_KEY_POINTS);
+  assert_int_equal(count(kp, "<th "), 3);
+  assert_int_equal(count(kp, "<td "), 3 * REPORT_TEST_KEY_POINTS);
+  assert_non_null(strstr(kp, "<tr><td class=\"l\">spring</td><td class=\"l\">spring</td><td "
+                             "class=\"l\">[4, 5, 6]</td></tr>"));
+  assert_non_null(strstr(kp, "<tr><td class=\"l\">waypoint 16</td><td class=\"l\">waypoint</td>"
+                             "<td class=\"l\">[160, 16.5, -16e1]</td></tr></table>"));
+  free(kp);
+
+  char *fr = table_after(html, "<th class=\"l\">fractures</th><td class=\"l\">");
+  assert_non_null(fr);
+  assert_string_equal(fr, "<table class=\"json rows\"><tr><th class=\"l\">dip_direction</th>"
+                          "<th class=\"l\">dip</th><th class=\"l\">weight</th></tr>"
+                          "<tr><td class=\"l\">120</td><td class=\"l\">80</td>"
+                          "<td class=\"l\">1</td></tr>"
+                          "<tr><td class=\"l\">30</td><td class=\"l\">60</td>"
+                          "<td class=\"l\">0.5</td></tr></table>");
+  free(fr);
+
+  /* One element: a one-row table; its name escaped, a nested object inside its cell. */
+  assert_non_null(strstr(html, "<th class=\"l\">lenses</th><td class=\"l\"><table class=\"json "
+                               "rows\"><tr><th class=\"l\">z&lt;0 &amp; &quot;q&quot;</th><th "
+                               "class=\"l\">shape</th></tr><tr><td class=\"l\">1</td><td "
+                               "class=\"l\"><table class=\"json\"><tr><th class=\"l\">r</th><td "
+                               "class=\"l\">2</td></tr><tr><th class=\"l\">h</th><td "
+                               "class=\"l\">[1, 2]</td></tr></table></td></tr></table>"));
+  /* Elements with different names: one table per element, as before. */
+  assert_non_null(strstr(html, "<th class=\"l\">mixed</th><td class=\"l\"><table class=\"json\">"
+                               "<tr><th class=\"l\">[0]</th><td class=\"l\"><table "
+                               "class=\"json\"><tr><th class=\"l\">a</th><td "
+                               "class=\"l\">1</td></tr></table></td></tr><tr><th "
+                               "class=\"l\">[1]</th>"));
+  assert_int_equal(count(html, "<script"), 0);
+
+  /* The independent check reads the rows tables value by value, and fails on a changed value
+   * in a row or on an array of same-keyed objects shown as one table per element. */
+  char pcmd[4096];
+  snprintf(pcmd, sizeof pcmd,
+           "/usr/bin/python3 '%s/tests/python/check_report_parameters.py' '%s' '%s'",
+           KARST_SOURCE_DIR, out, ens_dir);
+  assert_int_equal(system(pcmd), 0);
+  const char *mutations[] = {"s.replace('[160, 16.5, -16e1]', '[160, 16.5, -16e2]')",
+                             "s.replace('<td class=\\\"l\\\">30</td>', "
+                             "'<td class=\\\"l\\\">31</td>')",
+                             "s.replace('json rows', 'json', 1)"};
+  for (int m = 0; m < 3; m++) {
+    snprintf(pcmd, sizeof pcmd,
+             "/usr/bin/python3 -c \"import sys; s=open(sys.argv[1],encoding='utf-8').read(); "
+             "t=%s; assert t != s; open(sys.argv[2],'w',encoding='utf-8').write(t)\" '%s' "
+             "'%s.bad' && ! /usr/bin/python3 '%s/tests/python/check_report_parameters.py' "
+             "'%s.bad' '%s' >/dev/null",
+             mutations[m], out, out, KARST_SOURCE_DIR, out, ens_dir);
+    assert_int_equal(system(pcmd), 0);
+  }
+  free(html);
 }
 
 /* Unreadable members are listed; the page is still written. No survey: statistics only. */
@@ -376,9 +495,8 @@ static void test_report_chromium(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_report_content),
-      cmocka_unit_test(test_report_degraded),
-      cmocka_unit_test(test_report_real_files),
+      cmocka_unit_test(test_report_content),  cmocka_unit_test(test_report_parameter_rows),
+      cmocka_unit_test(test_report_degraded), cmocka_unit_test(test_report_real_files),
       cmocka_unit_test(test_report_chromium),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
