@@ -19,6 +19,9 @@ typedef struct cli_command {
 void cli_ctx_init(karst_ctx_t *ctx, int quiet, int verbose);
 /* Print "karst CMD: message" from ctx (or the error code) to stderr; returns CLI_ERROR. */
 int cli_fail(const char *cmd, const karst_ctx_t *ctx, karst_error_t err);
+/* A writer failed on the temporary file of @p output (its message names the temporary, which
+ * is gone): reword ctx's message as "writing OUTPUT: message; no output was kept". */
+void cli_note_failed_output(karst_ctx_t *ctx, karst_error_t err, const char *output);
 /* Print a usage error and the command's usage line; returns CLI_USAGE. */
 int cli_usage_error(const char *cmd, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));

@@ -91,6 +91,13 @@ int cli_fail(const char *cmd, const karst_ctx_t *ctx, karst_error_t err) {
   return CLI_ERROR;
 }
 
+void cli_note_failed_output(karst_ctx_t *ctx, karst_error_t err, const char *output) {
+  if (!ctx->errmsg[0]) return;
+  char msg[KARST_ERRMSG_MAX];
+  snprintf(msg, sizeof msg, "%s", ctx->errmsg);
+  karst_set_error(ctx, err, "writing %s: %s; no output was kept", output, msg);
+}
+
 int cli_usage_error(const char *cmd, const char *fmt, ...) {
   fprintf(stderr, "karst %s: ", cmd);
   va_list ap;

@@ -125,12 +125,7 @@ nomem:
   err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
   goto fail;
 fail_write:
-  /* the writers' messages name the temporary file; say which output it was */
-  if (ctx.errmsg[0]) {
-    char msg[KARST_ERRMSG_MAX];
-    snprintf(msg, sizeof msg, "%s", ctx.errmsg);
-    karst_set_error(&ctx, err, "writing %s: %s; no output was kept", writing, msg);
-  }
+  cli_note_failed_output(&ctx, err, writing);
 fail:
   status = cli_fail("generate", &ctx, err);
 cleanup:
