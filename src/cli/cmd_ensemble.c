@@ -1,5 +1,4 @@
 /* karst ensemble: N realisations of a scenario, resumable, on threads and MPI ranks. */
-#include <ctype.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
@@ -69,7 +68,7 @@ static int run(int argc, char **argv) {
     int more = i + 1 < argc;
     if (strcmp(a, "-n") == 0 && more) {
       const char *v = argv[++i];
-      if (!isdigit((unsigned char)v[0]) || cli_parse_u64(v, &n) || n < 1 ||
+      if (cli_parse_u64(v, &n) || n < 1 ||
           n > KARST_ENSEMBLE_MAX_MEMBERS)
         return cli_usage_error("ensemble",
                                "-n must be a whole number of realisations within [1, %d], got '%s'",
@@ -79,7 +78,7 @@ static int run(int argc, char **argv) {
       out = argv[++i];
     } else if (strcmp(a, "-j") == 0 && more) {
       const char *v = argv[++i];
-      if (!isdigit((unsigned char)v[0]) || cli_parse_int(v, &threads) || threads < 1 ||
+      if (cli_parse_int(v, &threads) || threads < 1 ||
           threads > KARST_ENSEMBLE_MAX_THREADS)
         return cli_usage_error("ensemble",
                                "-j must be a whole number of threads within [1, %d], got '%s'",
