@@ -30,6 +30,7 @@
 #include "karst/sampling.h"
 #include "karst/scenario.h"
 #include "karst/skeleton.h"
+#include "karst/version.h"
 #include "karst/vtk.h"
 
 #endif

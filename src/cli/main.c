@@ -1,5 +1,6 @@
 /* karst: git-style command dispatcher. Each subcommand lives in cmd_<name>.c. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
@@ -46,6 +47,19 @@ static int cmd_help(int argc, char **argv) {
   return CLI_OK;
 }
 
+/* `karst --version`: karst's version on the first line, then the compiler and every library
+ * (the list that run.json, ensemble.json and the .vtp field data carry). */
+static int print_version(void) {
+  char *text = karst_versions_text();
+  if (!text) {
+    fprintf(stderr, "karst: out of memory\n");
+    return CLI_ERROR;
+  }
+  fputs(text, stdout);
+  free(text);
+  return CLI_OK;
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     print_main_help(stderr);
@@ -55,10 +69,7 @@ int main(int argc, char **argv) {
     print_main_help(stdout);
     return CLI_OK;
   }
-  if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) {
-    printf("karst %s\n", karst_version());
-    return CLI_OK;
-  }
+  if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) return print_version();
   const cli_command_t *c = cli_find_command(argv[1]);
   if (!c) {
     if (argv[1][0] == '-')

@@ -21,6 +21,7 @@
  * std::bad_alloc (KARST_ENOMEM) and anything else (KARST_EEXTERNAL).
  */
 #include "karst/io.h"
+#include "karst/version.h"
 #include "karst/vtk.h"
 
 #include <fcntl.h>
@@ -191,6 +192,19 @@ const char *const sample_source_names[] = {
 void add_lookup_tables(vtkFieldData *fd) {
   fd->AddArray(string_array("tunnel_type_names", KARST_TUNNEL_TYPE_COUNT, tunnel_type_names));
   fd->AddArray(string_array("node_kind_names", KARST_NODE_KIND_COUNT, node_kind_names));
+}
+
+/* The software that wrote a file: field data "versions", one "name version" string per component
+ * (karst_versions), the same list as run.json's "versions" and `karst --version`. */
+void add_versions(vtkFieldData *fd) {
+  karst_component_t c[KARST_COMPONENTS_MAX];
+  const int n = karst_versions(c);
+  auto a = vtkSmartPointer<vtkStringArray>::New();
+  a->SetName("versions");
+  a->SetNumberOfValues(n);
+  for (int i = 0; i < n; i++)
+    a->SetValue(i, std::string(c[i].name) + " " + c[i].version);
+  fd->AddArray(a);
 }
 
 bool finite3(const double *p) {
@@ -470,6 +484,7 @@ karst_error_t write_network(karst_ctx_t *ctx, const char *path, const karst_netw
   if (net->crs) fd->AddArray(string_array("crs", 1, &net->crs));
   if (net->title) fd->AddArray(string_array("title", 1, &net->title));
   add_lookup_tables(fd);
+  add_versions(fd);
 
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
@@ -510,6 +525,7 @@ karst_error_t write_samples(karst_ctx_t *ctx, const char *path, const karst_samp
   nkey->SetName("n_key_points");
   nkey->InsertNextValue(s->n_key_points);
   fd->AddArray(nkey);
+  add_versions(fd);
 
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
@@ -542,6 +558,7 @@ karst_error_t write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t 
     pd->GetCellData()->SetActiveScalars(name);
     if (std::strcmp(name, "tunnel_type") == 0) add_lookup_tables(pd->GetFieldData());
   }
+  add_versions(pd->GetFieldData());
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
@@ -585,6 +602,7 @@ karst_error_t write_image(karst_ctx_t *ctx, const char *path, const int dims[3],
    * avoid copying a grid that may hold hundreds of millions of values. */
   arr->SetArray(const_cast<float *>(values), (vtkIdType)n, 1);
   img->GetPointData()->SetScalars(arr);
+  add_versions(img->GetFieldData());
   vtkNew<StreamedWriter<vtkXMLImageDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), img);
 }

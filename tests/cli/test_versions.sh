@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Every output names the versions of the libraries karst uses, and all name the same ones:
+# `karst --version`, run.json and ensemble.json ("versions"), the field data "versions" of
+# network.vtp and samples.vtp, and the report's software section. The versions themselves are
+# checked against independent sources: pkg-config, gdal-config, dpkg, mpirun, and VTK's own
+# vtkVersion through Debian's python3-vtk9.
+set -u
+KARST=$1
+SRC=$2
+PY=/usr/bin/python3
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+"$KARST" --version >"$T/version.txt" || fail "karst --version"
+cat "$T/version.txt"
+ver() { awk -v n="$1" '$1 == n { $1 = ""; sub(/^ /, ""); print }' "$T/version.txt"; }
+want() { # name expected
+  [ "$(ver "$1")" = "$2" ] || fail "--version says $1 '$(ver "$1")', expected '$2'"
+  echo "ok: $1 $2"
+}
+want karst "$(sed -n 's/^project(karst VERSION \([0-9.]*\).*/\1/p' "$SRC/CMakeLists.txt")"
+want igraph "$(pkg-config --modversion igraph)"
+want libyaml "$(pkg-config --modversion yaml-0.1)"
+want GeographicLib "$(pkg-config --modversion geographiclib)"
+want FLANN "$(pkg-config --modversion flann)"
+want GDAL "$(gdal-config --version)"
+want PROJ "$(pkg-config --modversion proj)"
+want CGAL "$(dpkg-query -W -f='${Version}' libcgal-dev | sed 's/-.*//')"
+want VTK "$("$PY" -c 'import vtk; print(vtk.vtkVersion.GetVTKVersion())')"
+case "$(ver MPI)" in
+"Open MPI "*) want MPI "Open MPI $(mpirun --version | sed -n 's/^mpirun (Open MPI) //p' | head -n 1) (MPI 3.1)" ;;
+"not built with MPI") echo "ok: MPI not built" ;;
+*) fail "MPI line '$(ver MPI)'" ;;
+esac
+ver compiler | grep -q "^GCC \|^clang " || fail "compiler line"
+
+# The outputs: one realisation with its samples, a two-member ensemble and its report.
+"$KARST" generate "$SRC/datasets/scenarios/branchwork.yaml" -o "$T/gen" --samples -q || fail "generate"
+"$KARST" ensemble "$SRC/datasets/scenarios/branchwork.yaml" -n 2 -j 1 -o "$T/ens" -q || fail "ensemble"
+"$KARST" report "$T/ens" -o "$T/report.html" || fail "report"
+"$PY" - "$T" <<'PY' || fail "versions in the outputs"
+import html, json, sys
+from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
+
+T = sys.argv[1]
+lines = [l.rstrip("\n") for l in open(f"{T}/version.txt")]
+want = dict(l.split(" ", 1) for l in lines)
+bad = []
+for f in ("gen/run.json", "ens/ensemble.json"):
+    got = json.load(open(f"{T}/{f}"))["versions"]
+    if got != want or list(got) != list(want):
+        bad.append(f"{f}: {got} != {want}")
+for f in ("gen/network.vtp", "gen/samples.vtp", "ens/realisations/0000/network.vtp"):
+    r = vtkXMLPolyDataReader()
+    r.SetFileName(f"{T}/{f}")
+    r.Update()
+    a = r.GetOutput().GetFieldData().GetAbstractArray("versions")
+    got = [a.GetValue(i) for i in range(a.GetNumberOfValues())] if a else None
+    if got != lines:
+        bad.append(f"{f}: field data versions {got} != {lines}")
+page = html.unescape(open(f"{T}/report.html").read())
+if "\n".join(lines) not in page:
+    bad.append("report.html: the software section is not the --version list")
+for b in bad:
+    print("FAIL:", b)
+print("ok: run.json, ensemble.json, network.vtp, samples.vtp and the report name", len(lines),
+      "components")
+sys.exit(1 if bad else 0)
+PY
+echo "ok: versions"
