@@ -24,6 +24,7 @@
 #include "karst/mesh.h"
 #include "karst/metrics.h"
 #include "karst/network.h"
+#include "karst/palette.h"
 #include "karst/paths.h"
 #include "karst/readers.h"
 #include "karst/report.h"
