@@ -16,6 +16,7 @@
 #include "karst/cost.h"
 #include "karst/crs.h"
 #include "karst/ensemble.h"
+#include "karst/export.h"
 #include "karst/generate.h"
 #include "karst/graph.h"
 #include "karst/implicit.h"

@@ -46,6 +46,8 @@ expect "c.vtp sub" mesh ""
 expect "" generate a.yaml --seed ""
 expect "bash" completion ""
 expect "$(printf '%s\n' $commands help | sort | tr '\n' ' ' | sed 's/ $//')" help ""
+expect "--crs" export sub --c
+expect "--qml --quiet" export sub --q
 # Every option of every command's synopsis is offered after '-'.
 for c in $commands; do
   offered=" $(complete_words "$c" - | tr '\n' ' ')"
