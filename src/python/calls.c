@@ -113,12 +113,18 @@ PyObject *karst_py_generate(PyObject *module, PyObject *args, PyObject *kw) {
   return out;
 }
 
+/* The one argument "path" of read_network and ensemble_table, as bytes (NULL on error). */
+static PyObject *path_argument(PyObject *args, PyObject *kw) {
+  static char *kwlist[] = {"path", NULL};
+  PyObject *path_o;
+  if (!PyArg_ParseTupleAndKeywords(args, kw, "O", kwlist, &path_o)) return NULL;
+  return karst_py_path(path_o);
+}
+
 /** read_network(path) -> network dict (any format karst_read_network reads). */
 PyObject *karst_py_read_network(PyObject *module, PyObject *args, PyObject *kw) {
-  static char *kwlist[] = {"path", NULL};
-  PyObject *path_o, *path;
-  if (!PyArg_ParseTupleAndKeywords(args, kw, "O", kwlist, &path_o)) return NULL;
-  if (!(path = karst_py_path(path_o))) return NULL;
+  PyObject *path = path_argument(args, kw);
+  if (!path) return NULL;
   karst_py_call_t c;
   karst_py_call_begin(&c, module, 1, NULL);
   karst_network_t net;
@@ -310,10 +316,8 @@ PyObject *karst_py_ensemble(PyObject *module, PyObject *args, PyObject *kw) {
 
 /** ensemble_table(path) -> (names, index int64 (n,), seed uint64 (n,), values float64 (n, k)). */
 PyObject *karst_py_ensemble_table(PyObject *module, PyObject *args, PyObject *kw) {
-  static char *kwlist[] = {"path", NULL};
-  PyObject *path_o, *path;
-  if (!PyArg_ParseTupleAndKeywords(args, kw, "O", kwlist, &path_o)) return NULL;
-  if (!(path = karst_py_path(path_o))) return NULL;
+  PyObject *path = path_argument(args, kw);
+  if (!path) return NULL;
   karst_py_call_t c;
   karst_py_call_begin(&c, module, 1, NULL);
   karst_ensemble_table_t t;

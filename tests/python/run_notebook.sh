@@ -34,6 +34,9 @@ if preload:
 json.dump({"argv": ["/usr/bin/python3", "-m", "ipykernel_launcher", "-f", "{connection_file}"],
            "display_name": "karst test", "language": "python", "env": env}, open(out, "w"))
 PY
+# The kernel's children (none in the notebook today) must not inherit the preloaded runtime.
+mkdir -p "$T/ipython/profile_default/startup"
+echo 'import os; os.environ.pop("LD_PRELOAD", None)' >"$T/ipython/profile_default/startup/00-karst-test.py"
 export JUPYTER_PATH="$T/jupyter" JUPYTER_CONFIG_DIR="$T/config" JUPYTER_RUNTIME_DIR="$T/runtime"
 export IPYTHONDIR="$T/ipython" MPLCONFIGDIR="$T/mpl" PYDEVD_DISABLE_FILE_VALIDATION=1
 # The Jupyter processes themselves must not inherit the sanitizer options meant for the kernel.
