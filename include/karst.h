@@ -10,6 +10,7 @@
 #define KARST_H
 
 #include "karst/amplification.h"
+#include "karst/arrays.h"
 #include "karst/classification.h"
 #include "karst/common.h"
 #include "karst/compare.h"

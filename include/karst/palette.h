@@ -59,6 +59,7 @@ typedef enum {
   KARST_PALETTE_ROLE_PUBLISHED = 2, /**< the range of the 34 published caves */
   KARST_PALETTE_ROLE_NONE = 3,      /**< no category (e.g. an edge without a tunnel type) */
   KARST_PALETTE_ROLE_STRUCTURE = 4, /**< geological structures drawn over data (fractures) */
+  KARST_PALETTE_ROLE_SURFACE = 5,   /**< a surface without categories (a conduit wall, rock) */
   KARST_PALETTE_ROLE_COUNT
 } karst_palette_role_t;
 

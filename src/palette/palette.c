@@ -16,6 +16,8 @@
 #define OI_REDDISH_PURPLE "#CC79A7"
 /** "None" and background categories (no tunnel type, terrain, interior nodes, fill samples). */
 #define NEUTRAL_GREY "#999999"
+/** Surfaces without categories: a pale limestone. */
+#define LIMESTONE "#D9D2C5"
 /** Survey and observed conduits: the red of the report's survey lines. */
 #define SURVEY_RED "#C00000"
 
@@ -107,9 +109,10 @@ static const karst_palette_ramp_t cool_warm = {"cool to warm", N_OF(cool_warm_po
                                                cool_warm_points};
 
 /* Indexed by karst_palette_role_t. The ensemble's blue is Paul Tol's (2021) "bright" blue,
- * apart from every categorical colour so members never read as a category. */
-static const char *const roles[KARST_PALETTE_ROLE_COUNT] = {"#4477AA", SURVEY_RED, NEUTRAL_GREY,
-                                                            NEUTRAL_GREY, "#333333"};
+ * apart from every categorical colour so members never read as a category; the structures'
+ * dark grey stays visible over the ensemble's blue. */
+static const char *const roles[KARST_PALETTE_ROLE_COUNT] = {"#4477AA",    SURVEY_RED, NEUTRAL_GREY,
+                                                            NEUTRAL_GREY, "#333333",  LIMESTONE};
 
 /**
  * Every palette entry. @p n receives their count (may be NULL).
