@@ -11,6 +11,7 @@
 #include <ogr_api.h>
 #include <ogr_srs_api.h>
 
+#include "karst/arrays.h"
 #include "karst/export.h"
 #include "karst/io.h"
 #include "karst/palette.h"
@@ -343,6 +344,115 @@ static karst_error_t write_styles(writer_t *w, GDALDatasetH ds, const char *cons
   return err;
 }
 
+/* The fields karst adds itself: title (quantity and unit) and meaning. */
+static const struct {
+  const char *column, *title, *description;
+} fixed_columns[] = {
+    {"edge", "edge index", "index of the edge in the network (0-based; network.vtp cell order)"},
+    {"from_node", "first node index", "index (0-based) of the node the edge starts at"},
+    {"to_node", "second node index", "index (0-based) of the node the edge ends at"},
+    {"length", "conduit length (m)", "3-D length of the edge in metres"},
+    {"node", "node index",
+     "index (0-based) of the network node (for a key point: the node at "
+     "exactly its position, null when none)"},
+    {"name", "key point name", "name of the key point in the scenario"},
+    {"type", "key point type", "sink, spring or waypoint"},
+};
+
+/* Write @p s as an SQL string literal into @p out (quotes doubled); 0 when it does not fit. */
+static int sql_quote(char *out, size_t size, const char *s) {
+  size_t k = 0;
+  if (size < 3) return 0;
+  out[k++] = '\'';
+  for (; *s; s++) {
+    if (k + 3 >= size) return 0;
+    if (*s == '\'') out[k++] = '\'';
+    out[k++] = *s;
+  }
+  out[k++] = '\'';
+  out[k] = '\0';
+  return 1;
+}
+
+/* Title and meaning of field @p col: a fixed field, or an array of include/karst/arrays.h
+ * (with "attr_" in front, "_name" or "_K" behind). 0 when karst does not describe it. */
+static int describe_column(const char *col, char *title, size_t tsize, const char **description) {
+  for (size_t i = 0; i < sizeof fixed_columns / sizeof fixed_columns[0]; i++)
+    if (strcmp(col, fixed_columns[i].column) == 0) {
+      snprintf(title, tsize, "%s", fixed_columns[i].title);
+      *description = fixed_columns[i].description;
+      return 1;
+    }
+  char base[96];
+  snprintf(base, sizeof base, "%s", strncmp(col, "attr_", 5) == 0 ? col + 5 : col);
+  const karst_array_info_t *info = karst_arrays_find(base);
+  size_t n = strlen(base);
+  if (!info && n > 5 && strcmp(base + n - 5, "_name") == 0) {
+    base[n - 5] = '\0';
+    if ((info = karst_arrays_find(base))) {
+      snprintf(title, tsize, "%s (name)", info->title);
+      *description = info->meaning;
+      return 1;
+    }
+  }
+  char *us = strrchr(base, '_');
+  if (!info && us && us[1] && strspn(us + 1, "0123456789") == strlen(us + 1)) {
+    int comp = atoi(us + 1);
+    *us = '\0';
+    if ((info = karst_arrays_find(base))) {
+      snprintf(title, tsize, "%s [%d]", info->title, comp);
+      *description = info->meaning;
+      return 1;
+    }
+  }
+  if (!info) return 0;
+  snprintf(title, tsize, "%s", info->title);
+  *description = info->meaning;
+  return 1;
+}
+
+/*
+ * Each field's quantity, unit and meaning in the file itself: the GeoPackage schema extension's
+ * gpkg_data_columns (OGC 12-128r18 F.9), title "conduit radius (m)", description the sentence
+ * of include/karst/arrays.h with its sign convention (docs/arrays.md), which GIS programs show
+ * as the field's alias and description.
+ */
+static karst_error_t write_data_columns(writer_t *w, GDALDatasetH ds, const char *const *layers,
+                                        int n_layers) {
+  static const char *const create[] = {
+      "CREATE TABLE gpkg_data_columns (table_name TEXT NOT NULL, column_name TEXT NOT NULL, "
+      "name TEXT, title TEXT, description TEXT, mime_type TEXT, constraint_name TEXT, "
+      "CONSTRAINT pk_gdc PRIMARY KEY (table_name, column_name), "
+      "CONSTRAINT gdc_tn UNIQUE (table_name, name))",
+      "INSERT INTO gpkg_extensions (table_name, column_name, extension_name, definition, scope) "
+      "VALUES ('gpkg_data_columns', NULL, 'gpkg_schema', "
+      "'http://www.geopackage.org/spec121/#extension_schema', 'read-write')"};
+  for (size_t i = 0; i < sizeof create / sizeof create[0]; i++) {
+    GDALDatasetExecuteSQL(ds, create[i], NULL, NULL);
+    if (w->g->failed) return gdal_fail(w->ctx, w->g, w->path, "creating gpkg_data_columns");
+  }
+  for (int l = 0; l < n_layers; l++) {
+    OGRLayerH layer = GDALDatasetGetLayerByName(ds, layers[l]);
+    if (!layer) continue;
+    OGRFeatureDefnH defn = OGR_L_GetLayerDefn(layer);
+    for (int i = 0; i < OGR_FD_GetFieldCount(defn); i++) {
+      const char *col = OGR_Fld_GetNameRef(OGR_FD_GetFieldDefn(defn, i)), *description = NULL;
+      char title[192], q[5][640], sql[3400];
+      if (!describe_column(col, title, sizeof title, &description)) continue;
+      if (!sql_quote(q[0], sizeof q[0], layers[l]) || !sql_quote(q[1], sizeof q[1], col) ||
+          !sql_quote(q[2], sizeof q[2], title) || !sql_quote(q[3], sizeof q[3], description))
+        continue;
+      snprintf(sql, sizeof sql,
+               "INSERT INTO gpkg_data_columns (table_name, column_name, name, title, description) "
+               "VALUES (%s, %s, %s, %s, %s)",
+               q[0], q[1], q[2], q[2], q[3]);
+      GDALDatasetExecuteSQL(ds, sql, NULL, NULL);
+      if (w->g->failed) return gdal_fail(w->ctx, w->g, w->path, "describing the fields");
+    }
+  }
+  return KARST_SUCCESS;
+}
+
 /* Dataset metadata: karst's and the libraries' versions and where the network came from. */
 static void write_metadata(GDALDatasetH ds, const karst_export_source_t *src, const char *crs,
                            const char *versions) {
@@ -492,6 +602,7 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
   static const char *const layers[3] = {KARST_EXPORT_LAYER_CONDUITS, KARST_EXPORT_LAYER_NODES,
                                         KARST_EXPORT_LAYER_KEY_POINTS};
   if ((err = write_styles(&w, ds, (const char *const *)qml, layers))) goto cleanup;
+  if ((err = write_data_columns(&w, ds, layers, 3))) goto cleanup;
   if (GDALDatasetCommitTransaction(ds) != OGRERR_NONE) {
     err = gdal_fail(ctx, &g, path, "committing the transaction");
     goto cleanup;

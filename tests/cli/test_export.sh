@@ -5,7 +5,8 @@
 # run.json; the coordinate system undefined (GeoPackage srs_id -1) without one, EPSG:2154 from a
 # hand-edited run.json, EPSG:7405 from the Dow-Providence survey's own CS, and --crs overriding
 # both; the .qml equal to the style QGIS finds in layer_styles, with one category per tunnel
-# type. Bad input: a clear message, exit 1, and no new or half-written file.
+# type; every attribute's unit and meaning in gpkg_data_columns as in network.vtp's array_units.
+# Bad input: a clear message, exit 1, and no new or half-written file.
 set -u
 KARST=$1
 SRC=$2
@@ -41,6 +42,8 @@ for layer in conduits nodes key_points; do
 done
 ogrinfo -ro -q "$T/gen.gpkg" -sql "SELECT f_table_name, styleQML FROM layer_styles WHERE useAsDefault = 1" \
   >"$T/styles.txt" || fail "ogrinfo layer_styles"
+ogr2ogr -f CSV "$T/columns.csv" "$T/gen.gpkg" -sql "SELECT * FROM gpkg_data_columns" \
+  || fail "ogr2ogr gpkg_data_columns"
 "$PY" - "$T" "$T/gen" <<'PY' || fail "GeoPackage contents differ from network.vtp and run.json"
 import csv, json, math, sys
 import xml.etree.ElementTree as ET
@@ -124,9 +127,26 @@ for t, nm in enumerate(names):
     if cats.get(t) != nm: bad.append(f"category {t} is {cats.get(t)}, expected {nm}")
 colours = [s.find("layer/prop[@k='line_color']").get("v") for s in rend.iter("symbol")]
 if len(set(colours)) != len(colours): bad.append(f"tunnel types share colours: {colours}")
+# Every attribute's unit and meaning: gpkg_data_columns says what network.vtp's "array_units"
+# table says (both from include/karst/arrays.h; read here through GDAL and VTK independently).
+units = pd.GetFieldData().GetAbstractArray("array_units")
+meaning = {units.GetValue(3 * i): (units.GetValue(3 * i + 1), units.GetValue(3 * i + 2))
+           for i in range(units.GetNumberOfTuples())}
+cols = {(r["table_name"], r["column_name"]): r for r in csv.DictReader(open(f"{T}/columns.csv"))}
+for layer, data in (("conduits", cd), ("nodes", ptd)):
+    for i in range(data.GetNumberOfArrays()):
+        name = data.GetAbstractArray(i).GetName()
+        row = cols.get((layer, name))
+        if not row or row["description"] != meaning[name][1]:
+            bad.append(f"{layer}.{name}: gpkg_data_columns {row} != array_units {meaning[name]}")
+        elif meaning[name][0] == "m" and not row["title"].endswith("m)"):
+            bad.append(f"{layer}.{name}: title {row['title']!r} does not give the unit m")
+for key in (("conduits", "length"), ("conduits", "tunnel_type_name"), ("key_points", "name")):
+    if key not in cols: bad.append(f"no gpkg_data_columns row for {key}")
 for b in bad[:20]:
     print("FAIL:", b)
-print(f"ok: {n_edges} conduits, {n_nodes} nodes, {len(kps)} key points, every attribute, geometry, style")
+print(f"ok: {n_edges} conduits, {n_nodes} nodes, {len(kps)} key points, every attribute, geometry, "
+      "style, units")
 sys.exit(1 if bad else 0)
 PY
 
