@@ -9,6 +9,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "karst/arrays.h"
 #include "karst/palette.h"
 
 /* ------------------------------------------------------------------------ */
@@ -306,6 +307,18 @@ static PyObject *py_role_colour(PyObject *module, PyObject *arg) {
                       "unknown role '%s' (ensemble, survey, published, none or structure)", name);
 }
 
+/* array_info(name): (unit, title, meaning, where) of an array karst writes, or None
+ * (include/karst/arrays.h). */
+static PyObject *py_array_info(PyObject *module, PyObject *arg) {
+  (void)module;
+  const char *name = PyUnicode_AsUTF8(arg);
+  if (!name) return NULL;
+  const karst_array_info_t *a = karst_arrays_find(name);
+  if (!a) Py_RETURN_NONE;
+  return Py_BuildValue("{s:s,s:s,s:s,s:s}", "unit", a->unit, "title", a->title, "meaning",
+                       a->meaning, "where", a->where);
+}
+
 static PyObject *names_list(const char *(*fn)(int), int n) {
   PyObject *list = PyList_New(n);
   for (int i = 0; list && i < n; i++) {
@@ -390,6 +403,7 @@ static PyMethodDef methods[] = {
     {"metric_fields", py_metric_fields, METH_NOARGS, "[(metric, is_integer)] in output order"},
     {"palette", py_palette, METH_O, "palette(array) -> [(code, name, colour)] or None"},
     {"role_colour", py_role_colour, METH_O, "role_colour(role) -> '#RRGGBB'"},
+    {"array_info", py_array_info, METH_O, "array_info(name) -> {unit, title, meaning, where}"},
     {"tunnel_type_names", py_tunnel_type_names, METH_NOARGS, "names of tunnel_type codes"},
     {"node_kind_names", py_node_kind_names, METH_NOARGS, "names of node kind codes"},
     {"published", py_published, METH_VARARGS, "published(path=None) -> the 34-cave table"},

@@ -349,6 +349,25 @@ class TestGis(Tmp):
         with self.assertRaisesRegex(karst.InvalidValueError, "must end in .gpkg"):
             karst.export_gpkg(self.tmp / "g", self.tmp / "g.shp")
 
+    def test_describe_agrees_with_the_files(self):
+        # The unit and meaning of each array, as network.vtp's field data "array_units" states
+        # them, read with VTK's own reader (python3-vtk9).
+        net = karst.generate(SCENARIO, seed=3)
+        net.write_vtp(self.tmp / "n.vtp")
+        from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
+        r = vtkXMLPolyDataReader()
+        r.SetFileName(str(self.tmp / "n.vtp"))
+        r.Update()
+        t = r.GetOutput().GetFieldData().GetAbstractArray("array_units")
+        rows = [(t.GetValue(3 * i), t.GetValue(3 * i + 1), t.GetValue(3 * i + 2))
+                for i in range(t.GetNumberOfTuples())]
+        self.assertGreater(len(rows), 5)
+        for name, unit, meaning in rows:
+            d = karst.describe(name)
+            self.assertEqual((d["unit"], d["meaning"]), (unit, meaning), name)
+        self.assertEqual(karst.describe("water_table_distance")["unit"], "m")
+        self.assertIsNone(karst.describe("no such array"))
+
     def test_palette_and_versions(self):
         pal = karst.palette("tunnel_type")
         self.assertEqual([n for c, n, _ in pal if c >= 0], karst.TUNNEL_TYPES)

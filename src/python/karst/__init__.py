@@ -33,7 +33,7 @@ __version__ = _karst.__version__
 
 __all__ = [
     "generate", "metrics", "read_survey", "ensemble", "read_ensemble", "export_gpkg",
-    "published", "versions", "palette", "colours", "Network", "Samples", "Ensemble",
+    "published", "versions", "describe", "palette", "colours", "Network", "Samples", "Ensemble",
     "METRICS", "TUNNEL_TYPES", "NODE_KINDS", "KarstError", "KarstWarning", "InvalidValueError",
     "KarstIOError", "ParseError", "RangeError", "NotFoundError", "UnsupportedError",
     "UnreachableError", "ExternalError", "BusyError", "NotImplementedKarstError",
@@ -205,6 +205,14 @@ def versions():
     except ImportError:
         v["networkx"] = "not installed"
     return v
+
+
+def describe(array):
+    """What an array karst writes means: {"unit", "title", "meaning", "where"} (the unit "m",
+    "1" for a ratio, "category", "index" ...; the title "conduit radius (m)"; the meaning with
+    its sign convention, e.g. water_table_distance positive above), as the files state it
+    (docs/arrays.md); None for an array karst does not describe."""
+    return _karst.array_info(array)
 
 
 def palette(array):
