@@ -16,6 +16,7 @@
 
 #include <cmocka.h>
 
+#include "geology_fixture.h"
 #include "karst.h"
 #include "scenario/scenario_internal.h"
 #include "test_util.h"
@@ -43,7 +44,11 @@ static void test_init_defaults(void **state) {
   assert_close(sc.domain_max[2], 100, 0);
   assert_int_equal(sc.terrain.is_grid, 0);
   assert_close(sc.terrain.elevation, 100, 0);
-  assert_close(sc.water_table, 0, 0);
+  assert_int_equal(sc.water_table.given, 0); /* each spring's own horizontal plane */
+  assert_close(sc.routing.vadose_factor, 2, 0);
+  assert_close(sc.routing.rise_cost, 4, 0);
+  assert_close(sc.routing.phreatic_depth, 50, 0);
+  assert_close(sc.routing.water_table_band, 5, 0);
   assert_close(sc.permeability.background, 1, 0);
   assert_close(sc.cost.w0, 1, 0);
   assert_close(sc.cost.horizon, 1, 0);
@@ -64,7 +69,6 @@ static void test_init_defaults(void **state) {
   assert_close(sc.amplification.dead_end_fraction, 0, 0);
   assert_close(sc.tortuosity, 0.1, 0);
   assert_close(sc.classification.vertical_angle, 60, 0);
-  assert_close(sc.classification.water_table_band, 5, 0);
   assert_close(sc.classification.epikarst_depth, 10, 0);
   assert_close(sc.classification.chamber_resistance, 0.05, 0);
   for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++) {
@@ -104,7 +108,8 @@ static void test_branchwork(void **state) {
   assert_int_equal(sc.sampling.k, 40);
   assert_int_equal(sc.terrain.is_grid, 0);
   assert_close(sc.terrain.elevation, 100.0, 0);
-  assert_close(sc.water_table, 20.0, 0);
+  assert_int_equal(sc.water_table.given, 1);
+  assert_close(sc.water_table.elevation, 20.0, 0);
   /* The horizon's origin defaults to the domain centre (200, 300). */
   assert_close(sc.horizons[0].origin[0], 200.0, 0);
   assert_close(sc.horizons[0].origin[1], 300.0, 0);
@@ -112,7 +117,7 @@ static void test_branchwork(void **state) {
   /* The spring sits at the water table (§5.3: outlets drain to it). */
   for (int i = 0; i < sc.n_key_points; i++)
     if (sc.key_points[i].type == KARST_KEYPOINT_SPRING)
-      assert_close(sc.key_points[i].p[2], sc.water_table, 0);
+      assert_close(sc.key_points[i].p[2], sc.water_table.elevation, 0);
   /* Epikarst radius fixed at 0.5 m, others 0.5-4 m (§5.3). */
   assert_close(sc.classification.radius[KARST_TUNNEL_EPIKARST].max, 0.5, 0);
   assert_close(sc.classification.radius[KARST_TUNNEL_TUBE].max, 4.0, 0);
@@ -140,7 +145,7 @@ static void test_minimal_defaults(void **state) {
   assert_int_equal(karst_scenario_load(&ctx, DATA "good/minimal.yaml", &sc), KARST_SUCCESS);
   assert_string_equal(sc.name, "minimal");
   assert_string_equal(sc.path, DATA "good/minimal.yaml");
-  assert_close(sc.water_table, 0.0, 0);
+  assert_int_equal(sc.water_table.given, 0);
   assert_string_equal(sc.key_points[0].name, "sink1");
   assert_string_equal(sc.key_points[1].name, "spring1");
   assert_int_equal(sc.key_points[0].line, 8);
@@ -180,7 +185,7 @@ static void test_full_file(void **state) {
   assert_close(sc.terrain.zmax, 45.0, 0);
   assert_close(sc.terrain.lipschitz, sqrt(0.1 * 0.1 + 0.05 * 0.05), 1e-12);
   assert_close(karst_terrain_height(&sc.terrain, 10, 50), 33.5, 1e-12);
-  assert_close(sc.water_table, 12.5, 0);
+  assert_close(sc.water_table.elevation, 12.5, 0);
   assert_int_equal(sc.n_horizons, 2);
   assert_close(sc.horizons[0].dip, 10, 0);
   assert_close(sc.horizons[0].dip_direction, 45, 0);
@@ -604,7 +609,8 @@ static void test_permeability_eval(void **state) {
 /* Horizon z = e - tan(dip) * (offset along the dip direction), by hand. */
 static void test_horizon_elevation(void **state) {
   (void)state;
-  karst_horizon_t h = {100, 30, 90, {10, 20}, 5, 0, 0};
+  karst_horizon_t h = {
+      .elevation = 100, .dip = 30, .dip_direction = 90, .origin = {10, 20}, .radius = 5};
   /* 10 m east, dipping 30° east: 100 - 10 tan 30° = 94.226497... */
   assert_close(karst_horizon_elevation(&h, 20, 20), 100 - 10 / sqrt(3.0), 1e-12);
   /* Along the strike (north): unchanged. */
