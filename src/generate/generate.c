@@ -193,6 +193,22 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_
   t = karst_i_now();
   karst_rng_derive(&r_class, seed, realisation, KARST_I_STREAM_CLASSIFICATION);
   if ((err = karst_classification_run(ctx, geo, &r_class, &out))) goto cleanup;
+  {
+    /* What the integer codes of "zone" and "spring" stand for, as field data of network.vtp. */
+    const char *zones[KARST_ZONE_COUNT], *springs[KARST_SCENARIO_MAX_SPRINGS];
+    int ns = karst_geology_n_springs(geo);
+    for (int z = 0; z < KARST_ZONE_COUNT; z++)
+      zones[z] = karst_zone_name(z);
+    for (int i = 0; i < ns && i < KARST_SCENARIO_MAX_SPRINGS; i++)
+      springs[i] = sc->key_points[karst_geology_spring_key(geo, i)].name;
+    if (karst_network_set_strings(&out, "zone_names", KARST_ZONE_COUNT, zones) ||
+        karst_network_set_strings(&out, "spring_names",
+                                  ns < KARST_SCENARIO_MAX_SPRINGS ? ns : KARST_SCENARIO_MAX_SPRINGS,
+                                  springs)) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+      goto cleanup;
+    }
+  }
   if (sc->name && !out.title) {
     out.title = strdup(sc->name);
     if (!out.title) {

@@ -851,6 +851,7 @@ static karst_error_t realise_dfn(karst_ctx_t *ctx, karst_geology_t *g, uint64_t 
     karst_plane_normal(fr->dip_direction, fr->dip, mu);
     for (karst_int_t i = 0; i < m; i++) {
       karst_disc_t *d = &g->discs[g->n_discs++];
+      memset(d, 0, sizeof *d); /* padding too: the discs are compared byte for byte */
       for (int k = 0; k < 3; k++)
         d->c[k] = karst_rng_uniform_range(&rng, lo[k], hi[k]);
       karst_i_fisher_draw(&rng, mu, fr->kappa, d->n);

@@ -71,15 +71,16 @@ static int has_required(const karst_scenario_t *sc, const karst_geology_t *geo, 
 static karst_error_t unreachable(karst_ctx_t *ctx, const karst_scenario_t *sc, int a, int b,
                                  const char *why) {
   const karst_keypoint_t *ka = &sc->key_points[a], *kb = &sc->key_points[b];
-  char where[KARST_ERRMSG_MAX / 4];
+  char where[KARST_ERRMSG_MAX / 4], bline[32] = "";
   kp_where(sc, ka, where, sizeof where);
+  if (kb->line > 0) snprintf(bline, sizeof bline, " (line %d)", kb->line);
   return karst_set_error(
       ctx, KARST_EUNREACHABLE,
-      "%skey point '%s' at (%.2f, %.2f, %.2f) cannot drain to '%s' (line %d)%s: no path through "
+      "%skey point '%s' at (%.2f, %.2f, %.2f) cannot drain to '%s'%s%s: no path through "
       "the bedrock reaches it without rising back from the water table into the vadose zone or "
       "crossing an exclusion zone; raise sampling.k (now %d) or lower sampling.fill_radius (now "
       "%g m) so that the samples join up, and check the water table of '%s' and the exclusions",
-      where, ka->name, ka->p[0], ka->p[1], ka->p[2], kb->name, kb->line, why, sc->sampling.k,
+      where, ka->name, ka->p[0], ka->p[1], ka->p[2], kb->name, bline, why, sc->sampling.k,
       sc->sampling.fill_radius, kb->name);
 }
 
@@ -242,11 +243,13 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
         best = s;
     }
     if (!req && best < 0) {
-      int first = 0;
+      int first = 0, n_allowed = 0;
       while (first < S - 1 && !allowed[k * S + first])
         first++;
+      for (int q = 0; q < S; q++)
+        n_allowed += allowed[k * S + q];
       err = unreachable(ctx, sc, k, P.targets[first],
-                        S > 1 ? " nor any other spring it may drain to" : "");
+                        n_allowed > 1 ? " nor any other spring it may drain to" : "");
       goto cleanup;
     }
     for (int s = 0; s < S; s++) /* the sink's own routes: required springs, or the best one */
