@@ -1155,6 +1155,20 @@ static karst_error_t read_surface_def(reader_t *r, yaml_node_t *n, karst_surface
                    "or {surface: FILE}, got %s",
                    path, describe(n, d2, sizeof d2));
   d->elevation = NAN;
+  int has_file = 0, has_plane = 0;
+  for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
+    yaml_node_t *k = yaml_document_get_node(r->doc, p->key);
+    if (k->type != YAML_SCALAR_NODE) continue;
+    if (!strcmp(scalar(k), "surface"))
+      has_file = 1;
+    else
+      has_plane = 1;
+  }
+  if (has_file && has_plane) /* before any file is read */
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s gives both a surface file and plane keys (elevation, dip, dip_direction, "
+                   "origin); give one of them",
+                   path);
   if ((err = walk_map(r, n, &surface_schema, d, path, NULL))) return err;
   int plane_keys = 0;
   for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
@@ -1388,6 +1402,19 @@ static karst_error_t read_exclusions(reader_t *r, yaml_node_t *n, void *base, co
 
 /* --- faults ----------------------------------------------------------------- */
 
+/* faults[i].radius: a finite radius > 0 (not given: an unbounded plane, stored as INFINITY). */
+static karst_error_t read_fault_radius(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  static const range_t gt0 = RANGE_GT(0, " m");
+  char d[80];
+  double v = 0;
+  karst_error_t err = get_number(r, n, path, &v);
+  if (err) return err;
+  if (!in_range(&gt0, v))
+    return fail_at(r, n, KARST_ERANGE, "%s must be > 0 m, got %s", path, describe(n, d, sizeof d));
+  ((karst_fault_t *)base)->radius = v;
+  return KARST_SUCCESS;
+}
+
 static const char *const fault_kind_names[] = {"conduit", "barrier"};
 static const field_t fault_fields[] = {
     {.key = "name", .type = T_FN, .fn = read_fault_name},
@@ -1402,10 +1429,7 @@ static const field_t fault_fields[] = {
      .off = offsetof(karst_fault_t, dip),
      .range = RANGE_CLOSED(0, 90, " degrees"),
      .required = 1},
-    {.key = "radius",
-     .type = T_NUM,
-     .off = offsetof(karst_fault_t, radius),
-     .range = RANGE_GT(0, " m")},
+    {.key = "radius", .type = T_FN, .fn = read_fault_radius},
     {.key = "damage_zone",
      .type = T_NUM,
      .off = offsetof(karst_fault_t, damage_zone),
@@ -1467,6 +1491,17 @@ static const field_t routing_fields[] = {
      .range = RANGE_GE(0, " m")},
 };
 static const schema_t routing_schema = {routing_fields, 4};
+
+/* classification.water_table_band moved to routing.water_table_band (the band is the routing's
+ * epiphreatic zone, which the classification also uses): say so rather than "unknown key". */
+static karst_error_t moved_water_table_band(reader_t *r, yaml_node_t *n, void *base,
+                                            const char *path) {
+  (void)base;
+  return fail_at(r, n, KARST_EINVAL,
+                 "%s is now routing.water_table_band (the epiphreatic band of the two-stage "
+                 "routing, which the classification uses too); move it there",
+                 path);
+}
 
 /* --- the top level --------------------------------------------------------- */
 
@@ -1597,8 +1632,9 @@ static const field_t classification_fields[] = {
      .off = offsetof(karst_classification_t, radius_correlation),
      .range = RANGE_GE(0, " m")},
     {.key = "radius", .type = T_FN, .fn = read_radius},
+    {.key = "water_table_band", .type = T_FN, .fn = moved_water_table_band},
 };
-static const schema_t classification_schema = {classification_fields, 5};
+static const schema_t classification_schema = {classification_fields, 6};
 
 static const field_t random_fields[] = {
     {.key = "seed", .type = T_U64, .off = offsetof(karst_scenario_t, seed)},
