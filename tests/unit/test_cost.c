@@ -45,10 +45,12 @@ static double midpoint_integral(const karst_scenario_t *sc, const double a[3], c
                                 int n) {
   double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), sum = 0;
+  karst_geology_t *g = geo_make(sc);
   for (int i = 0; i < n; i++) {
     double s = (i + 0.5) / n, p[3] = {a[0] + s * d[0], a[1] + s * d[1], a[2] + s * d[2]};
-    sum += T_cost_point(sc, p, d);
+    sum += karst_cost_point(g, p, d);
   }
+  karst_geology_free(g);
   return sum * len / n;
 }
 
@@ -297,15 +299,16 @@ static void test_lower_bound(void **state) {
     sc.permeability.root->radius = 20, sc.permeability.root->falloff = 10;
     sc.permeability.root->resistance = karst_rng_uniform(&r);
     double lb = karst_cost_lower_bound_per_metre(&sc), cmin = INFINITY, fmin_seen = INFINITY;
+    karst_geology_t *g = geo_make(&sc);
     for (int i = 0; i < 10000; i++) {
       double p[3], d[3];
       for (int a = 0; a < 3; a++)
         p[a] = karst_rng_uniform_range(&r, 0, 100);
       karst_rng_unit_vector(&r, d);
-      double c = T_cost_point(&sc, p, d);
+      double c = karst_cost_point(g, p, d);
       assert_true(lb <= c);
       cmin = fmin(cmin, c);
-      fmin_seen = fmin(fmin_seen, T_fracture_term(&sc, d));
+      fmin_seen = fmin(fmin_seen, karst_cost_fracture_term(g, d));
     }
     for (int i = 0; i < 300; i++) {
       double a[3], b[3], d[3];
@@ -315,8 +318,9 @@ static void test_lower_bound(void **state) {
       double len = karst_rng_uniform_range(&r, 0.1, 10);
       for (int k = 0; k < 3; k++)
         b[k] = a[k] + len * d[k];
-      assert_true(lb * len <= T_cost_edge(&sc, a, b));
+      assert_true(lb * len <= karst_cost_edge(g, a, b));
     }
+    karst_geology_free(g);
     (void)cmin;
     /* The fracture part of the bound is tight: some random direction comes
      * within 2 % of Σ w_k of the minimum λmin (1e4 directions). */
