@@ -246,17 +246,22 @@ static void grid_cell(const karst_surface_t *s, double x, double y, karst_int_t 
   *v = s->nrows > 1 ? fy - (double)*j : 0;
 }
 
+/* The cell of (x, y): its corner elevations z00 z10 z01 z11, (u, v) and the clamping flags. */
+static void grid_corners(const karst_surface_t *s, double x, double y, double c[4], double *u,
+                         double *v, int *cx, int *cy) {
+  karst_int_t i, j;
+  grid_cell(s, x, y, &i, &j, u, v, cx, cy);
+  karst_int_t i1 = s->ncols > 1 ? i + 1 : i, j1 = s->nrows > 1 ? j + 1 : j;
+  c[0] = s->z[j * s->ncols + i], c[1] = s->z[j * s->ncols + i1];
+  c[2] = s->z[j1 * s->ncols + i], c[3] = s->z[j1 * s->ncols + i1];
+}
+
 static double grid_z(const karst_surface_t *s, double x, double y) {
   if (!isfinite(x) || !isfinite(y)) return NAN;
-  karst_int_t i, j;
-  double u, v;
+  double c[4], u, v;
   int cx, cy;
-  grid_cell(s, x, y, &i, &j, &u, &v, &cx, &cy);
-  karst_int_t i1 = s->ncols > 1 ? i + 1 : i, j1 = s->nrows > 1 ? j + 1 : j;
-  const double *z = s->z;
-  double z00 = z[j * s->ncols + i], z10 = z[j * s->ncols + i1];
-  double z01 = z[j1 * s->ncols + i], z11 = z[j1 * s->ncols + i1];
-  return (1 - v) * ((1 - u) * z00 + u * z10) + v * ((1 - u) * z01 + u * z11);
+  grid_corners(s, x, y, c, &u, &v, &cx, &cy);
+  return (1 - v) * ((1 - u) * c[0] + u * c[1]) + v * ((1 - u) * c[2] + u * c[3]);
 }
 
 static void grid_gradient(const karst_surface_t *s, double x, double y, double g[2]) {
@@ -264,16 +269,11 @@ static void grid_gradient(const karst_surface_t *s, double x, double y, double g
     g[0] = g[1] = NAN;
     return;
   }
-  karst_int_t i, j;
-  double u, v;
+  double c[4], u, v;
   int cx, cy;
-  grid_cell(s, x, y, &i, &j, &u, &v, &cx, &cy);
-  karst_int_t i1 = s->ncols > 1 ? i + 1 : i, j1 = s->nrows > 1 ? j + 1 : j;
-  const double *z = s->z;
-  double z00 = z[j * s->ncols + i], z10 = z[j * s->ncols + i1];
-  double z01 = z[j1 * s->ncols + i], z11 = z[j1 * s->ncols + i1];
-  g[0] = cx ? 0.0 : ((1 - v) * (z10 - z00) + v * (z11 - z01)) / s->cs;
-  g[1] = cy ? 0.0 : ((1 - u) * (z01 - z00) + u * (z11 - z10)) / s->cs;
+  grid_corners(s, x, y, c, &u, &v, &cx, &cy);
+  g[0] = cx ? 0.0 : ((1 - v) * (c[1] - c[0]) + v * (c[3] - c[2])) / s->cs;
+  g[1] = cy ? 0.0 : ((1 - u) * (c[2] - c[0]) + u * (c[3] - c[1])) / s->cs;
 }
 
 /* Extreme (sign = 1: max, -1: min) of the grid over a rectangle. On each cell
@@ -506,12 +506,14 @@ static int pieces_range(const karst_surface_t *s, const double a[3], const doubl
  * @param a, b the segment's ends; @param t receives the parameters;
  * @param max_t room in @p t.
  * @return the number of parameters, or -1 when there are more than @p max_t
- *         (split the segment and ask for each half).
+ *         (split the segment and ask for each half); 0 for non-finite ends.
  * Time complexity: O(1 + pieces) for a grid; O(1 + buckets crossed x triangles
  * per bucket) expected for a TIN.
  */
 int karst_surface_segment_pieces(const karst_surface_t *s, const double a[3], const double b[3],
                                  double *t, int max_t) {
+  for (int k = 0; k < 2; k++)
+    if (!isfinite(a[k]) || !isfinite(b[k])) return 0;
   return pieces_range(s, a, b, 0.0, 1.0, t, max_t);
 }
 

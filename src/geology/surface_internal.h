@@ -37,7 +37,7 @@ struct karst_surface {
   karst_int_t bnx, bny;
   double bx0, by0, bcs, binv;
   karst_int_t *bstart; /* bnx bny + 1 offsets into bitem */
-  karst_int_t *bitem;  /* triangle indices, the one covering most of the bucket first */
+  karst_int_t *bitem;  /* triangle indices, the one holding the bucket's centre first */
 };
 
 /** Where the vertices and triangles of a TIN came from, to name them in messages. */

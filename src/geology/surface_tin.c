@@ -70,7 +70,7 @@ static inline double orient_filter(const double a[2], const double b[2], const d
  * whose products do not underflow. A floating-point filter decides almost every
  * call (Shewchuk 1997); the rest are summed exactly. O(1).
  */
-int karst_i_orient2d(const double a[2], const double b[2], const double c[2]) {
+static inline int orient(const double a[2], const double b[2], const double c[2]) {
   double detl = (a[0] - c[0]) * (b[1] - c[1]);
   double detr = (a[1] - c[1]) * (b[0] - c[0]);
   double det = detl - detr;
@@ -80,6 +80,10 @@ int karst_i_orient2d(const double a[2], const double b[2], const double c[2]) {
   /* A rounded difference is 0 only when exact, so a zero product is exact. */
   if (detl == 0.0 && detr == 0.0) return 0;
   return orient_exact(a, b, c);
+}
+
+int karst_i_orient2d(const double a[2], const double b[2], const double c[2]) {
+  return orient(a, b, c);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -160,6 +164,15 @@ static int cmp_edge(const void *pa, const void *pb) {
   return a->t < b->t ? -1 : (a->t > b->t);
 }
 
+/* min and max of finite values, inlined (libm's fmin and fmax are calls that
+ * also order NaNs, which these hot loops never see). */
+static inline double min2(double a, double b) {
+  return a < b ? a : b;
+}
+static inline double max2(double a, double b) {
+  return a > b ? a : b;
+}
+
 static const double *tvert(const karst_surface_t *s, karst_int_t t, int k) {
   return s->tdata + 9 * t + 2 * k;
 }
@@ -174,8 +187,8 @@ static inline int in_triangle(const karst_surface_t *s, karst_int_t t, const dou
   if ((d1 = orient_filter(v1, v2, p, &b1)) < -b1) return 0;
   if ((d2 = orient_filter(v2, v0, p, &b2)) < -b2) return 0;
   if (d0 > b0 && d1 > b1 && d2 > b2) return 2;
-  int o0 = karst_i_orient2d(v0, v1, p), o1 = karst_i_orient2d(v1, v2, p);
-  int o2 = karst_i_orient2d(v2, v0, p);
+  int o0 = orient(v0, v1, p), o1 = orient(v1, v2, p);
+  int o2 = orient(v2, v0, p);
   if (o0 < 0 || o1 < 0 || o2 < 0) return 0;
   return o0 > 0 && o1 > 0 && o2 > 0 ? 2 : 1;
 }
@@ -190,7 +203,7 @@ static int interiors_overlap(const karst_surface_t *s, karst_int_t p, karst_int_
       const double *e0 = tvert(s, A, k), *e1 = tvert(s, A, (k + 1) % 3);
       int outside = 1;
       for (int c = 0; c < 3 && outside; c++)
-        if (karst_i_orient2d(e0, e1, tvert(s, B, c)) > 0) outside = 0;
+        if (orient(e0, e1, tvert(s, B, c)) > 0) outside = 0;
       if (outside) return 0;
     }
   }
@@ -264,14 +277,14 @@ static int strip_xrange(const karst_surface_t *s, karst_int_t t, double ya, doub
   double lo = INFINITY, hi = -INFINITY;
   for (int k = 0; k < 3; k++) {
     const double *p = tvert(s, t, k), *q = tvert(s, t, (k + 1) % 3);
-    if (p[1] >= ya && p[1] <= yb) lo = fmin(lo, p[0]), hi = fmax(hi, p[0]);
+    if (p[1] >= ya && p[1] <= yb) lo = min2(lo, p[0]), hi = max2(hi, p[0]);
     if (p[1] == q[1]) continue;
     const double ys[2] = {ya, yb};
     for (int e = 0; e < 2; e++) {
       double c = ys[e];
       if ((c - p[1]) * (c - q[1]) <= 0) {
         double x = p[0] + (c - p[1]) * (q[0] - p[0]) / (q[1] - p[1]);
-        lo = fmin(lo, x), hi = fmax(hi, x);
+        lo = min2(lo, x), hi = max2(hi, x);
       }
     }
   }
@@ -282,13 +295,13 @@ static int strip_xrange(const karst_surface_t *s, karst_int_t t, double ya, doub
 /* Visit the buckets triangle t overlaps: fill = 0 counts into bstart, 1 lists. */
 static void bucket_insert(karst_surface_t *s, karst_int_t t, int fill, karst_int_t *cursor) {
   const double *v = s->tdata + 9 * t;
-  double ymin = fmin(v[1], fmin(v[3], v[5])), ymax = fmax(v[1], fmax(v[3], v[5]));
+  double ymin = min2(v[1], min2(v[3], v[5])), ymax = max2(v[1], max2(v[3], v[5]));
   double m = KARST_I_BUCKET_MARGIN * s->bcs;
   karst_int_t j0 = bucket_row(s, ymin - m), j1 = bucket_row(s, ymax + m);
   for (karst_int_t j = j0; j <= j1; j++) {
     double ya = s->by0 + (double)j * s->bcs - m, yb = s->by0 + (double)(j + 1) * s->bcs + m;
     double xlo, xhi;
-    if (!strip_xrange(s, t, fmax(ya, ymin), fmin(yb, ymax), &xlo, &xhi)) continue;
+    if (!strip_xrange(s, t, max2(ya, ymin), min2(yb, ymax), &xlo, &xhi)) continue;
     karst_int_t i0 = bucket_col(s, xlo - m), i1 = bucket_col(s, xhi + m);
     for (karst_int_t i = i0; i <= i1; i++) {
       karst_int_t b = j * s->bnx + i;
@@ -300,19 +313,7 @@ static void bucket_insert(karst_surface_t *s, karst_int_t t, int fill, karst_int
   }
 }
 
-typedef struct {
-  double area;
-  karst_int_t t;
-} cover_t;
-
-static int cmp_cover(const void *pa, const void *pb) {
-  const cover_t *a = pa, *b = pb;
-  if (a->area != b->area) return a->area > b->area ? -1 : 1;
-  return a->t < b->t ? -1 : (a->t > b->t);
-}
-
 static karst_error_t build_buckets(karst_ctx_t *ctx, karst_surface_t *s, double area) {
-  cover_t *order = NULL;
   double W = s->hi[0] - s->lo[0], H = s->hi[1] - s->lo[1];
   double cs = sqrt(area / (double)s->nt / KARST_SURFACE_BUCKETS_PER_TRIANGLE);
   double cap = 4.0 * KARST_SURFACE_BUCKETS_PER_TRIANGLE * (double)s->nt + 64.0;
@@ -337,31 +338,24 @@ static karst_error_t build_buckets(karst_ctx_t *ctx, karst_surface_t *s, double 
   memcpy(cursor, s->bstart, (size_t)nb * sizeof *cursor);
   for (karst_int_t t = 0; t < s->nt; t++)
     bucket_insert(s, t, 1, cursor);
-  /* Within a bucket, the triangle covering most of it first: a query then
-   * tests about 1.6 triangles instead of 2.4 on a regular mesh. */
-  order = malloc((size_t)(s->bstart[nb] > 0 ? s->bstart[nb] : 1) * sizeof *order);
-  if (!order) goto nomem;
+  /* Within a bucket, the triangle holding its centre first: it covers much of
+   * the bucket, so a query tests about 1.6 triangles instead of 2.4 on a
+   * regular mesh. */
   for (karst_int_t b = 0; b < nb; b++) {
-    karst_int_t j = b / s->bnx, i = b % s->bnx;
-    double x0 = s->bx0 + (double)i * s->bcs, y0 = s->by0 + (double)j * s->bcs;
-    karst_int_t k0 = s->bstart[b], k1 = s->bstart[b + 1];
-    for (karst_int_t k = k0; k < k1; k++) {
-      double poly[8][3], a = 0;
-      int n = clip_to_rect(s, s->bitem[k], x0, x0 + s->bcs, y0, y0 + s->bcs, poly);
-      for (int c = 1; c + 1 < n; c++)
-        a += (poly[c][0] - poly[0][0]) * (poly[c + 1][1] - poly[0][1]) -
-             (poly[c][1] - poly[0][1]) * (poly[c + 1][0] - poly[0][0]);
-      order[k] = (cover_t){a, s->bitem[k]};
-    }
-    qsort(order + k0, (size_t)(k1 - k0), sizeof *order, cmp_cover);
-    for (karst_int_t k = k0; k < k1; k++)
-      s->bitem[k] = order[k].t;
+    double c[2] = {s->bx0 + ((double)(b % s->bnx) + 0.5) * s->bcs,
+                   s->by0 + ((double)(b / s->bnx) + 0.5) * s->bcs};
+    for (karst_int_t k = s->bstart[b]; k < s->bstart[b + 1]; k++)
+      if (in_triangle(s, s->bitem[k], c)) {
+        karst_int_t t = s->bitem[k];
+        memmove(s->bitem + s->bstart[b] + 1, s->bitem + s->bstart[b],
+                (size_t)(k - s->bstart[b]) * sizeof *s->bitem);
+        s->bitem[s->bstart[b]] = t;
+        break;
+      }
   }
-  free(order);
   free(cursor);
   return KARST_SUCCESS;
 nomem:
-  free(order);
   free(cursor);
   return karst_set_error(ctx, KARST_ENOMEM, "TIN: out of memory for the spatial index");
 }
@@ -439,8 +433,9 @@ static karst_error_t check_overlaps(karst_ctx_t *ctx, const karst_surface_t *s,
  * (NULL: "vertex 3", "triangle 7 (vertices ...)"); @param out the surface.
  * @return KARST_SUCCESS, KARST_EINVAL (bad geometry, naming the vertex or
  *         triangle and its line), KARST_ERANGE (a limit) or KARST_ENOMEM.
- * Time complexity: O(n log n) for n = nv + nt (sorting vertices and edges),
- * plus the overlap check, O(n) expected on a well-shaped mesh.
+ * Time complexity: O(n log n) for n = nv + nt (sorting the vertices; edges
+ * are sorted in O(n)), plus the overlap check, O(n) expected on a
+ * well-shaped mesh.
  */
 karst_error_t karst_i_surface_tin(karst_ctx_t *ctx, karst_int_t nv, const double *xyz,
                                   karst_int_t nt, const karst_int_t *tri,
@@ -449,7 +444,7 @@ karst_error_t karst_i_surface_tin(karst_ctx_t *ctx, karst_int_t nv, const double
   karst_surface_t *s = NULL;
   vsort_t *vs = NULL;
   edge_t *edges = NULL;
-  karst_int_t *rep = NULL, *newidx = NULL, *orig = NULL;
+  karst_int_t *rep = NULL, *newidx = NULL, *orig = NULL, *first_edge = NULL;
   char w[1100], lab[160], note[48];
   const char *file = src && src->path ? src->path : "TIN";
   *out = NULL;
@@ -571,7 +566,7 @@ karst_error_t karst_i_surface_tin(karst_ctx_t *ctx, karst_int_t nv, const double
         goto cleanup;
       }
     const double *P[3] = {s->xyz + 3 * T[0], s->xyz + 3 * T[1], s->xyz + 3 * T[2]};
-    int o = karst_i_orient2d(P[0], P[1], P[2]);
+    int o = orient(P[0], P[1], P[2]);
     if (o == 0) {
       triangle_where(src, t, w, sizeof w);
       triangle_label(src, t, tri, lab, sizeof lab);
@@ -604,16 +599,41 @@ karst_error_t karst_i_surface_tin(karst_ctx_t *ctx, karst_int_t nv, const double
     s->lipschitz = fmax(s->lipschitz, hypot(d[7], d[8]));
   }
 
-  /* Edges: at most two triangles each, on opposite sides. */
+  /* Edges: at most two triangles each, on opposite sides. They are sorted by
+   * their lower vertex with a counting sort, then within a vertex's few edges. */
   edges = malloc((size_t)nt * 3 * sizeof *edges);
-  if (!edges) goto nomem;
+  first_edge = calloc((size_t)nkeep + 1, sizeof *first_edge);
+  if (!edges || !first_edge) goto nomem;
   for (karst_int_t t = 0; t < nt; t++)
     for (int k = 0; k < 3; k++) {
       karst_int_t a = s->tri[3 * t + k], b = s->tri[3 * t + (k + 1) % 3];
-      edges[3 * t + k] = (edge_t){a < b ? a : b, a < b ? b : a, t, k};
+      first_edge[(a < b ? a : b) + 1]++;
       s->nbr[3 * t + k] = -1;
     }
-  qsort(edges, (size_t)nt * 3, sizeof *edges, cmp_edge);
+  for (karst_int_t v = 0; v < nkeep; v++)
+    first_edge[v + 1] += first_edge[v];
+  for (karst_int_t t = 0; t < nt; t++)
+    for (int k = 0; k < 3; k++) {
+      karst_int_t a = s->tri[3 * t + k], b = s->tri[3 * t + (k + 1) % 3];
+      karst_int_t u = a < b ? a : b;
+      edges[first_edge[u]++] = (edge_t){u, a < b ? b : a, t, k};
+    }
+  for (karst_int_t v = nkeep; v > 0; v--) /* back to the starts */
+    first_edge[v] = first_edge[v - 1];
+  first_edge[0] = 0;
+  for (karst_int_t v = 0; v < nkeep; v++) {
+    edge_t *E = edges + first_edge[v];
+    karst_int_t n = first_edge[v + 1] - first_edge[v];
+    if (n > 16)
+      qsort(E, (size_t)n, sizeof *E, cmp_edge); /* a vertex of high degree */
+    else
+      for (karst_int_t i = 1; i < n; i++) /* insertion sort; t ascends already */
+        for (karst_int_t j = i; j > 0 && cmp_edge(E + j - 1, E + j) > 0; j--) {
+          edge_t w = E[j];
+          E[j] = E[j - 1];
+          E[j - 1] = w;
+        }
+  }
   karst_int_t ne = 3 * nt, nbnd = 0;
   for (karst_int_t e = 0; e < ne;) {
     karst_int_t f = e + 1;
@@ -681,6 +701,7 @@ cleanup:
   karst_surface_free(s);
   free(vs);
   free(edges);
+  free(first_edge);
   free(rep);
   free(newidx);
   free(orig);
@@ -710,8 +731,8 @@ karst_error_t karst_surface_create_tin(karst_ctx_t *ctx, karst_int_t nv, const d
 /**
  * The triangle whose closed plan-view area holds (x, y), the lowest index when
  * (x, y) lies on a shared edge or vertex, or -1 outside the TIN. The bucket of
- * (x, y) lists every triangle that meets it, the one covering most of the
- * bucket first; a triangle holding the point strictly inside (exact orientation
+ * (x, y) lists every triangle that meets it, the one holding the bucket's
+ * centre first; a triangle holding the point strictly inside (exact orientation
  * tests) is the only one and ends the scan, a point on borders scans them all.
  * Time complexity: O(1) expected (the triangles of one bucket).
  */
@@ -741,6 +762,11 @@ karst_int_t karst_i_tin_locate_brute(const karst_surface_t *s, double x, double 
 /* Segment pieces                                                            */
 /* ------------------------------------------------------------------------ */
 
+/* Triangles remembered per call of karst_i_tin_pieces so that one listed in
+ * several buckets is examined once (beyond, a repeat only costs time: its
+ * parameters are already in the list). */
+#define PIECES_SEEN_MAX 64
+
 /* Insert v into the sorted distinct list t[0..*n); -1 when full. */
 static int insert_sorted(double *t, int *n, int max_t, double v) {
   int lo = 0, hi = *n;
@@ -759,6 +785,50 @@ static int insert_sorted(double *t, int *n, int max_t, double v) {
   return 0;
 }
 
+/* Parameter along A + t D where the trace crosses the edge (u, v), computed
+ * from its lower-numbered end so that both triangles of the edge give the same
+ * value to the bit. */
+static double crossing(const karst_surface_t *s, karst_int_t u, karst_int_t v, const double A[2],
+                       const double D[2]) {
+  if (u > v) {
+    karst_int_t w = u;
+    u = v, v = w;
+  }
+  const double *E0 = s->xyz + 3 * u, *E1 = s->xyz + 3 * v;
+  double ex = E1[0] - E0[0], ey = E1[1] - E0[1];
+  return ((E0[0] - A[0]) * ey - (E0[1] - A[1]) * ex) / (D[0] * ey - D[1] * ex);
+}
+
+/* The trace walked from triangle T, which holds P0, across the edge by which
+ * it leaves each triangle (decided by exact sides of the line through A, B),
+ * recording each crossing in (t0, t1) until the triangle that holds P1:
+ * O(pieces). The count, -1 when t is full, or -2 when the walk cannot decide:
+ * the line meets a vertex (or runs along an edge) or the trace leaves the TIN,
+ * and the bucket scan does the range instead. */
+static int walk_pieces(const karst_surface_t *s, const double A[2], const double B[2],
+                       const double P0[2], const double P1[2], double t0, double t1, karst_int_t T,
+                       double *t, int max_t) {
+  const double D[2] = {B[0] - A[0], B[1] - A[1]};
+  int n = 0;
+  for (karst_int_t step = 0; step <= s->nt && T >= 0; step++) {
+    const karst_int_t *V = s->tri + 3 * T;
+    int side[3], k = -1;
+    for (int c = 0; c < 3; c++)
+      if ((side[c] = orient(A, B, s->xyz + 3 * V[c])) == 0) return -2;
+    for (int c = 0; c < 3; c++)
+      if (side[c] < 0 && side[(c + 1) % 3] > 0) k = c; /* the edge the line leaves by */
+    if (k < 0) return -2;
+    const double *e0 = s->xyz + 3 * V[k], *e1 = s->xyz + 3 * V[(k + 1) % 3];
+    if (orient(e0, e1, P1) >= 0) return n; /* P1 is in T: done */
+    if (orient(e0, e1, P0) > 0) {          /* the exit lies beyond P0 */
+      double te = crossing(s, V[k], V[(k + 1) % 3], A, D);
+      if (te > t0 && te < t1 && insert_sorted(t, &n, max_t, te)) return -1;
+    }
+    T = s->nbr[3 * T + k];
+  }
+  return -2;
+}
+
 /* Break parameters contributed by triangle tr: its corners on the trace's line
  * and its edges the trace crosses properly (both decided exactly). */
 static int triangle_breaks(const karst_surface_t *s, karst_int_t tr, const double A[2],
@@ -769,7 +839,7 @@ static int triangle_breaks(const karst_surface_t *s, karst_int_t tr, const doubl
   int side[3];
   for (int k = 0; k < 3; k++) {
     const double *V = s->xyz + 3 * T[k];
-    side[k] = karst_i_orient2d(A, B, V);
+    side[k] = orient(A, B, V);
     if (side[k] == 0) {
       double tv = ((V[0] - A[0]) * D[0] + (V[1] - A[1]) * D[1]) / dd;
       if (tv > t0 && tv < t1 && insert_sorted(t, n, max_t, tv)) return -1;
@@ -779,14 +849,11 @@ static int triangle_breaks(const karst_surface_t *s, karst_int_t tr, const doubl
     int k1 = (k + 1) % 3;
     if (side[k] * side[k1] >= 0) continue; /* not strictly on both sides of the line */
     karst_int_t u = T[k], v = T[k1];
-    if (u > v) u = T[k1], v = T[k]; /* canonical: both triangles give the same value */
+    if (u > v) u = T[k1], v = T[k];
     const double *E0 = s->xyz + 3 * u, *E1 = s->xyz + 3 * v;
-    int r0 = karst_i_orient2d(E0, E1, A), r1 = karst_i_orient2d(E0, E1, B);
+    int r0 = orient(E0, E1, A), r1 = orient(E0, E1, B);
     if (r0 * r1 >= 0) continue; /* the crossing is not strictly between a and b */
-    double ex = E1[0] - E0[0], ey = E1[1] - E0[1];
-    double num = (E0[0] - A[0]) * ey - (E0[1] - A[1]) * ex;
-    double den = D[0] * ey - D[1] * ex;
-    double te = num / den;
+    double te = crossing(s, T[k], T[k1], A, D);
     if (te > t0 && te < t1 && insert_sorted(t, n, max_t, te)) return -1;
   }
   return 0;
@@ -794,9 +861,12 @@ static int triangle_breaks(const karst_surface_t *s, karst_int_t tr, const doubl
 
 /**
  * Piece boundaries of a TIN along [a, b] with parameters in (t0, t1) (see
- * karst_surface_segment_pieces): the triangles of the buckets the trace
+ * karst_surface_segment_pieces): nothing when both ends lie in one triangle; a
+ * walk across the triangles from the one under the start when the trace meets
+ * no vertex and stays in the TIN; else the triangles of the buckets the trace
  * crosses contribute the corners on it and the edges it crosses.
- * Time complexity: O(buckets crossed x triangles per bucket) expected.
+ * Time complexity: O(1 + pieces) for the walk, O(buckets crossed x triangles
+ * per bucket) expected for the scan.
  */
 int karst_i_tin_pieces(const karst_surface_t *s, const double a[3], const double b[3], double t0,
                        double t1, double *t, int max_t) {
@@ -807,10 +877,19 @@ int karst_i_tin_pieces(const karst_surface_t *s, const double a[3], const double
     P1[k] = a[k] + t1 * (b[k] - a[k]);
   }
   if (A[0] == B[0] && A[1] == B[1]) return 0; /* vertical: one x-y point */
-  double xmin = fmax(fmin(P0[0], P1[0]), s->lo[0]), xmax = fmin(fmax(P0[0], P1[0]), s->hi[0]);
-  double ymin = fmax(fmin(P0[1], P1[1]), s->lo[1]), ymax = fmin(fmax(P0[1], P1[1]), s->hi[1]);
+  /* Both ends in one (convex) triangle: the trace between them crosses nothing.
+   * Graph edges are often shorter than triangles, so this is the common case. */
+  karst_int_t e0 = karst_i_tin_locate(s, P0[0], P0[1]);
+  if (e0 >= 0 && e0 == karst_i_tin_locate(s, P1[0], P1[1])) return 0;
+  if (e0 >= 0) {
+    int w = walk_pieces(s, A, B, P0, P1, t0, t1, e0, t, max_t);
+    if (w != -2) return w;
+  }
+  double xmin = max2(min2(P0[0], P1[0]), s->lo[0]), xmax = min2(max2(P0[0], P1[0]), s->hi[0]);
+  double ymin = max2(min2(P0[1], P1[1]), s->lo[1]), ymax = min2(max2(P0[1], P1[1]), s->hi[1]);
   if (!(xmin <= xmax && ymin <= ymax)) return 0; /* outside the TIN's box */
-  int n = 0;
+  int n = 0, nseen = 0;
+  karst_int_t seen[PIECES_SEEN_MAX];
   double m = KARST_I_BUCKET_MARGIN * s->bcs;
   karst_int_t j0 = bucket_row(s, ymin - m), j1 = bucket_row(s, ymax + m);
   double dx = P1[0] - P0[0], dy = P1[1] - P0[1];
@@ -820,16 +899,27 @@ int karst_i_tin_pieces(const karst_surface_t *s, const double a[3], const double
     double xa = P0[0], xb = P1[0];
     if (dy != 0) {
       double ua = (ya - P0[1]) / dy, ub = (yb - P0[1]) / dy;
-      double ulo = fmax(0.0, fmin(ua, ub)), uhi = fmin(1.0, fmax(ua, ub));
+      double ulo = max2(0.0, min2(ua, ub)), uhi = min2(1.0, max2(ua, ub));
       if (ulo > uhi) continue;
       xa = P0[0] + ulo * dx, xb = P0[0] + uhi * dx;
     }
-    karst_int_t i0 = bucket_col(s, fmax(fmin(xa, xb) - m, xmin - m));
-    karst_int_t i1 = bucket_col(s, fmin(fmax(xa, xb) + m, xmax + m));
+    karst_int_t i0 = bucket_col(s, max2(min2(xa, xb) - m, xmin - m));
+    karst_int_t i1 = bucket_col(s, min2(max2(xa, xb) + m, xmax + m));
     for (karst_int_t i = i0; i <= i1; i++) {
       karst_int_t bk = j * s->bnx + i;
-      for (karst_int_t k = s->bstart[bk]; k < s->bstart[bk + 1]; k++)
-        if (triangle_breaks(s, s->bitem[k], A, B, t0, t1, t, &n, max_t)) return -1;
+      for (karst_int_t k = s->bstart[bk]; k < s->bstart[bk + 1]; k++) {
+        karst_int_t tr = s->bitem[k];
+        const double *d = s->tdata + 9 * tr;
+        if (max2(d[0], max2(d[2], d[4])) < xmin - m || min2(d[0], min2(d[2], d[4])) > xmax + m ||
+            max2(d[1], max2(d[3], d[5])) < ymin - m || min2(d[1], min2(d[3], d[5])) > ymax + m)
+          continue;  /* its box misses the trace's: nothing to add */
+        int dup = 0; /* a triangle listed in several buckets of the trace is done once */
+        for (int q = 0; q < nseen && !dup; q++)
+          dup = seen[q] == tr;
+        if (dup) continue;
+        if (nseen < PIECES_SEEN_MAX) seen[nseen++] = tr;
+        if (triangle_breaks(s, tr, A, B, t0, t1, t, &n, max_t)) return -1;
+      }
     }
   }
   return n;
@@ -1031,7 +1121,7 @@ karst_error_t karst_i_tin_triangulate(karst_ctx_t *ctx, const karst_surface_t *s
     for (int c = 0; c < n; c++)
       if ((idx[c] = ptmap_get(&pm, poly[c])) < 0) goto nomem;
     for (int c = 1; c + 1 < n; c++) {
-      if (karst_i_orient2d(poly[0], poly[c], poly[c + 1]) <= 0) continue; /* a sliver cut away */
+      if (orient(poly[0], poly[c], poly[c + 1]) <= 0) continue; /* a sliver cut away */
       if (m == tcap) {
         karst_int_t nc = tcap ? 2 * tcap : 1024;
         karst_int_t *nT = realloc(T, (size_t)nc * 3 * sizeof *nT);

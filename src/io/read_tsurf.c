@@ -213,6 +213,21 @@ static void *grow(void *p, karst_int_t *cap, karst_int_t need, size_t size) {
   return np;
 }
 
+/* Double *cap (from 1024) and every array p[k] of elem[k]-byte elements with it
+ * (elem 0: not kept); p[k] holds each array as it stands, so nothing leaks
+ * when a later realloc fails. 0, or -1 when out of memory. */
+static int grow_together(karst_int_t *cap, int n, void *p[], const size_t elem[]) {
+  karst_int_t nc = *cap ? 2 * *cap : 1024;
+  for (int k = 0; k < n; k++) {
+    if (elem[k] == 0) continue;
+    void *q = realloc(p[k], (size_t)nc * elem[k]);
+    if (!q) return -1;
+    p[k] = q;
+  }
+  *cap = nc;
+  return 0;
+}
+
 static karst_error_t ensure_part(reader_t *r) {
   if (!r->part_open) { /* triangles before any TFACE: an implicit first part */
     r->part_open = 1;
@@ -246,20 +261,13 @@ static karst_error_t add_vertex(reader_t *r, int with_props) {
   if (with_props && r->ntok - 5 < nvals)
     FAIL(KARST_EPARSE, "PVRTX %lld has %d property value%s, the PROPERTIES line declares %d",
          (long long)id, r->ntok - 5, r->ntok - 5 == 1 ? "" : "s", nvals);
-  if (ts->nv == r->vcap) { /* every per-vertex array grows together */
-    karst_int_t nc = r->vcap ? 2 * r->vcap : 1024;
-    double *nx = realloc(ts->xyz, (size_t)nc * 3 * sizeof *nx);
-    if (nx) ts->xyz = nx;
-    karst_int_t *ni = nx ? realloc(ts->vid, (size_t)nc * sizeof *ni) : NULL;
-    if (ni) ts->vid = ni;
-    long *nl = ni ? realloc(ts->vline, (size_t)nc * sizeof *nl) : NULL;
-    if (nl) ts->vline = nl;
-    double *np = nl && ts->prop_stride > 0
-                     ? realloc(ts->props, (size_t)nc * (size_t)ts->prop_stride * sizeof *np)
-                     : NULL;
-    if (np) ts->props = np;
-    if (!nl || (ts->prop_stride > 0 && !np)) return nomem(r);
-    r->vcap = nc;
+  if (ts->nv == r->vcap) {
+    void *p[4] = {ts->xyz, ts->vid, ts->vline, ts->props};
+    const size_t elem[4] = {3 * sizeof(double), sizeof(karst_int_t), sizeof(long),
+                            (size_t)ts->prop_stride * sizeof(double)};
+    int bad = grow_together(&r->vcap, 4, p, elem);
+    ts->xyz = p[0], ts->vid = p[1], ts->vline = p[2], ts->props = p[3];
+    if (bad) return nomem(r);
   }
   if (ts->prop_stride > 0) {
     double *pv = ts->props + ts->nv * ts->prop_stride;
@@ -313,16 +321,12 @@ static karst_error_t add_triangle(reader_t *r) {
   if (ts->nt >= KARST_SURFACE_MAX_TRIANGLES)
     FAIL(KARST_ERANGE, "more than %lld triangles", (long long)KARST_SURFACE_MAX_TRIANGLES);
   ensure_part(r);
-  if (ts->nt == r->tcap) { /* every per-triangle array grows together */
-    karst_int_t nc = r->tcap ? 2 * r->tcap : 1024;
-    karst_int_t *nr = realloc(r->traw, (size_t)nc * 3 * sizeof *nr);
-    if (nr) r->traw = nr;
-    long *nl = nr ? realloc(ts->tline, (size_t)nc * sizeof *nl) : NULL;
-    if (nl) ts->tline = nl;
-    int *np = nl ? realloc(ts->tpart, (size_t)nc * sizeof *np) : NULL;
-    if (np) ts->tpart = np;
-    if (!np) return nomem(r);
-    r->tcap = nc;
+  if (ts->nt == r->tcap) {
+    void *p[3] = {r->traw, ts->tline, ts->tpart};
+    const size_t elem[3] = {3 * sizeof(karst_int_t), sizeof(long), sizeof(int)};
+    int bad = grow_together(&r->tcap, 3, p, elem);
+    r->traw = p[0], ts->tline = p[1], ts->tpart = p[2];
+    if (bad) return nomem(r);
   }
   memcpy(r->traw + 3 * ts->nt, id, sizeof id);
   ts->tline[ts->nt] = r->lineno;
@@ -486,12 +490,8 @@ static karst_error_t read_properties(reader_t *r) {
     if (r->ntok - 1 != r->nprops)
       FAIL(KARST_EPARSE, "NO_DATA_VALUES gives %d value%s for %d PROPERTIES", r->ntok - 1,
            r->ntok == 2 ? "" : "s", r->nprops);
-    for (int k = 0; k < r->nprops; k++) {
-      quote(r->tok[1 + k], q);
-      if (parse_number(r->tok[1 + k], &r->pnodata[k]))
-        FAIL(KARST_EPARSE, "NO_DATA_VALUES: the value of %s must be a finite number, got '%s'",
-             r->pnames[k], q);
-    }
+    for (int k = 0; k < r->nprops; k++) /* not a number (**none**): no no-data value */
+      if (parse_number(r->tok[1 + k], &r->pnodata[k])) r->pnodata[k] = NAN;
   }
   r->pstride = 0;
   for (int k = 0; k < r->nprops; k++)
@@ -633,6 +633,17 @@ static karst_error_t object_line(reader_t *r) {
     return read_crs_line(r);
   }
   const char *last = r->tok[r->ntok - 1];
+  if (strncmp(kw, "HEADER", 6) == 0 && strchr(kw, '{') == NULL && r->ntok > 1 &&
+      r->tok[1][0] == '{' && last[strlen(last) - 1] == '}') { /* HEADER {name:x} on one line */
+    for (int k = 1; k < r->ntok; k++) {
+      const char *t = r->tok[k] + (r->tok[k][0] == '{');
+      if (strncmp(t, "name:", 5) == 0 && !r->ts->name && r->ts->nobjects == 1) {
+        size_t n = strlen(t + 5) - (t[strlen(t) - 1] == '}');
+        if (!(r->ts->name = strndup(t + 5, n))) return nomem(r);
+      }
+    }
+    return KARST_SUCCESS;
+  }
   if (last[strlen(last) - 1] == '{') { /* HEADER {, HEADER{, PROPERTY_CLASS_HEADER Z { */
     r->in_block = 1;
     r->block_line = r->lineno;

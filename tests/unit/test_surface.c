@@ -211,6 +211,14 @@ static void test_plane_three_ways(void **state) {
     }
   }
   assert_true(n_below > 500 && n_above > 500); /* both answers were exercised */
+  /* the long segments cross more piece boundaries than the segment tests look up
+   * at once (128), so they were split: across the domain, 100 + 75 node lines
+   * on the grid, and on the TIN those and the 100 x 75 cells' diagonals */
+  double tt[1024];
+  const double a0[3] = {1, 1, 0}, b0[3] = {1999, 1499, 0};
+  assert_true(karst_surface_segment_pieces(sg, a0, b0, tt, 1024) > 128);
+  assert_true(karst_surface_segment_pieces(st, a0, b0, tt, 1024) > 128);
+  assert_int_equal(karst_surface_segment_pieces(st, a0, b0, tt, 128), -1);
   for (int s = 0; s < 3; s++)
     karst_surface_free(S[s]);
 }
@@ -432,6 +440,80 @@ static void test_bucket_vs_brute(void **state) {
     inside += tb >= 0;
   }
   assert_true(inside > 80000 && inside < 100000); /* both outcomes were exercised */
+
+  /* Piece boundaries against every edge and vertex of the TIN: an edge counts
+   * when the trace crosses it properly (exact orientations), at the parameter of
+   * the crossing computed from its lower-numbered end; a vertex counts when it
+   * lies on the trace strictly between the ends. Segments: random, leaving the
+   * TIN, vertex to vertex, and along the west and south borders (x = 0, y = 0
+   * exactly), which run through vertices. */
+  const double *V;
+  const karst_int_t *T;
+  karst_int_t nv, nt;
+  assert_int_equal(karst_surface_tin(s, &V, &nv, &T, &nt), 1);
+  double *expect = malloc(6 * (size_t)nt * sizeof *expect);
+  int max_n = 0;
+  for (int k = 0; k < 3000; k++) {
+    double a[3] = {0, 0, 0}, b[3] = {0, 0, 0};
+    if (k % 5 == 0) {
+      karst_int_t u = (karst_int_t)karst_rng_below(&rng, (uint64_t)nv);
+      karst_int_t w = (karst_int_t)karst_rng_below(&rng, (uint64_t)nv);
+      memcpy(a, V + 3 * u, 2 * sizeof(double));
+      memcpy(b, V + 3 * w, 2 * sizeof(double));
+    } else if (k % 5 == 1) {
+      a[k % 2] = 0, a[1 - k % 2] = karst_rng_uniform_range(&rng, -20, 100);
+      b[k % 2] = 0, b[1 - k % 2] = karst_rng_uniform_range(&rng, 100, 340);
+    } else {
+      double span = k % 5 == 2 ? 400 : 30;
+      a[0] = karst_rng_uniform_range(&rng, -20, 340),
+      a[1] = karst_rng_uniform_range(&rng, -20, 340);
+      b[0] = a[0] + karst_rng_uniform_range(&rng, -span, span);
+      b[1] = a[1] + karst_rng_uniform_range(&rng, -span, span);
+    }
+    const double A[2] = {a[0], a[1]}, B[2] = {b[0], b[1]}, D[2] = {b[0] - a[0], b[1] - a[1]};
+    int ne = 0;
+    if (D[0] != 0 || D[1] != 0) {
+      for (karst_int_t t = 0; t < nt; t++)
+        for (int e = 0; e < 3; e++) {
+          karst_int_t u = T[3 * t + e], w = T[3 * t + (e + 1) % 3];
+          if (u > w) {
+            karst_int_t x = u;
+            u = w, w = x;
+          }
+          const double *E0 = V + 3 * u, *E1 = V + 3 * w;
+          if (karst_i_orient2d(A, B, E0) * karst_i_orient2d(A, B, E1) >= 0) continue;
+          if (karst_i_orient2d(E0, E1, A) * karst_i_orient2d(E0, E1, B) >= 0) continue;
+          double ex = E1[0] - E0[0], ey = E1[1] - E0[1];
+          expect[ne++] = ((E0[0] - A[0]) * ey - (E0[1] - A[1]) * ex) / (D[0] * ey - D[1] * ex);
+        }
+      for (karst_int_t v = 0; v < nv; v++) {
+        const double *P = V + 3 * v;
+        if (karst_i_orient2d(A, B, P) != 0) continue;
+        double tv = ((P[0] - A[0]) * D[0] + (P[1] - A[1]) * D[1]) / (D[0] * D[0] + D[1] * D[1]);
+        if (tv > 0 && tv < 1) expect[ne++] = tv;
+      }
+    }
+    /* sort and drop repeats (an edge is seen from both its triangles) */
+    for (int i = 1; i < ne; i++)
+      for (int j = i; j > 0 && expect[j - 1] > expect[j]; j--) {
+        double x = expect[j];
+        expect[j] = expect[j - 1], expect[j - 1] = x;
+      }
+    int nu = 0;
+    for (int i = 0; i < ne; i++)
+      if (nu == 0 || expect[i] != expect[nu - 1]) expect[nu++] = expect[i];
+    double got[512];
+    int n = karst_surface_segment_pieces(s, a, b, got, 512);
+    if (n != nu)
+      print_error("segment %d (%g, %g)-(%g, %g): %d pieces, expected %d\n", k, a[0], a[1], b[0],
+                  b[1], n, nu);
+    assert_int_equal(n, nu);
+    for (int i = 0; i < n; i++)
+      assert_true(got[i] == expect[i]);
+    max_n = nu > max_n ? nu : max_n;
+  }
+  assert_true(max_n > 40); /* long traces were among them */
+  free(expect);
   free(xyz);
   free(tri);
   karst_surface_free(s);
@@ -821,6 +903,20 @@ static void test_tsurf_variants(void **state) {
   assert_int_equal(karst_surface_load(&ctx, TMP "/feet.ts", &s), KARST_SUCCESS);
   assert_string_equal(karst_surface_name(s), "feet");
   assert_close(karst_surface_z(s, 30.48, 0), 3.048, 1e-12); /* 100 ft, 10 ft */
+  karst_surface_free(s);
+
+  /* a one-line header, tabs, a non-numeric NO_DATA_VALUES, kilometres */
+  const char oneline[] = "GOCAD TSurf 1\nHEADER {name:short}\nPROPERTIES p\n"
+                         "NO_DATA_VALUES **none**\nAXIS_UNIT km km m\nTFACE\n"
+                         "PVRTX\t1\t0\t0\t5\t7\nPVRTX 2 1 0 5 -99999\nPVRTX 3 0 1 6 1\n"
+                         "TRGL 1 2 3\nEND\n";
+  write_file(TMP "/oneline.ts", oneline, sizeof oneline - 1);
+  assert_int_equal(karst_i_tsurf_read(&ctx, TMP "/oneline.ts", &ts), KARST_SUCCESS);
+  assert_string_equal(ts.name, "short");
+  assert_close(ts.props[1], -99999, 0); /* no no-data value: kept */
+  karst_i_tsurf_destroy(&ts);
+  assert_int_equal(karst_surface_load(&ctx, TMP "/oneline.ts", &s), KARST_SUCCESS);
+  assert_close(karst_surface_z(s, 0, 1000), 6, 1e-12); /* y 1 km */
   karst_surface_free(s);
 }
 
