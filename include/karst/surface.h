@@ -37,6 +37,12 @@ extern "C" {
  */
 #define KARST_SURFACE_MAX_COORD 1e9
 /**
+ * Steepest slope |grad z| of a TIN triangle (1e6, 89.99994 degrees): a steeper
+ * one is refused as vertical, since its elevations would carry errors of its
+ * slope times the rounding of its coordinates.
+ */
+#define KARST_SURFACE_MAX_SLOPE 1e6
+/**
  * Bucket cells of a TIN's spatial index per triangle (2): the cell size is
  * sqrt(mean triangle area / KARST_SURFACE_BUCKETS_PER_TRIANGLE), so a query
  * scans about three triangles on a regular mesh (see bench/bench_surface.c).

@@ -316,9 +316,11 @@ static void bucket_insert(karst_surface_t *s, karst_int_t t, int fill, karst_int
 static karst_error_t build_buckets(karst_ctx_t *ctx, karst_surface_t *s, double area) {
   double W = s->hi[0] - s->lo[0], H = s->hi[1] - s->lo[1];
   double cs = sqrt(area / (double)s->nt / KARST_SURFACE_BUCKETS_PER_TRIANGLE);
+  /* At most cap buckets, also for a TIN covering little of its box or a thin one. */
   double cap = 4.0 * KARST_SURFACE_BUCKETS_PER_TRIANGLE * (double)s->nt + 64.0;
-  double cells = ceil(W / cs) * ceil(H / cs);
-  if (!(cells <= cap)) cs *= sqrt(cells / cap) * 1.01; /* a TIN covering little of its box */
+  if (!(cs >= fmax(W, H) / cap)) cs = fmax(W, H) / cap;
+  while (ceil(W / cs) * ceil(H / cs) > cap)
+    cs *= 1.25;
   s->bcs = cs;
   s->binv = 1.0 / cs;
   s->bx0 = s->lo[0];
@@ -595,8 +597,18 @@ karst_error_t karst_i_surface_tin(karst_ctx_t *ctx, karst_int_t nv, const double
     d[6] = P[0][2];
     d[7] = (uz * vy - uy * vz) / det;
     d[8] = (ux * vz - uz * vx) / det;
-    area += 0.5 * fabs(det);
-    s->lipschitz = fmax(s->lipschitz, hypot(d[7], d[8]));
+    double slope = hypot(d[7], d[8]);
+    if (!(det > 0) || !(slope <= KARST_SURFACE_MAX_SLOPE)) { /* nearly vertical */
+      triangle_where(src, t, w, sizeof w);
+      triangle_label(src, t, tri, lab, sizeof lab);
+      err = karst_set_error(ctx, KARST_EINVAL,
+                            "%s%s is vertical: its slope %.3g is steeper than %g (its plan-view "
+                            "area is %.3g m^2); a surface must be single-valued z = f(x, y)",
+                            w, lab, slope, KARST_SURFACE_MAX_SLOPE, 0.5 * det);
+      goto cleanup;
+    }
+    area += 0.5 * det;
+    s->lipschitz = fmax(s->lipschitz, slope);
   }
 
   /* Edges: at most two triangles each, on opposite sides. They are sorted by

@@ -1059,6 +1059,20 @@ static void test_create_tin_errors(void **state) {
   assert_true(has(ctx.errmsg, "triangle 0 (vertices 0, 1, 2) is vertical"));
   assert_int_equal(karst_surface_create_tin(&ctx, 3, line, 0, t0, &s), KARST_EINVAL);
   assert_true(has(ctx.errmsg, "needs at least one triangle"));
+  /* not collinear, but so thin that its slope is 1e8 / 1e-300 = 1e308, beyond
+   * KARST_SURFACE_MAX_SLOPE */
+  const double thin[9] = {0, 0, 0, 1, 0, 0, 0.5, 1e-300, 1e8};
+  assert_int_equal(karst_surface_create_tin(&ctx, 3, thin, 1, t0, &s), KARST_EINVAL);
+  assert_true(has(ctx.errmsg, "triangle 0 (vertices 0, 1, 2) is vertical: its slope 1e+308 is "
+                              "steeper than 1e+06"));
+  /* a sliver 1 km long and 1 m wide, 1e5 m high at one corner: slope 1e5, accepted, and
+   * its one-row index stays small */
+  const double sliver[9] = {0, 0, 0, 1000, 0, 0, 0, 1, 1e5};
+  assert_int_equal(karst_surface_create_tin(&ctx, 3, sliver, 1, t0, &s), KARST_SUCCESS);
+  assert_close(karst_surface_lipschitz(s), 1e5, 1e-6);
+  assert_close(karst_surface_z(s, 0, 0.5), 5e4, 1e-6);
+  karst_surface_free(s);
+  s = NULL;
   const karst_int_t t1[3] = {0, 1, 7};
   assert_int_equal(karst_surface_create_tin(&ctx, 3, line, 1, t1, &s), KARST_EINVAL);
   assert_true(has(ctx.errmsg, "triangle 0: vertex index 7 is outside [0, 3)"));
