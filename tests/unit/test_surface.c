@@ -6,6 +6,7 @@
  * M the largest Hessian norm and R the circumradius) and match closed forms at
  * cell centres and diagonal midpoints; the bucket index is checked against a
  * scan of every triangle; the small files' values were computed by hand. */
+#include <ctype.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -1047,6 +1048,95 @@ static void test_special_files(void **state) {
   }
 }
 
+/* 3000 random mutations of two_parts.ts and of the plateau horizon's first
+ * lines (a byte replaced, a line dropped, repeated or swapped, the file cut):
+ * each is read without a crash (the ASan build runs this too) and either
+ * accepted or refused with a message that names the file and a line. */
+static void test_tsurf_mutations(void **state) {
+  (void)state;
+  static char src[2][8192], buf[16384];
+  size_t len[2];
+  const char *from[2] = {DATA "two_parts.ts", PLATEAU "fold_horizon.ts"};
+  for (int f = 0; f < 2; f++) {
+    FILE *fp = fopen(from[f], "rb");
+    assert_non_null(fp);
+    len[f] = fread(src[f], 1, sizeof src[f], fp);
+    fclose(fp);
+    if (f == 1) { /* the header, the first vertices and triangles of the second part, END */
+      const char *tail = "TFACE\nATOM 3000 1\nVRTX 3001 -50 -10 120\nVRTX 3002 0 -10 121\n"
+                         "TRGL 3000 2 3001\nTRGL 2 3002 3001\nTRGL 1 2 3000\nEND\n";
+      char *cut = strstr(src[f], "PVRTX 4 ");
+      assert_non_null(cut);
+      size_t keep = (size_t)(cut - src[f]);
+      memcpy(src[f] + keep, tail, strlen(tail));
+      len[f] = keep + strlen(tail);
+    }
+  }
+  static const char chars[] = "0123456789-+.eE \t\n{}:#ATOMVRXGLnaif\0\x01\xff";
+  karst_rng_t rng;
+  karst_rng_init(&rng, 20, 0);
+  int accepted = 0;
+  for (int k = 0; k < 3000; k++) {
+    int f = k % 2;
+    memcpy(buf, src[f], len[f]);
+    size_t n = len[f];
+    int op = (int)karst_rng_below(&rng, 5);
+    size_t at = (size_t)karst_rng_below(&rng, n);
+    if (op <= 1) { /* replace a byte (twice as often) */
+      buf[at] = chars[karst_rng_below(&rng, sizeof chars - 1)];
+    } else if (op == 4) { /* cut */
+      n = at;
+    } else { /* drop, repeat or swap the line holding at with the next one */
+      size_t a = at;
+      while (a > 0 && buf[a - 1] != '\n')
+        a--;
+      size_t b = at;
+      while (b < n && buf[b] != '\n')
+        b++;
+      if (b < n) b++;
+      size_t c = b;
+      while (c < n && buf[c] != '\n')
+        c++;
+      if (c < n) c++;
+      static char tmp[16384];
+      if (op == 2) { /* drop */
+        memmove(buf + a, buf + b, n - b);
+        n -= b - a;
+      } else if (op == 3 && k % 4 == 1) { /* repeat */
+        memcpy(tmp, buf + a, b - a);
+        memmove(buf + b + (b - a), buf + b, n - b);
+        memcpy(buf + b, tmp, b - a);
+        n += b - a;
+      } else { /* swap with the next line */
+        memcpy(tmp, buf + b, c - b);
+        memcpy(tmp + (c - b), buf + a, b - a);
+        memcpy(buf + a, tmp, c - a);
+      }
+    }
+    write_file(TMP "/mut.ts", buf, n);
+    karst_ctx_t ctx;
+    karst_ctx_init(&ctx);
+    karst_surface_t *s = NULL;
+    karst_error_t err = karst_surface_load(&ctx, TMP "/mut.ts", &s);
+    if (err == KARST_SUCCESS) {
+      assert_non_null(s);
+      accepted++;
+      karst_surface_free(s);
+      continue;
+    }
+    assert_null(s);
+    if (!(err == KARST_EPARSE || err == KARST_EINVAL || err == KARST_ERANGE) ||
+        !strstr(ctx.errmsg, TMP "/mut.ts:"))
+      print_error("mutation %d: %s '%s'\n", k, karst_error_name(err), ctx.errmsg);
+    assert_true(err == KARST_EPARSE || err == KARST_EINVAL || err == KARST_ERANGE);
+    const char *named = strstr(ctx.errmsg, TMP "/mut.ts:");
+    assert_non_null(named);
+    assert_true(isdigit((unsigned char)named[strlen(TMP "/mut.ts:")])); /* a line number */
+  }
+  print_message("mutations: %d of 3000 still valid surfaces\n", accepted);
+  assert_true(accepted > 100 && accepted < 2900); /* both outcomes were exercised */
+}
+
 /* From code: messages name the triangle by index. */
 static void test_create_tin_errors(void **state) {
   (void)state;
@@ -1212,6 +1302,7 @@ int main(void) {
       cmocka_unit_test(test_tsurf_variants),
       cmocka_unit_test(test_tsurf_hostile),
       cmocka_unit_test(test_special_files),
+      cmocka_unit_test(test_tsurf_mutations),
       cmocka_unit_test(test_create_tin_errors),
       cmocka_unit_test(test_grid_file_is_terrain),
       cmocka_unit_test(test_plateau_surfaces),
