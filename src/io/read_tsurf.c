@@ -604,7 +604,6 @@ static const char *const skipped[] = {"GEOLOGICAL_FEATURE",
 static karst_error_t object_line(reader_t *r) {
   const char *kw = r->tok[0];
   karst_error_t err;
-  size_t n = strlen(kw);
   if (r->in_block) {
     if (kw[0] == '}')
       r->in_block = 0;
@@ -638,8 +637,8 @@ static karst_error_t object_line(reader_t *r) {
     for (int k = 1; k < r->ntok; k++) {
       const char *t = r->tok[k] + (r->tok[k][0] == '{');
       if (strncmp(t, "name:", 5) == 0 && !r->ts->name && r->ts->nobjects == 1) {
-        size_t n = strlen(t + 5) - (t[strlen(t) - 1] == '}');
-        if (!(r->ts->name = strndup(t + 5, n))) return nomem(r);
+        size_t nlen = strlen(t + 5) - (t[strlen(t) - 1] == '}');
+        if (!(r->ts->name = strndup(t + 5, nlen))) return nomem(r);
       }
     }
     return KARST_SUCCESS;
@@ -691,7 +690,7 @@ static karst_error_t object_line(reader_t *r) {
          r->object_line);
   }
   if (is_keyword(kw, skipped, sizeof skipped / sizeof skipped[0])) return KARST_SUCCESS;
-  if (kw[0] == '#' || (n > 0 && kw[0] == '*')) return KARST_SUCCESS;
+  if (kw[0] == '#' || kw[0] == '*') return KARST_SUCCESS;
   if (!r->warned) {
     char q[TOKEN_QUOTE_MAX + 4];
     quote(kw, q);
