@@ -98,6 +98,8 @@ typedef struct karst_terrain {
                                 convention after reading) */
   double *z;                 /**< nrows*ncols elevations, row 0 = southernmost row */
   double zmin, zmax;         /**< range of the heightfield */
+  struct karst_surface *surface; /**< a terrain read from a surface file (terrain.surface: a TSurf
+                                      or a grid), or NULL; is_grid is then 0 */
   double lipschitz; /**< max slope |grad h| of the bilinear surface (for implicit terrain, Appendix
                        A) */
 } karst_terrain_t;

@@ -167,6 +167,18 @@ static double horizon_integral(const karst_i_cost_model_t *m, const double a[3],
                                double len) {
   const karst_scenario_t *sc = m->sc;
   if (!m->horizons_planar) { /* folded horizons: the offset is not linear along the edge */
+    /* An edge that stays farther than every horizon's radius from it has cL = 1 all along: the
+     * horizon's exact range over the edge's x-y box decides (most edges are far from any). */
+    double zlo_e = fmin(a[2], b[2]), zhi_e = fmax(a[2], b[2]);
+    double x0 = fmin(a[0], b[0]), x1 = fmax(a[0], b[0]), y0 = fmin(a[1], b[1]),
+           y1 = fmax(a[1], b[1]);
+    int near = 0;
+    for (int h = 0; h < sc->n_horizons && !near; h++) {
+      double lo, hi, r = sc->horizons[h].radius;
+      karst_i_surf_range_bound(&m->geo->horizon[h], x0, x1, y0, y1, &lo, &hi);
+      near = !(zlo_e >= hi + r || zhi_e <= lo - r); /* NAN (undefined there): near, to be safe */
+    }
+    if (!near) return 1.0;
     double n = ceil(len / (KARST_COST_STEP_FRACTION * m->horizon_rmin));
     n = clampd(n, 1.0, KARST_COST_MAX_SUBINTERVALS);
     double sum = 0.0, h = 1.0 / n;

@@ -8,6 +8,8 @@
 #include <string.h>
 
 #include "geology/geology_internal.h"
+#include "geology/surface_internal.h"
+#include "karst/surface.h"
 
 #define DEG2RAD (M_PI / 180.0)
 
@@ -56,22 +58,21 @@ const char *karst_geology_feature_name(int feature) {
 /* ------------------------------------------------------------------------ */
 
 /**
- * Terrain elevation at (x, y): the flat elevation, or bilinear interpolation
- * of the grid (cell centres), clamped at the border. O(1).
+ * Terrain elevation at (x, y): the flat elevation, the terrain's surface file, or bilinear
+ * interpolation of the grid (cell centres) clamped at the border — the grid surface of
+ * src/geology/surface.c, asked through a view of the terrain's own elevations. O(1), O(1)
+ * expected for a triangulated terrain.
  */
 double karst_terrain_height(const karst_terrain_t *t, double x, double y) {
+  if (t->surface) return karst_surface_z(t->surface, x, y);
   if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) return t->elevation;
-  double fx = clamp((x - t->xll) / t->cellsize, 0.0, (double)(t->ncols - 1));
-  double fy = clamp((y - t->yll) / t->cellsize, 0.0, (double)(t->nrows - 1));
-  karst_int_t i = (karst_int_t)floor(fx), j = (karst_int_t)floor(fy);
-  if (i >= t->ncols - 1) i = t->ncols > 1 ? t->ncols - 2 : 0;
-  if (j >= t->nrows - 1) j = t->nrows > 1 ? t->nrows - 2 : 0;
-  double u = t->ncols > 1 ? fx - i : 0, v = t->nrows > 1 ? fy - j : 0;
-  karst_int_t i1 = t->ncols > 1 ? i + 1 : i, j1 = t->nrows > 1 ? j + 1 : j;
-  const double *z = t->z;
-  double z00 = z[j * t->ncols + i], z10 = z[j * t->ncols + i1];
-  double z01 = z[j1 * t->ncols + i], z11 = z[j1 * t->ncols + i1];
-  return (1 - v) * ((1 - u) * z00 + u * z10) + v * ((1 - u) * z01 + u * z11);
+  karst_surface_t view;
+  memset(&view, 0, sizeof view);
+  view.kind = KARST_SURFACE_GRID;
+  view.ncols = t->ncols, view.nrows = t->nrows;
+  view.xll = t->xll, view.yll = t->yll, view.cs = t->cellsize;
+  view.z = t->z;
+  return karst_surface_z(&view, x, y);
 }
 
 /**
@@ -91,12 +92,8 @@ void karst_plane_normal(double dip_direction, double dip, double n[3]) {
  * horizon's surface file. O(1) (plane, grid), O(1) expected (triangulated).
  */
 double karst_horizon_elevation(const karst_horizon_t *h, double x, double y) {
-  if (h->path || h->surface) {
-    karst_i_surf_t s = {0};
-    s.kind = KARST_I_SURF_FILE;
-    s.file = h->surface;
-    return karst_i_surf_z(&s, x, y);
-  }
+  if (h->surface) return karst_surface_z(h->surface, x, y);
+  if (h->path) return NAN; /* a file that was not read */
   if (h->dip == 0.0) return h->elevation;
   double a = h->dip_direction * DEG2RAD;
   double along = (x - h->origin[0]) * sin(a) + (y - h->origin[1]) * cos(a);
@@ -184,12 +181,14 @@ karst_i_surf_t karst_i_surf_of_def(const karst_surface_def_t *d) {
   return karst_i_surf_plane(d->elevation, d->dip, d->dip_direction, d->origin[0], d->origin[1]);
 }
 
-karst_i_surf_t karst_i_surf_of_terrain(const karst_terrain_t *t) {
+/* The terrain as a surface: its file, a view of its grid (built by karst_geology_create, which
+ * owns it), or its flat plane. */
+static karst_i_surf_t surf_of_terrain(const karst_terrain_t *t, const karst_surface_t *grid_view) {
   karst_i_surf_t s;
   memset(&s, 0, sizeof s);
-  if (t->is_grid && t->z && t->ncols > 0 && t->nrows > 0) {
-    s.kind = KARST_I_SURF_GRID;
-    s.grid = t;
+  if (t->surface || grid_view) {
+    s.kind = KARST_I_SURF_FILE;
+    s.file = t->surface ? t->surface : grid_view;
     return s;
   }
   return karst_i_surf_plane(t->elevation, 0.0, 0.0, 0.0, 0.0);
@@ -201,8 +200,6 @@ int karst_i_surf_equal(const karst_i_surf_t *a, const karst_i_surf_t *b) {
   case KARST_I_SURF_PLANE:
     return a->z0 == b->z0 && a->ox == b->ox && a->oy == b->oy && a->sa == b->sa && a->ca == b->ca &&
            a->t == b->t && a->flat == b->flat;
-  case KARST_I_SURF_GRID:
-    return a->grid == b->grid;
   case KARST_I_SURF_FILE:
     return a->file == b->file;
   default:
@@ -219,201 +216,67 @@ double karst_i_surf_z(const karst_i_surf_t *s, double x, double y) {
   switch (s->kind) {
   case KARST_I_SURF_PLANE:
     return plane_z(s, x, y);
-  case KARST_I_SURF_GRID:
-    return karst_terrain_height(s->grid, x, y);
+  case KARST_I_SURF_FILE:
+    return s->file ? karst_surface_z(s->file, x, y) : NAN;
   default:
     return NAN;
   }
 }
 
-/* Smallest terrain elevation over a rectangle (the twin of karst_i_terrain_max_rect). */
-static double terrain_min_rect(const karst_terrain_t *t, double x0, double x1, double y0,
-                               double y1) {
-  double m = fmin(fmin(karst_terrain_height(t, x0, y0), karst_terrain_height(t, x1, y0)),
-                  fmin(karst_terrain_height(t, x0, y1), karst_terrain_height(t, x1, y1)));
-  if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) return m;
-  double cs = t->cellsize;
-  double ilo = fmax(0.0, ceil((x0 - t->xll) / cs)),
-         ihi = fmin(t->ncols - 1.0, floor((x1 - t->xll) / cs));
-  double jlo = fmax(0.0, ceil((y0 - t->yll) / cs)),
-         jhi = fmin(t->nrows - 1.0, floor((y1 - t->yll) / cs));
-  for (double i = ilo; i <= ihi; i++) {
-    double x = t->xll + i * cs;
-    m = fmin(m, fmin(karst_terrain_height(t, x, y0), karst_terrain_height(t, x, y1)));
-    for (double j = jlo; j <= jhi; j++)
-      m = fmin(m, t->z[(karst_int_t)j * t->ncols + (karst_int_t)i]);
-  }
-  for (double j = jlo; j <= jhi; j++) {
-    double y = t->yll + j * cs;
-    m = fmin(m, fmin(karst_terrain_height(t, x0, y), karst_terrain_height(t, x1, y)));
-  }
-  return m;
-}
-
-/**
- * Largest terrain elevation over an axis-aligned rectangle. On each grid cell
- * the bilinear surface is linear along x and along y, so its maximum over a
- * rectangle is at a corner of the rectangle cut by the grid lines: the
- * rectangle's corners, the grid nodes inside and the crossings of its edges
- * with grid lines. O(1 + grid nodes inside the rectangle).
- */
-double karst_i_terrain_max_rect(const karst_terrain_t *t, double x0, double x1, double y0,
-                                double y1) {
-  double m = fmax(fmax(karst_terrain_height(t, x0, y0), karst_terrain_height(t, x1, y0)),
-                  fmax(karst_terrain_height(t, x0, y1), karst_terrain_height(t, x1, y1)));
-  if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) return m;
-  double cs = t->cellsize;
-  double ilo = fmax(0.0, ceil((x0 - t->xll) / cs)),
-         ihi = fmin(t->ncols - 1.0, floor((x1 - t->xll) / cs));
-  double jlo = fmax(0.0, ceil((y0 - t->yll) / cs)),
-         jhi = fmin(t->nrows - 1.0, floor((y1 - t->yll) / cs));
-  for (double i = ilo; i <= ihi; i++) {
-    double x = t->xll + i * cs;
-    m = fmax(m, fmax(karst_terrain_height(t, x, y0), karst_terrain_height(t, x, y1)));
-    for (double j = jlo; j <= jhi; j++)
-      m = fmax(m, t->z[(karst_int_t)j * t->ncols + (karst_int_t)i]);
-  }
-  for (double j = jlo; j <= jhi; j++) {
-    double y = t->yll + j * cs;
-    m = fmax(m, fmax(karst_terrain_height(t, x0, y), karst_terrain_height(t, x1, y)));
-  }
-  return m;
-}
-
 void karst_i_surf_range(const karst_i_surf_t *s, double x0, double x1, double y0, double y1,
                         double *zlo, double *zhi) {
-  switch (s->kind) {
-  case KARST_I_SURF_PLANE: { /* a plane: the extremes are at corners */
+  if (s->kind == KARST_I_SURF_PLANE) { /* a plane: the extremes are at corners */
     double z[4] = {plane_z(s, x0, y0), plane_z(s, x1, y0), plane_z(s, x0, y1), plane_z(s, x1, y1)};
     *zlo = fmin(fmin(z[0], z[1]), fmin(z[2], z[3]));
     *zhi = fmax(fmax(z[0], z[1]), fmax(z[2], z[3]));
-    return;
-  }
-  case KARST_I_SURF_GRID:
-    *zlo = terrain_min_rect(s->grid, x0, x1, y0, y1);
-    *zhi = karst_i_terrain_max_rect(s->grid, x0, x1, y0, y1);
-    return;
-  default:
+  } else if (s->kind == KARST_I_SURF_FILE && s->file) {
+    *zlo = karst_surface_min_rect(s->file, x0, x1, y0, y1);
+    *zhi = karst_surface_max_rect(s->file, x0, x1, y0, y1);
+  } else {
     *zlo = NAN, *zhi = NAN;
-    return;
   }
 }
 
-/* Iterator over the parameters s in (0, 1) where a segment coordinate
- * a + s d crosses the grid lines origin + i * step, i in [0, count). */
-typedef struct line_iter {
-  double s_next, a, d, origin, step;
-  karst_int_t i, end, inc;
-} line_iter_t;
-
-static void line_iter_set(line_iter_t *it) {
-  it->s_next = (it->origin + (double)it->i * it->step - it->a) / it->d;
-}
-
-static void line_iter_init(line_iter_t *it, double a, double d, double origin, double step,
-                           karst_int_t count) {
-  it->a = a, it->d = d, it->origin = origin, it->step = step;
-  it->s_next = INFINITY;
-  if (d == 0.0 || count < 1) return;
-  double lo = fmin(a, a + d), hi = fmax(a, a + d);
-  double flo = ceil((lo - origin) / step), fhi = floor((hi - origin) / step);
-  flo = fmax(flo, 0.0), fhi = fmin(fhi, (double)(count - 1));
-  if (flo > fhi) return;
-  karst_int_t ilo = (karst_int_t)flo, ihi = (karst_int_t)fhi;
-  it->i = d > 0 ? ilo : ihi;
-  it->end = d > 0 ? ihi : ilo;
-  it->inc = d > 0 ? 1 : -1;
-  line_iter_set(it);
-}
-
-static void line_iter_next(line_iter_t *it) {
-  if (it->i == it->end) {
-    it->s_next = INFINITY;
-    return;
-  }
-  it->i += it->inc;
-  line_iter_set(it);
-}
-
-/*
- * Whether the quadratic through (0, q0), (1/2, qm), (1, q1) is negative at
- * every t of the open interval (0, 1). The end values may be 0 (an end point
- * on the ground): inside, a non-constant quadratic stays strictly below
- * max(q0, q1) unless its vertex is inside (0, 1), where it is checked.
+/**
+ * A cheap enclosing range of the surface over the rectangle: exact for a plane; for a file
+ * surface its value at the centre ± its Lipschitz constant × the half-diagonal (|f(p) − f(c)| ≤
+ * L |p − c|), or the exact range where the centre is not defined. O(1), where the exact range of
+ * a triangulated surface costs a clipping of the triangles under the rectangle.
  */
-static int quadratic_negative_inside(double q0, double qm, double q1) {
-  double A = 2 * q0 - 4 * qm + 2 * q1, B = -3 * q0 + 4 * qm - q1;
-  if (A == 0 && B == 0) return q0 < 0; /* constant, e.g. along the ground */
-  if (fmax(q0, q1) > 0) return 0;
-  if (A < 0) {
-    double t = -B / (2 * A);
-    if (t > 0 && t < 1 && q0 + B * t + A * t * t >= 0) return 0;
-  }
-  return 1;
-}
-
-/* Whether the same quadratic is <= 0 on the closed interval [0, 1]. */
-static int quadratic_nonpositive(double q0, double qm, double q1) {
-  if (fmax(q0, q1) > 0) return 0;
-  double A = 2 * q0 - 4 * qm + 2 * q1, B = -3 * q0 + 4 * qm - q1;
-  if (A < 0) {
-    double t = -B / (2 * A);
-    if (t > 0 && t < 1 && q0 + B * t + A * t * t > 0) return 0;
-  }
-  return 1;
-}
-
-/*
- * The sign test of karst_i_surf_segment_side on a grid: the bilinear surface
- * restricted to the segment is a quadratic in the segment parameter between two
- * crossings of grid lines (the clamped border included), so the sign of
- * z(s) − h(s) is decided exactly piece by piece: no sampling step, no tolerance.
- */
-static int grid_segment_side(const karst_terrain_t *t, const double a[3], const double b[3],
-                             int above, int strict) {
-  double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  const double sg = above ? -1.0 : 1.0;
-  line_iter_t ix, iy;
-  line_iter_init(&ix, a[0], d[0], t->xll, t->cellsize, t->ncols);
-  line_iter_init(&iy, a[1], d[1], t->yll, t->cellsize, t->nrows);
-#define Q_AT(s) (sg * (a[2] + (s)*d[2] - karst_terrain_height(t, a[0] + (s)*d[0], a[1] + (s)*d[1])))
-  double s0 = 0.0, q0 = Q_AT(0.0);
-  while (s0 < 1.0) {
-    double s1 = fmin(1.0, fmin(ix.s_next, iy.s_next));
-    while (ix.s_next <= s1)
-      line_iter_next(&ix);
-    while (iy.s_next <= s1)
-      line_iter_next(&iy);
-    if (!(s1 > s0)) continue;
-    double qm = Q_AT(0.5 * (s0 + s1)), q1 = Q_AT(s1);
-    if (strict) {
-      if (!quadratic_negative_inside(q0, qm, q1)) return 0;
-      if (s1 < 1.0 && !(q1 < 0.0)) return 0; /* a grid-line crossing is inside the segment */
-    } else if (!quadratic_nonpositive(q0, qm, q1)) {
-      return 0;
+void karst_i_surf_range_bound(const karst_i_surf_t *s, double x0, double x1, double y0, double y1,
+                              double *zlo, double *zhi) {
+  if (s->kind == KARST_I_SURF_FILE && s->file) {
+    double zc = karst_surface_z(s->file, 0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    if (isfinite(zc)) {
+      double d = karst_surface_lipschitz(s->file) * 0.5 * hypot(x1 - x0, y1 - y0);
+      *zlo = zc - d, *zhi = zc + d;
+      return;
     }
-    s0 = s1, q0 = q1;
   }
-#undef Q_AT
-  return 1;
+  karst_i_surf_range(s, x0, x1, y0, y1, zlo, zhi);
 }
 
+/**
+ * Whether [a, b] lies on one side of the surface, exactly. A plane is linear along the segment,
+ * so its ends decide; a file surface is decided piece by piece by karst_surface_segment_below /
+ * _above (the ends may touch it, the interior is strictly on one side). A file surface's
+ * non-strict test is its strict one: they differ only for a segment running along the surface,
+ * which the callers (stratum boundaries) need not tell apart.
+ */
 int karst_i_surf_segment_side(const karst_i_surf_t *s, const double a[3], const double b[3],
                               int above, int strict) {
-  switch (s->kind) {
-  case KARST_I_SURF_PLANE: {
-    /* Linear along the segment: the ends decide. Strictly inside (0, 1), ends may touch, but a
-     * segment lying in the surface is not strictly on one side. */
+  if (s->kind == KARST_I_SURF_PLANE) {
+    /* Strictly inside (0, 1), ends may touch, but a segment lying in the plane is not strictly
+     * on one side. */
     double qa = (a[2] - plane_z(s, a[0], a[1])) * (above ? -1.0 : 1.0);
     double qb = (b[2] - plane_z(s, b[0], b[1])) * (above ? -1.0 : 1.0);
     if (strict) return qa <= 0 && qb <= 0 && !(qa == 0 && qb == 0);
     return qa <= 0 && qb <= 0;
   }
-  case KARST_I_SURF_GRID:
-    return grid_segment_side(s->grid, a, b, above, strict);
-  default:
-    return 0;
-  }
+  if (s->kind == KARST_I_SURF_FILE && s->file)
+    return above ? karst_surface_segment_above(s->file, a, b)
+                 : karst_surface_segment_below(s->file, a, b);
+  return 0;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -955,6 +818,7 @@ int karst_i_geology_discs_at(const karst_geology_t *g, const double p[3],
 
 void karst_geology_free(karst_geology_t *g) {
   if (!g) return;
+  karst_surface_free(g->terrain_view);
   free(g->horizon);
   free(g->spring_key);
   free(g->key_spring);
@@ -1029,7 +893,12 @@ karst_error_t karst_geology_create(karst_ctx_t *ctx, const karst_scenario_t *sc,
   if (!g) return karst_set_error(ctx, KARST_ENOMEM, "geology: out of memory");
   g->sc = sc;
   g->band = sc->routing.water_table_band;
-  g->terrain = karst_i_surf_of_terrain(&sc->terrain);
+  const karst_terrain_t *tr = &sc->terrain;
+  if (!tr->surface && tr->is_grid && tr->z && tr->ncols > 0 && tr->nrows > 0 &&
+      (err = karst_i_surface_grid_view(ctx, tr->ncols, tr->nrows, tr->xll, tr->yll, tr->cellsize,
+                                       tr->z, &g->terrain_view)))
+    goto cleanup;
+  g->terrain = surf_of_terrain(tr, g->terrain_view);
   size_t nk = (size_t)(sc->n_key_points > 0 ? sc->n_key_points : 1);
   g->key_spring = malloc(nk * sizeof *g->key_spring);
   g->spring_key = malloc(nk * sizeof *g->spring_key);
@@ -1050,6 +919,7 @@ karst_error_t karst_geology_create(karst_ctx_t *ctx, const karst_scenario_t *sc,
   for (int h = 0; h < sc->n_horizons; h++) {
     const karst_horizon_t *H = &sc->horizons[h];
     if (H->path || H->surface) {
+      memset(&g->horizon[h], 0, sizeof g->horizon[h]);
       g->horizon[h].kind = KARST_I_SURF_FILE;
       g->horizon[h].file = H->surface;
     } else {

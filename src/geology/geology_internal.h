@@ -12,8 +12,7 @@
 typedef enum {
   KARST_I_SURF_NONE = 0,  /* not given */
   KARST_I_SURF_PLANE = 1, /* z0 − tan(dip) × distance along the dip direction from (ox, oy) */
-  KARST_I_SURF_GRID = 2,  /* a bilinear grid (karst_terrain_t, is_grid = 1) */
-  KARST_I_SURF_FILE = 3   /* a surface read from a file (include/karst/surface.h) */
+  KARST_I_SURF_FILE = 2   /* a grid or triangulated surface (include/karst/surface.h) */
 } karst_i_surf_kind_t;
 
 /** One geological surface with its evaluation constants. */
@@ -31,8 +30,6 @@ karst_i_surf_t karst_i_surf_plane(double elevation, double dip, double dip_direc
                                   double oy);
 /** The surface of a scenario surface definition (KARST_I_SURF_NONE when not given). */
 karst_i_surf_t karst_i_surf_of_def(const karst_surface_def_t *d);
-/** The terrain as a surface (flat plane or grid). */
-karst_i_surf_t karst_i_surf_of_terrain(const karst_terrain_t *t);
 
 /** Whether two surfaces are the same (same kind and parameters, or the same grid or file). */
 int karst_i_surf_equal(const karst_i_surf_t *a, const karst_i_surf_t *b);
@@ -41,6 +38,10 @@ double karst_i_surf_z(const karst_i_surf_t *s, double x, double y);
 /** Exact range of z over the rectangle [x0, x1] x [y0, y1]. */
 void karst_i_surf_range(const karst_i_surf_t *s, double x0, double x1, double y0, double y1,
                         double *zlo, double *zhi);
+/** An enclosing (not always tight) range of z over the rectangle, in O(1): exact for a plane,
+ *  the centre ± Lipschitz × half-diagonal for a file surface. */
+void karst_i_surf_range_bound(const karst_i_surf_t *s, double x0, double x1, double y0, double y1,
+                              double *zlo, double *zhi);
 /**
  * Sign of the segment [a, b] against the surface, exactly: returns 1 when z(t) − f(t) < 0 for
  * every t in (0, 1) (@p strict) or <= 0 for every t in [0, 1] (!strict), else 0. With @p above,
@@ -56,6 +57,7 @@ int karst_i_surf_segment_side(const karst_i_surf_t *s, const double a[3], const 
 struct karst_geology {
   const karst_scenario_t *sc;
   karst_i_surf_t terrain;
+  struct karst_surface *terrain_view; /* the grid surface over a heightfield's elevations */
   int n_horizons;
   karst_i_surf_t *horizon; /* one per scenario horizon */
   int n_springs;
@@ -95,9 +97,5 @@ void karst_i_fisher_draw(karst_rng_t *rng, const double mu[3], double kappa, dou
  *  until it returns non-zero (then returns that value), else 0. */
 int karst_i_geology_discs_at(const karst_geology_t *g, const double p[3],
                              int (*fn)(const karst_disc_t *d, void *arg), void *arg);
-
-/** Largest terrain elevation over an axis-aligned rectangle (exact for the bilinear grid). */
-double karst_i_terrain_max_rect(const karst_terrain_t *t, double x0, double x1, double y0,
-                                double y1);
 
 #endif

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "geology/geology_internal.h"
+#include "karst/surface.h"
 #include "karst/vtk.h"
 
 /** Most grid intervals along x or y of a surface drawn in geology.vtp. */
@@ -63,15 +64,52 @@ static void add_poly(polys_t *P, const karst_int_t *v, int k, int feature, int i
   P->off[++P->nc] = P->nconn;
 }
 
+/* Whether a triangle (point indices) lies wholly above the terrain. */
+static int above_terrain(const polys_t *P, const karst_geology_t *g, const karst_int_t tri[3]) {
+  for (int k = 0; k < 3; k++) {
+    const double *p = P->xyz + 3 * tri[k];
+    if (!(p[2] > karst_i_surf_z(&g->terrain, p[0], p[1]))) return 0;
+  }
+  return 1;
+}
+
+/* A triangulated surface by its own triangles, cut to the domain's x-y extent
+ * (karst_surface_triangulate). */
+static void add_tin(polys_t *P, const karst_geology_t *g, const karst_surface_t *surf, int feature,
+                    int id, int clip_to_terrain) {
+  const karst_scenario_t *sc = g->sc;
+  double *xyz = NULL;
+  karst_int_t *tri = NULL, nv = 0, nt = 0;
+  karst_ctx_t quiet;
+  karst_ctx_init(&quiet);
+  if (karst_surface_triangulate(&quiet, surf, sc->domain_min, sc->domain_max, INFINITY, &xyz, &nv,
+                                &tri, &nt) != KARST_SUCCESS) {
+    P->failed = 1;
+    return;
+  }
+  karst_int_t base = P->np;
+  for (karst_int_t v = 0; v < nv; v++)
+    add_point(P, xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]);
+  for (karst_int_t t = 0; t < nt && !P->failed; t++) {
+    karst_int_t q[3] = {base + tri[3 * t], base + tri[3 * t + 1], base + tri[3 * t + 2]};
+    if (!clip_to_terrain || !above_terrain(P, g, q)) add_poly(P, q, 3, feature, id);
+  }
+  free(xyz);
+  free(tri);
+}
+
 /* A surface over the domain's x-y extent on a regular grid, triangles entirely above the
  * terrain left out (they are not in the rock); NAN vertices (outside a file surface) skip their
  * triangles. */
 static void add_surface(polys_t *P, const karst_geology_t *g, const karst_i_surf_t *s, int feature,
                         int id, int clip_to_terrain) {
   const karst_scenario_t *sc = g->sc;
+  if (s->kind == KARST_I_SURF_FILE && s->file && karst_surface_kind(s->file) == KARST_SURFACE_TIN) {
+    add_tin(P, g, s->file, feature, id, clip_to_terrain);
+    return;
+  }
   double ex = sc->domain_max[0] - sc->domain_min[0], ey = sc->domain_max[1] - sc->domain_min[1];
   double step = fmax(ex, ey) / GEOLOGY_VTP_MAX_INTERVALS;
-  if (s->kind == KARST_I_SURF_GRID) step = fmax(step, s->grid->cellsize);
   int nx = (int)fmax(1.0, ceil(ex / step)), ny = (int)fmax(1.0, ceil(ey / step));
   karst_int_t base = P->np;
   for (int j = 0; j <= ny; j++)

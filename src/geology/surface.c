@@ -37,7 +37,7 @@ void karst_surface_free(karst_surface_t *s) {
   if (!s) return;
   free(s->path);
   free(s->name);
-  free(s->z);
+  if (!s->z_borrowed) free(s->z);
   free(s->xyz);
   free(s->tri);
   free(s->tdata);
@@ -186,9 +186,25 @@ static void grid_finish(karst_surface_t *s) {
  *         naming the cell), KARST_ERANGE (too many cells) or KARST_ENOMEM.
  * Time complexity: O(ncols nrows).
  */
+static karst_error_t create_grid(karst_ctx_t *ctx, karst_int_t ncols, karst_int_t nrows,
+                                 double xll_center, double yll_center, double cellsize,
+                                 const double *z, int borrow, karst_surface_t **out);
+
 karst_error_t karst_surface_create_grid(karst_ctx_t *ctx, karst_int_t ncols, karst_int_t nrows,
                                         double xll_center, double yll_center, double cellsize,
                                         const double *z, karst_surface_t **out) {
+  return create_grid(ctx, ncols, nrows, xll_center, yll_center, cellsize, z, 0, out);
+}
+
+karst_error_t karst_i_surface_grid_view(karst_ctx_t *ctx, karst_int_t ncols, karst_int_t nrows,
+                                        double xll_center, double yll_center, double cellsize,
+                                        const double *z, karst_surface_t **out) {
+  return create_grid(ctx, ncols, nrows, xll_center, yll_center, cellsize, z, 1, out);
+}
+
+static karst_error_t create_grid(karst_ctx_t *ctx, karst_int_t ncols, karst_int_t nrows,
+                                 double xll_center, double yll_center, double cellsize,
+                                 const double *z, int borrow, karst_surface_t **out) {
   *out = NULL;
   if (ncols < 1 || nrows < 1)
     return karst_set_error(ctx, KARST_EINVAL,
@@ -210,14 +226,15 @@ karst_error_t karst_surface_create_grid(karst_ctx_t *ctx, karst_int_t ncols, kar
                              "south) must be finite, got %g",
                              (long long)(k % ncols + 1), (long long)(k / ncols + 1), z[k]);
   karst_surface_t *s = surface_alloc(KARST_SURFACE_GRID);
-  double *copy = malloc((size_t)(ncols * nrows) * sizeof *copy);
+  double *copy = borrow ? (double *)z : malloc((size_t)(ncols * nrows) * sizeof *copy);
   if (!s || !copy) {
     free(s);
-    free(copy);
+    if (!borrow) free(copy);
     return karst_set_error(ctx, KARST_ENOMEM, "grid surface: out of memory for %lld cells",
                            (long long)(ncols * nrows));
   }
-  memcpy(copy, z, (size_t)(ncols * nrows) * sizeof *copy);
+  if (!borrow) memcpy(copy, z, (size_t)(ncols * nrows) * sizeof *copy);
+  s->z_borrowed = borrow;
   s->ncols = ncols;
   s->nrows = nrows;
   s->xll = xll_center;

@@ -25,6 +25,7 @@ struct karst_surface {
   karst_int_t ncols, nrows;
   double xll, yll, cs;
   double *z;
+  int z_borrowed; /* z belongs to the caller (karst_i_surface_grid_view): not freed */
   /* TIN */
   karst_int_t nv, nt;
   double *xyz;      /* 3 nv */
@@ -39,6 +40,14 @@ struct karst_surface {
   karst_int_t *bstart; /* bnx bny + 1 offsets into bitem */
   karst_int_t *bitem;  /* triangle indices, the one holding the bucket's centre first */
 };
+
+/**
+ * A grid surface over the caller's elevations (not copied: @p z must outlive it), e.g. the
+ * terrain a scenario already holds, so that a large heightfield is not stored twice.
+ */
+karst_error_t karst_i_surface_grid_view(karst_ctx_t *ctx, karst_int_t ncols, karst_int_t nrows,
+                                        double xll_center, double yll_center, double cellsize,
+                                        const double *z, karst_surface_t **out);
 
 /** Where the vertices and triangles of a TIN came from, to name them in messages. */
 typedef struct karst_i_tin_source {

@@ -344,7 +344,7 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out,
         double zlo = fmax(S->lo[2], box.lo[2]), zhi = fmin(fmin(S->hi[2], box.hi[2]), ztop);
         if (R->layer) {
           double llo, lhi;
-          karst_i_surf_range(R->layer, x0, x1, y0, y1, &llo, &lhi);
+          karst_i_surf_range_bound(R->layer, x0, x1, y0, y1, &llo, &lhi);
           if (!isfinite(llo) || !isfinite(lhi)) continue;
           zlo = fmax(zlo, llo - R->band), zhi = fmin(zhi, lhi + R->band);
         }
@@ -465,7 +465,7 @@ static void region_tile_pass(region_job_t *J, size_t t) {
     double zlo = -INFINITY, zhi = INFINITY, p[3];
     if (R->layer) {
       double x0 = g->origin[0] + c[0] * g->cell, y0 = g->origin[1] + c[1] * g->cell;
-      karst_i_surf_range(R->layer, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
+      karst_i_surf_range_bound(R->layer, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
       if (!isfinite(zlo) || !isfinite(zhi)) continue;
       zlo -= R->band, zhi += R->band;
     }

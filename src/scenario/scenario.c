@@ -18,6 +18,7 @@
 #include <yaml.h>
 
 #include "karst/geology.h"
+#include "karst/surface.h"
 #include "scenario_internal.h"
 
 /* ------------------------------------------------------------------------ */
@@ -80,14 +81,18 @@ void karst_scenario_destroy(karst_scenario_t *sc) {
   free(sc->name);
   free(sc->terrain.path);
   free(sc->terrain.z);
+  karst_surface_free(sc->terrain.surface);
   for (int i = 0; i < sc->n_horizons; i++)
-    free(sc->horizons[i].path);
+    free(sc->horizons[i].path), karst_surface_free(sc->horizons[i].surface);
   free(sc->horizons);
-  free(sc->water_table.path);
+  free(sc->water_table.path), karst_surface_free(sc->water_table.surface);
   for (int i = 0; i < sc->n_key_points; i++)
-    free(sc->key_points[i].water_table.path);
-  for (int i = 0; i < sc->n_strata; i++)
-    free(sc->strata[i].top.path), free(sc->strata[i].bottom.path);
+    free(sc->key_points[i].water_table.path),
+        karst_surface_free(sc->key_points[i].water_table.surface);
+  for (int i = 0; i < sc->n_strata; i++) {
+    free(sc->strata[i].top.path), karst_surface_free(sc->strata[i].top.surface);
+    free(sc->strata[i].bottom.path), karst_surface_free(sc->strata[i].bottom.surface);
+  }
   free(sc->fractures);
   if (sc->permeability.root) {
     free_perm(sc->permeability.root);
@@ -829,11 +834,16 @@ static karst_error_t read_units(reader_t *r, yaml_node_t *n, void *base, const c
                  path, describe(n, d, sizeof d));
 }
 
-/* terrain: {elevation: z} or {heightfield: file.asc}, the file relative to the scenario. */
+static char *resolve_relative(reader_t *r, const char *name);
+static karst_error_t read_surface_file(reader_t *r, yaml_node_t *v, const char *path,
+                                       const char *file, struct karst_surface **out);
+
+/* terrain: {elevation: z}, {heightfield: file.asc} or {surface: file.ts|.asc}, files relative to
+ * the scenario. */
 static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const char *path) {
-  static const char *const keys[] = {"elevation", "heightfield"};
+  static const char *const keys[] = {"elevation", "heightfield", "surface"};
   karst_scenario_t *sc = base;
-  yaml_node_t *vals[2] = {NULL, NULL};
+  yaml_node_t *vals[3] = {NULL, NULL, NULL};
   char d[80], sub[PATH_LEN];
   karst_error_t err = KARST_SUCCESS;
   char *resolved = NULL;
@@ -845,19 +855,36 @@ static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const
                    path, describe(n, d, sizeof d));
   for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
     int idx = 0;
-    if ((err = check_key(r, n, p, keys, 2, path, NULL, &idx))) return err;
+    if ((err = check_key(r, n, p, keys, 3, path, NULL, &idx))) return err;
     vals[idx] = yaml_document_get_node(r->doc, p->value);
   }
-  if (vals[0] && vals[1])
-    return fail_at(r, n, KARST_EINVAL, "%s gives both elevation and heightfield; give one of them",
-                   path);
-  if (!vals[0] && !vals[1])
+  int given = !!vals[0] + !!vals[1] + !!vals[2];
+  if (given > 1)
     return fail_at(r, n, KARST_EINVAL,
-                   "%s must give elevation (flat, m) or heightfield (an ESRI ASCII grid file)",
+                   "%s gives more than one of elevation, heightfield and surface; give one of them",
                    path);
-  yaml_node_t *v = vals[0] ? vals[0] : vals[1];
+  if (given == 0)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s must give elevation (flat, m), heightfield (an ESRI ASCII grid file) or "
+                   "surface (a GOCAD TSurf or grid file)",
+                   path);
+  yaml_node_t *v = vals[0] ? vals[0] : (vals[1] ? vals[1] : vals[2]);
   sc->pos_terrain.line = line_of(v);
   sc->pos_terrain.column = col_of(v);
+  if (vals[2]) { /* a triangulated (or grid) terrain through the surface module */
+    const char *name;
+    join(sub, path, "surface");
+    if ((err = get_string(r, v, sub, &name))) return err;
+    free(sc->terrain.path);
+    if (!(sc->terrain.path = resolve_relative(r, name))) return no_memory(r);
+    if ((err = read_surface_file(r, v, sub, sc->terrain.path, &sc->terrain.surface))) return err;
+    double lo[3], hi[3];
+    karst_surface_bounds(sc->terrain.surface, lo, hi);
+    sc->terrain.is_grid = 0;
+    sc->terrain.zmin = lo[2], sc->terrain.zmax = hi[2];
+    sc->terrain.lipschitz = karst_surface_lipschitz(sc->terrain.surface);
+    return KARST_SUCCESS;
+  }
   if (vals[0]) {
     join(sub, path, "elevation");
     if ((err = get_number(r, v, sub, &sc->terrain.elevation))) return err;
@@ -1102,12 +1129,25 @@ static char *resolve_relative(reader_t *r, const char *name) {
   return out;
 }
 
-/* Read the surface file of a definition (grid .asc or GOCAD TSurf .ts). */
+/* Read the surface file @p file (a grid .asc or a GOCAD TSurf .ts) into *out; a failure names
+ * the key and its position in the scenario after the file's own FILE:LINE message. */
+static karst_error_t read_surface_file(reader_t *r, yaml_node_t *v, const char *path,
+                                       const char *file, struct karst_surface **out) {
+  karst_surface_free(*out);
+  *out = NULL;
+  karst_error_t err = karst_surface_load(r->ctx, file, out);
+  if (err) {
+    size_t len = strlen(r->ctx->errmsg);
+    snprintf(r->ctx->errmsg + len, KARST_ERRMSG_MAX - len, " (the surface of %s at %s:%d:%d)", path,
+             r->file, line_of(v), col_of(v));
+  }
+  return err;
+}
+
+/* Read the surface file of a definition. */
 static karst_error_t load_surface_file(reader_t *r, yaml_node_t *v, const char *path,
                                        karst_surface_def_t *d) {
-  (void)d;
-  return fail_at(r, v, KARST_ENOTIMPL,
-                 "%s: surface files are read by the surface module, which this build lacks", path);
+  return read_surface_file(r, v, path, d->path, &d->surface);
 }
 
 static karst_error_t read_surface_path(reader_t *r, yaml_node_t *n, void *base, const char *path) {
@@ -1253,12 +1293,12 @@ static karst_error_t read_horizon_name(reader_t *r, yaml_node_t *n, void *base, 
 static karst_error_t read_horizon_surface(reader_t *r, yaml_node_t *n, void *base,
                                           const char *path) {
   karst_horizon_t *h = base;
-  karst_surface_def_t d;
-  memset(&d, 0, sizeof d);
-  karst_error_t err = read_surface_path(r, n, &d, path);
-  h->path = d.path;
-  h->surface = d.surface;
-  return err;
+  const char *name;
+  karst_error_t err = get_string(r, n, path, &name);
+  if (err) return err;
+  free(h->path);
+  if (!(h->path = resolve_relative(r, name))) return no_memory(r);
+  return read_surface_file(r, n, path, h->path, &h->surface);
 }
 
 static const char *const soluble_names[] = {"false", "true"};
@@ -2053,6 +2093,7 @@ static karst_error_t finish(reader_t *r) {
                              "%s:%d:%d: horizons[%d] gives both elevation and surface; give one "
                              "of them",
                              r->file, h->line, h->column, i);
+    if (h->path) h->elevation = 0; /* unused: the surface file gives the elevations */
   }
   centre_origin(sc, &sc->water_table);
   for (int i = 0; i < sc->n_key_points; i++)
@@ -2236,6 +2277,12 @@ static karst_error_t check_surface(karst_ctx_t *ctx, const karst_scenario_t *sc,
     if (!d->surface)
       return check_fail(ctx, sc, d->line, d->column, KARST_EINVAL,
                         "%s: the surface file '%s' was not read", path, d->path);
+    const double lo[2] = {sc->domain_min[0], sc->domain_min[1]},
+                 hi[2] = {sc->domain_max[0], sc->domain_max[1]};
+    karst_ctx_t cover;
+    karst_ctx_init(&cover);
+    if (karst_surface_check_covers(&cover, d->surface, lo, hi, path))
+      return check_fail(ctx, sc, d->line, d->column, KARST_ERANGE, "%s", cover.errmsg);
     return KARST_SUCCESS;
   }
   if (!isfinite(d->elevation) || !isfinite(d->origin[0]) || !isfinite(d->origin[1]))
@@ -2302,7 +2349,19 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
   }
 
   const karst_terrain_t *tr = &sc->terrain;
-  if (tr->is_grid) {
+  if (tr->surface) {
+    const double lo[2] = {sc->domain_min[0], sc->domain_min[1]},
+                 hi[2] = {sc->domain_max[0], sc->domain_max[1]};
+    karst_ctx_t cover;
+    karst_ctx_init(&cover);
+    if (karst_surface_check_covers(&cover, tr->surface, lo, hi, "terrain.surface"))
+      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE, "%s", cover.errmsg);
+    if (!(tr->zmax > sc->domain_min[2]))
+      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE,
+                        "terrain.surface '%s' peaks at %g m, not above domain.min z (%g m): "
+                        "there is no bedrock",
+                        tr->path ? tr->path : "", tr->zmax, sc->domain_min[2]);
+  } else if (tr->is_grid) {
     if (!tr->z || tr->ncols < 1 || tr->nrows < 1 || !(tr->cellsize > 0))
       return check_fail(ctx, sc, pt->line, pt->column, KARST_EINVAL,
                         "terrain.heightfield holds no grid");

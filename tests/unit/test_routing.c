@@ -285,6 +285,70 @@ static void test_faults(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* Length of the network within 5 m (vertically) of the horizon z = 100 − 0.25 |x − 150|. */
+static double length_on_fold(const karst_network_t *net) {
+  double L = 0;
+  for (karst_int_t e = 0; e < net->n_edges; e++) {
+    const double *a = &net->xyz[3 * net->edges[2 * e]], *b = &net->xyz[3 * net->edges[2 * e + 1]];
+    double fa = 100 - 0.25 * fabs(a[0] - 150), fb = 100 - 0.25 * fabs(b[0] - 150);
+    if (fabs(a[2] - fa) <= 5 && fabs(b[2] - fb) <= 5) L += dist3(a, b);
+  }
+  return L;
+}
+
+/* A folded horizon given as a triangulated surface (a ridge z = 100 − 0.25 |x − 150|, crest along
+ * x = 150, limbs dipping 14°), strongly attractive (cost.horizon = 3, radius 5): the route from a
+ * sink above the crest to a spring at the foot of the east limb runs down the limb along the
+ * horizon — at least 100 m of the network within 5 m of it, against less than a third of that
+ * when the horizon has no weight. */
+static void test_folded_horizon_followed(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  base(&sc);
+  sc.key_points[0].p[0] = 150, sc.key_points[0].p[1] = 150;
+  sc.key_points[1].p[0] = 290, sc.key_points[1].p[1] = 150, sc.key_points[1].p[2] = 40;
+  /* The ridge as a TIN: columns every 10 m (one at the crest), rows every 50 m. */
+  enum { NX = 31, NY = 7 };
+  double xyz[3 * NX * NY];
+  karst_int_t tri[6 * (NX - 1) * (NY - 1)], nt = 0;
+  for (int j = 0; j < NY; j++)
+    for (int i = 0; i < NX; i++) {
+      double x = 10.0 * i, y = 50.0 * j;
+      xyz[3 * (j * NX + i)] = x, xyz[3 * (j * NX + i) + 1] = y;
+      xyz[3 * (j * NX + i) + 2] = 100 - 0.25 * fabs(x - 150);
+    }
+  for (int j = 0; j + 1 < NY; j++)
+    for (int i = 0; i + 1 < NX; i++) {
+      karst_int_t a = j * NX + i, b = a + 1, c = a + NX, d = c + 1;
+      tri[3 * nt] = a, tri[3 * nt + 1] = b, tri[3 * nt + 2] = d, nt++;
+      tri[3 * nt] = a, tri[3 * nt + 1] = d, tri[3 * nt + 2] = c, nt++;
+    }
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  sc.n_horizons = 1;
+  sc.horizons = calloc(1, sizeof *sc.horizons);
+  sc.horizons[0].radius = 5;
+  sc.horizons[0].path = strdup("ridge (built in code)");
+  assert_int_equal(karst_surface_create_tin(&ctx, NX * NY, xyz, nt, tri, &sc.horizons[0].surface),
+                   KARST_SUCCESS);
+  karst_geology_t *g = geo_make(&sc);
+  const double crest[3] = {150, 20, 100}, limb[3] = {250, 20, 75};
+  assert_close(karst_geology_horizon_term(g, crest), 0.0, 1e-12);
+  assert_close(karst_geology_horizon_term(g, limb), 0.0, 1e-12);
+  karst_geology_free(g);
+  sc.cost.horizon = 3;
+  karst_network_t with, without;
+  generate(&sc, &with);
+  sc.cost.horizon = 0;
+  generate(&sc, &without);
+  double L1 = length_on_fold(&with), L0 = length_on_fold(&without);
+  print_message("along the folded horizon: %.0f m with its weight, %.0f m without\n", L1, L0);
+  assert_true(L1 >= 100 && L1 >= 3 * L0);
+  karst_network_destroy(&with);
+  karst_network_destroy(&without);
+  karst_scenario_destroy(&sc);
+}
+
 /* The connectivity matrix: sinks s1, s2, s3 and springs A (270, 270, 40), B (270, 30, 40);
  * s1: [2, 0] (A required, B never), s2: [0, 1] (only B allowed), s3: [2, 2] (both required).
  * The plan lays no route from s1 to B nor from s2 to A, routes from s1 to A and from s3 to both;
@@ -376,9 +440,9 @@ static void test_connectivity(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_vadose_then_phreatic),  cmocka_unit_test(test_own_water_tables),
-      cmocka_unit_test(test_exclusion_box_avoided), cmocka_unit_test(test_faults),
-      cmocka_unit_test(test_connectivity),
+      cmocka_unit_test(test_vadose_then_phreatic),    cmocka_unit_test(test_own_water_tables),
+      cmocka_unit_test(test_exclusion_box_avoided),   cmocka_unit_test(test_faults),
+      cmocka_unit_test(test_folded_horizon_followed), cmocka_unit_test(test_connectivity),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

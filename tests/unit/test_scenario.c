@@ -417,7 +417,8 @@ BAD(perm_two_kinds, KARST_EINVAL, 16, 5, "permeability.tree has both 'sphere' an
 BAD(perm_empty, KARST_EINVAL, 15, 12, "permeability.tree.blend must list at least one node")
 BAD(perm_alias_cycle, KARST_ERANGE, 14, 9, "nested deeper than 64 levels")
 /* Terrain and heightfields. */
-BAD(terrain_both, KARST_EINVAL, 7, 3, "terrain gives both elevation and heightfield")
+BAD(terrain_both, KARST_EINVAL, 7, 3,
+    "terrain gives more than one of elevation, heightfield and surface")
 BAD(heightfield_missing, KARST_EIO, 7, 16, "terrain.heightfield: ")
 BAD(heightfield_short, KARST_ERANGE, 7, 16,
     "covers x in [-25, 125], y in [-25, 125] m but the domain spans x in [0, 200]")

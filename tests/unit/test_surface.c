@@ -103,7 +103,11 @@ typedef struct {
 
 static double plane_f(double x, double y, const void *p) {
   const plane_t *P = p;
-  karst_horizon_t h = {P->e, P->dip, P->dipdir, {P->ox, P->oy}, 1.0, 0, 0};
+  karst_horizon_t h = {.elevation = P->e,
+                       .dip = P->dip,
+                       .dip_direction = P->dipdir,
+                       .origin = {P->ox, P->oy},
+                       .radius = 1.0};
   return karst_horizon_elevation(&h, x, y);
 }
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Write the two geological surfaces of the `plateau` scenario, reproducibly.
+"""Write the three surfaces of the `plateau` scenario, reproducibly.
 
     /usr/bin/python3 datasets/scenarios/plateau/make_surfaces.py [OUTDIR]
 
@@ -31,6 +31,16 @@ water_table.asc: an ESRI ASCII grid of the water table, 20 m cells centred on
       s = (x + 1500 - y) / 3500   (0 at the north-west corner, 1 at the south-east),
 
   from 220 m in the north-west to 150 m in the south-east, rounded to 1 cm.
+
+terrain.asc: the plateau's ground, an ESRI ASCII grid of 25 m cells centred on
+  x = 0, 25, ..., 2000 and y = 0, 25, ..., 1500 (81 x 61 nodes): a gently undulating
+  surface around 370 m with ten dolines (closed depressions, Gaussian, 6-9 m deep,
+  35 m across) where the scenario's sinks are,
+
+      z = 370 + 10 sin(2 pi x / 1700) cos(2 pi y / 1300) + 6 sin(2 pi (x + y) / 900)
+          - sum_k d_k exp(-|p - c_k|^2 / (2 * 35^2)),
+
+  rounded to 1 cm (DOLINES lists c_k and d_k).
 """
 import math
 import os
@@ -169,12 +179,44 @@ def write_water_table(path):
         f.write("\n".join(out) + "\n")
 
 
+# Doline centres (x, y) and depths (m): the sinks of plateau.yaml sit at their bottoms.
+DOLINES = [(250, 300, 8), (420, 1150, 7), (640, 700, 9), (900, 1300, 6), (1120, 250, 8),
+           (1300, 900, 7), (1500, 1350, 8), (1650, 500, 9), (1820, 1050, 6), (760, 200, 7)]
+
+
+def terrain_z(x, y):
+    z = (370.0 + 10.0 * math.sin(2 * math.pi * x / 1700.0) * math.cos(2 * math.pi * y / 1300.0)
+         + 6.0 * math.sin(2 * math.pi * (x + y) / 900.0))
+    for cx, cy, d in DOLINES:
+        z -= d * math.exp(-((x - cx) ** 2 + (y - cy) ** 2) / (2 * 35.0 ** 2))
+    return z
+
+
+def write_terrain(path):
+    ncols, nrows, cs = 81, 61, 25.0
+    out = [
+        "ncols        %d" % ncols,
+        "nrows        %d" % nrows,
+        "xllcorner    -12.5",
+        "yllcorner    -12.5",
+        "cellsize     25",
+        "NODATA_value -9999",
+    ]
+    for r in range(nrows):  # north to south
+        y = (nrows - 1 - r) * cs
+        out.append(" ".join("%.2f" % terrain_z(c * cs, y) for c in range(ncols)))
+    with open(path, "w", newline="\n") as f:
+        f.write("\n".join(out) + "\n")
+
+
 def main():
     outdir = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__file__))
     nt = write_fold(os.path.join(outdir, "fold_horizon.ts"))
     write_water_table(os.path.join(outdir, "water_table.asc"))
-    print("wrote %s (%d triangles) and %s" % (os.path.join(outdir, "fold_horizon.ts"), nt,
-                                             os.path.join(outdir, "water_table.asc")))
+    write_terrain(os.path.join(outdir, "terrain.asc"))
+    print("wrote %s (%d triangles), %s and %s" % (os.path.join(outdir, "fold_horizon.ts"), nt,
+                                                 os.path.join(outdir, "water_table.asc"),
+                                                 os.path.join(outdir, "terrain.asc")))
 
 
 if __name__ == "__main__":
