@@ -375,13 +375,14 @@ static int sql_quote(char *out, size_t size, const char *s) {
 }
 
 /* Title and meaning of field @p col: a fixed field, or an array of include/karst/arrays.h
- * (with "attr_" in front, "_name" or "_K" behind). 0 when karst does not describe it. */
-static int describe_column(const char *col, char *title, size_t tsize, const char **description) {
+ * (with "attr_" in front, "_name" or "_K" behind), or the column's name and "not described"
+ * for an array arrays.h does not know. */
+static void describe_column(const char *col, char *title, size_t tsize, const char **description) {
   for (size_t i = 0; i < sizeof fixed_columns / sizeof fixed_columns[0]; i++)
     if (strcmp(col, fixed_columns[i].column) == 0) {
       snprintf(title, tsize, "%s", fixed_columns[i].title);
       *description = fixed_columns[i].description;
-      return 1;
+      return;
     }
   char base[96];
   snprintf(base, sizeof base, "%s", strncmp(col, "attr_", 5) == 0 ? col + 5 : col);
@@ -392,7 +393,7 @@ static int describe_column(const char *col, char *title, size_t tsize, const cha
     if ((info = karst_arrays_find(base))) {
       snprintf(title, tsize, "%s (name)", info->title);
       *description = info->meaning;
-      return 1;
+      return;
     }
   }
   char *us = strrchr(base, '_');
@@ -402,13 +403,12 @@ static int describe_column(const char *col, char *title, size_t tsize, const cha
     if ((info = karst_arrays_find(base))) {
       snprintf(title, tsize, "%s [%d]", info->title, comp);
       *description = info->meaning;
-      return 1;
+      return;
     }
   }
-  if (!info) return 0;
-  snprintf(title, tsize, "%s", info->title);
-  *description = info->meaning;
-  return 1;
+  /* As the .vtp's array_units says of an array karst does not describe. */
+  snprintf(title, tsize, "%s", info ? info->title : col);
+  *description = info ? info->meaning : "not described by karst (docs/arrays.md)";
 }
 
 /*
@@ -438,7 +438,7 @@ static karst_error_t write_data_columns(writer_t *w, GDALDatasetH ds, const char
     for (int i = 0; i < OGR_FD_GetFieldCount(defn); i++) {
       const char *col = OGR_Fld_GetNameRef(OGR_FD_GetFieldDefn(defn, i)), *description = NULL;
       char title[192], q[5][640], sql[3400];
-      if (!describe_column(col, title, sizeof title, &description)) continue;
+      describe_column(col, title, sizeof title, &description);
       if (!sql_quote(q[0], sizeof q[0], layers[l]) || !sql_quote(q[1], sizeof q[1], col) ||
           !sql_quote(q[2], sizeof q[2], title) || !sql_quote(q[3], sizeof q[3], description))
         continue;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Every output names the versions of the libraries karst uses, and all name the same ones:
 # `karst --version`, run.json and ensemble.json ("versions"), the field data "versions" of
-# network.vtp, samples.vtp and a mesh .vtp, a .ply mesh's header comments, the GeoPackage's
+# network.vtp, samples.vtp, geology.vtp and a mesh .vtp, a .ply mesh's header comments, the GeoPackage's
 # metadata, and the report's software section. The versions themselves are
 # checked against independent sources: pkg-config, gdal-config, dpkg, mpirun, and VTK's own
 # vtkVersion through Debian's python3-vtk9.
@@ -55,7 +55,8 @@ for f in ("gen/run.json", "ens/ensemble.json"):
     got = json.load(open(f"{T}/{f}"))["versions"]
     if got != want or list(got) != list(want):
         bad.append(f"{f}: {got} != {want}")
-for f in ("gen/network.vtp", "gen/samples.vtp", "ens/realisations/0000/network.vtp", "cave.vtp"):
+for f in ("gen/network.vtp", "gen/samples.vtp", "gen/geology.vtp", "ens/realisations/0000/network.vtp",
+          "cave.vtp"):
     r = vtkXMLPolyDataReader()
     r.SetFileName(f"{T}/{f}")
     r.Update()
@@ -72,7 +73,7 @@ if "\n".join(lines) not in page:
     bad.append("report.html: the software section is not the --version list")
 for b in bad:
     print("FAIL:", b)
-print("ok: run.json, ensemble.json, network.vtp, samples.vtp, the mesh .vtp and .ply and the "
+print("ok: run.json, ensemble.json, network.vtp, samples.vtp, geology.vtp, the mesh .vtp and .ply and the "
       "report name", len(lines), "components")
 sys.exit(1 if bad else 0)
 PY

@@ -364,7 +364,11 @@ class TestGis(Tmp):
         self.assertGreater(len(rows), 5)
         for name, unit, meaning in rows:
             d = karst.describe(name)
-            self.assertEqual((d["unit"], d["meaning"]), (unit, meaning), name)
+            if d is None:  # an array arrays.h does not know yet: the file says so too
+                self.assertEqual(unit, "unknown", name)
+            else:
+                self.assertEqual((d["unit"], d["meaning"]), (unit, meaning), name)
+        self.assertGreater(sum(karst.describe(n) is not None for n, _, _ in rows), 5)
         self.assertEqual(karst.describe("water_table_distance")["unit"], "m")
         self.assertIsNone(karst.describe("no such array"))
 
