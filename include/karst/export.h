@@ -65,10 +65,17 @@ void karst_export_source_destroy(karst_export_source_t *s);
 karst_error_t karst_export_source_load(karst_ctx_t *ctx, const char *path,
                                        karst_export_source_t *s);
 
+/** karst_export_options_t.timestamp: stamp the GeoPackage with the time of the export. */
+#define KARST_EXPORT_TIME_NOW (-1)
+
 /** How to write the GeoPackage. */
 typedef struct karst_export_options {
   const char *crs;      /**< overrides the source's coordinate system; NULL: the source's */
   const char *qml_path; /**< where to write the conduits' QGIS style; NULL: none */
+  /** The GeoPackage's only clock readings (gpkg_contents.last_change, layer_styles.update_time),
+   * in seconds since 1970-01-01 UTC: a fixed time (e.g. SOURCE_DATE_EPOCH) makes the same
+   * input give a byte-identical file; KARST_EXPORT_TIME_NOW (the default): the export's time. */
+  int64_t timestamp;
 } karst_export_options_t;
 
 void karst_export_options_init(karst_export_options_t *opt);

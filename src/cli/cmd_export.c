@@ -1,4 +1,5 @@
 /* karst export: a network as a GeoPackage for QGIS (library: karst_export_gpkg). */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,6 +15,24 @@ static char *style_name(const char *gpkg) {
   if (n > 5 && strcmp(q + n - 5, ".gpkg") == 0) q[n - 5] = '\0';
   strcat(q, ".qml");
   return q;
+}
+
+/* SOURCE_DATE_EPOCH (reproducible-builds.org): the time to stamp the GeoPackage with, a
+ * decimal number of seconds since 1970-01-01 UTC; unset or empty: the export's time. */
+static karst_error_t source_date_epoch(karst_ctx_t *ctx, int64_t *timestamp) {
+  const char *v = getenv("SOURCE_DATE_EPOCH");
+  *timestamp = KARST_EXPORT_TIME_NOW;
+  if (!v || !*v) return KARST_SUCCESS;
+  char *end = NULL;
+  errno = 0;
+  long long t = strtoll(v, &end, 10);
+  if (v[0] < '0' || v[0] > '9' || *end != '\0' || errno == ERANGE)
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "SOURCE_DATE_EPOCH: '%s' is not a number of seconds since "
+                           "1970-01-01 UTC",
+                           v);
+  *timestamp = (int64_t)t;
+  return KARST_SUCCESS;
 }
 
 static int run(int argc, char **argv) {
@@ -53,6 +72,7 @@ static int run(int argc, char **argv) {
   }
   opt.crs = crs;
   opt.qml_path = qml ? qml : style;
+  if ((err = source_date_epoch(&ctx, &opt.timestamp))) goto fail;
   if ((err = karst_export_source_load(&ctx, input, &src))) goto fail;
   if ((err = karst_export_gpkg(&ctx, gpkg, &src, &opt))) goto fail;
   if (!quiet) {
@@ -86,7 +106,10 @@ const cli_command_t cli_cmd_export = {
     "when the input has none. QGIS applies the styles stored in the GeoPackage when it opens\n"
     "a layer; the conduits' style is also written to OUT.qml (tunnel types in the colours of\n"
     "the report and of ParaView). Both files are written to temporary names and renamed\n"
-    "into place together: a failed export leaves neither.\n\n"
+    "into place together: a failed export leaves neither. The file's only clock readings\n"
+    "(gpkg_contents.last_change, layer_styles.update_time) are the export's time, or\n"
+    "SOURCE_DATE_EPOCH (seconds since 1970-01-01 UTC) when that is set: the same input\n"
+    "then gives a byte-identical GeoPackage.\n\n"
     "  --gpkg OUT.gpkg  the GeoPackage to write (the name must end in .gpkg)\n"
     "  --crs CRS        coordinate system to write instead of the input's: EPSG:2154, a WKT\n"
     "                   or PROJ string (anything GDAL's OSRSetFromUserInput reads)\n"

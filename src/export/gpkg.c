@@ -26,6 +26,7 @@
 
 void karst_export_options_init(karst_export_options_t *opt) {
   memset(opt, 0, sizeof *opt);
+  opt->timestamp = KARST_EXPORT_TIME_NOW;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -301,7 +302,7 @@ static karst_error_t write_key_points(writer_t *w, GDALDatasetH ds, OGRSpatialRe
 /* QGIS's layer_styles table (the "QGIS GeoPackage styling extension", as QGIS itself writes
  * it): QGIS applies the row marked useAsDefault of a layer when it opens that layer. */
 static karst_error_t write_styles(writer_t *w, GDALDatasetH ds, const char *const qml[3],
-                                  const char *const layers[3]) {
+                                  const char *const layers[3], const struct tm *utc) {
   char *options[] = {"FID=id", NULL};
   OGRLayerH layer = GDALDatasetCreateLayer(ds, "layer_styles", NULL, wkbNone, options);
   static const char *const text[] = {"f_table_catalog", "f_table_schema",
@@ -321,9 +322,6 @@ static karst_error_t write_styles(writer_t *w, GDALDatasetH ds, const char *cons
   if (ok) ok = add_field(layer, "update_time", OFTDateTime);
   if (!ok) return gdal_fail(w->ctx, w->g, w->path, "creating the layer_styles table");
   OGRFeatureDefnH defn = OGR_L_GetLayerDefn(layer);
-  time_t now = time(NULL);
-  struct tm utc;
-  gmtime_r(&now, &utc);
   karst_error_t err = KARST_SUCCESS;
   for (int i = 0; i < 3 && !err; i++) {
     OGRFeatureH feat = OGR_F_Create(defn);
@@ -336,8 +334,9 @@ static karst_error_t write_styles(writer_t *w, GDALDatasetH ds, const char *cons
     OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "description"),
                          "karst palette (include/karst/palette.h)");
     OGR_F_SetFieldInteger(feat, OGR_FD_GetFieldIndex(defn, "useAsDefault"), 1);
-    OGR_F_SetFieldDateTime(feat, OGR_FD_GetFieldIndex(defn, "update_time"), utc.tm_year + 1900,
-                           utc.tm_mon + 1, utc.tm_mday, utc.tm_hour, utc.tm_min, utc.tm_sec, 100);
+    OGR_F_SetFieldDateTime(feat, OGR_FD_GetFieldIndex(defn, "update_time"), utc->tm_year + 1900,
+                           utc->tm_mon + 1, utc->tm_mday, utc->tm_hour, utc->tm_min, utc->tm_sec,
+                           100);
     err = put_feature(w, layer, feat);
     OGR_F_Destroy(feat);
   }
@@ -506,7 +505,7 @@ static karst_error_t check_source(karst_ctx_t *ctx, const char *path,
  * @param src   what to write (karst_export_source_load).
  * @param opt   coordinate system override and style file; NULL: the defaults.
  * @return KARST_SUCCESS; KARST_EINVAL (a name not ending in .gpkg, a coordinate that is not
- *         finite, an edge naming a missing node); KARST_EPARSE (a coordinate system GDAL/PROJ
+ *         finite, an edge naming a missing node, a timestamp before 1970 or after 9999); KARST_EPARSE (a coordinate system GDAL/PROJ
  *         does not know, naming where it came from); KARST_EIO (the directory cannot be
  *         written); KARST_EEXTERNAL (GDAL failed, quoting it); KARST_EINTERRUPTED; KARST_ENOMEM.
  * Time complexity: O(nodes + edges) features, each an SQLite insert (O(log features)).
@@ -526,6 +525,9 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
                            "the format by it)",
                            path);
   if (!src) return karst_set_error(ctx, KARST_EINVAL, "%s: nothing to export", path);
+  if (opt->timestamp < 0 && opt->timestamp != KARST_EXPORT_TIME_NOW)
+    return karst_set_error(ctx, KARST_EINVAL, "%s: timestamp %lld is before 1970-01-01", path,
+                           (long long)opt->timestamp);
   karst_error_t err = check_source(ctx, path, src);
   if (err) return err;
   if ((err = karst_check_writable(ctx, path))) return err;
@@ -540,6 +542,7 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
   char *qml[3] = {NULL, NULL, NULL}, *versions = NULL;
   const char *crs = opt->crs ? opt->crs : src->crs;
   const char *tmp = NULL;
+  int stamped = 0;
   writer_t w = {ctx, path, &g, 0,
                 (double)(src->net.n_edges + src->net.n_nodes + src->n_key_points)};
 
@@ -579,6 +582,20 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
   free(tmp_name);
   if (err) goto cleanup;
 
+  /* The clock readings: layer_styles.update_time (ours) and gpkg_contents.last_change (GDAL's
+   * GPKG driver reads the configuration option OGR_CURRENT_DATE; set for this thread only). */
+  const time_t when = opt->timestamp == KARST_EXPORT_TIME_NOW ? time(NULL) : (time_t)opt->timestamp;
+  struct tm utc;
+  char stamp[32];
+  if (!gmtime_r(&when, &utc) || utc.tm_year + 1900 > 9999 ||
+      strftime(stamp, sizeof stamp, "%Y-%m-%dT%H:%M:%S.000Z", &utc) == 0) {
+    err = karst_set_error(ctx, KARST_EINVAL, "%s: timestamp %lld is not a date before year 10000",
+                          path, (long long)when);
+    goto cleanup;
+  }
+  CPLSetThreadLocalConfigOption("OGR_CURRENT_DATE", stamp);
+  stamped = 1;
+
   GDALAllRegister();
   GDALDriverH drv = GDALGetDriverByName("GPKG");
   if (!drv) {
@@ -601,7 +618,7 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
   if ((err = write_key_points(&w, ds, srs, src))) goto cleanup;
   static const char *const layers[3] = {KARST_EXPORT_LAYER_CONDUITS, KARST_EXPORT_LAYER_NODES,
                                         KARST_EXPORT_LAYER_KEY_POINTS};
-  if ((err = write_styles(&w, ds, (const char *const *)qml, layers))) goto cleanup;
+  if ((err = write_styles(&w, ds, (const char *const *)qml, layers, &utc))) goto cleanup;
   if ((err = write_data_columns(&w, ds, layers, 3))) goto cleanup;
   if (GDALDatasetCommitTransaction(ds) != OGRERR_NONE) {
     err = gdal_fail(ctx, &g, path, "committing the transaction");
@@ -631,6 +648,7 @@ nomem:
   err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
 cleanup:
   if (ds) GDALClose(ds);
+  if (stamped) CPLSetThreadLocalConfigOption("OGR_CURRENT_DATE", NULL);
   karst_fileset_abort(&files);
   if (srs) OSRDestroySpatialReference(srs);
   CPLPopErrorHandler();

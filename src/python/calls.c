@@ -443,14 +443,17 @@ PyObject *karst_py_compare(PyObject *module, PyObject *args, PyObject *kw) {
 }
 
 /**
- * export_gpkg(source, path, crs=None, qml=None) -> summary dict: karst_export_source_load of a
- * directory or file (or a karst.Network, without key points) and karst_export_gpkg.
+ * export_gpkg(source, path, crs=None, qml=None, timestamp=-1) -> summary dict:
+ * karst_export_source_load of a directory or file (or a karst.Network, without key points) and
+ * karst_export_gpkg; timestamp in seconds since 1970 UTC, -1 (KARST_EXPORT_TIME_NOW): now.
  */
 PyObject *karst_py_export_gpkg(PyObject *module, PyObject *args, PyObject *kw) {
-  static char *kwlist[] = {"source", "path", "crs", "qml", NULL};
+  static char *kwlist[] = {"source", "path", "crs", "qml", "timestamp", NULL};
   PyObject *src_o, *path_o, *qml_o = Py_None, *path, *qml = NULL, *src_path = NULL;
   const char *crs = NULL;
-  if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|zO", kwlist, &src_o, &path_o, &crs, &qml_o))
+  long long timestamp = KARST_EXPORT_TIME_NOW;
+  if (!PyArg_ParseTupleAndKeywords(args, kw, "OO|zOL", kwlist, &src_o, &path_o, &crs, &qml_o,
+                                   &timestamp))
     return NULL;
   karst_export_source_t src;
   karst_export_source_init(&src);
@@ -479,6 +482,7 @@ PyObject *karst_py_export_gpkg(PyObject *module, PyObject *args, PyObject *kw) {
   karst_export_options_init(&opt);
   opt.crs = crs;
   opt.qml_path = qml ? PyBytes_AS_STRING(qml) : NULL;
+  opt.timestamp = (int64_t)timestamp;
   karst_error_t err = KARST_SUCCESS;
   Py_BEGIN_ALLOW_THREADS;
   if (src_path) err = karst_export_source_load(&c.ctx, PyBytes_AS_STRING(src_path), &src);

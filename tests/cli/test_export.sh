@@ -14,6 +14,7 @@ PY=/usr/bin/python3
 T=$(mktemp -d)
 trap 'chmod -R u+w "$T"; rm -rf "$T"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
+unset SOURCE_DATE_EPOCH # section 4b sets it where it means to
 command -v ogrinfo >/dev/null || fail "ogrinfo is required (scripts/install-deps installs gdal-bin)"
 
 "$KARST" generate "$SRC/datasets/scenarios/branchwork.yaml" -o "$T/gen" -q || fail "generate"
@@ -194,6 +195,22 @@ grep -q "^Feature Count: 17$" "$T/l.txt" || fail "member key points (17 in branc
 grep -q "^  seed=$seed$" "$T/l.txt" && grep -q "^  member=1$" "$T/l.txt" || { cat "$T/l.txt"; fail "member seed $seed"; }
 echo "ok: an ensemble member keeps its key points and its own seed"
 
+# 4b. Reproducible files: with SOURCE_DATE_EPOCH the two exports, a second apart, are
+# byte-identical, and every clock reading in the file is that time (1700000000 s after the
+# epoch is 2023-11-14 22:13:20 UTC, by hand: 19675 days = 2023-11-14, plus 80000 s).
+SOURCE_DATE_EPOCH=1700000000 "$KARST" export "$T/gen" --gpkg "$T/r1.gpkg" -q || fail "export r1"
+sleep 1.1
+SOURCE_DATE_EPOCH=1700000000 "$KARST" export "$T/gen" --gpkg "$T/r2.gpkg" -q || fail "export r2"
+cmp -s "$T/r1.gpkg" "$T/r2.gpkg" || fail "the same input and SOURCE_DATE_EPOCH gave different GeoPackages"
+cmp -s "$T/r1.qml" "$T/r2.qml" || fail "the same input gave different .qml files"
+stamps=$( (ogrinfo -ro -q "$T/r1.gpkg" -sql "SELECT DISTINCT last_change FROM gpkg_contents"
+  ogrinfo -ro -q "$T/r1.gpkg" -sql "SELECT DISTINCT update_time FROM layer_styles") \
+  | sed -n 's/^ *\(last_change\|update_time\)[^=]*= *//p' | sort -u)
+[ "$stamps" = "2023/11/14 22:13:20+00" ] || fail "timestamps are not SOURCE_DATE_EPOCH's: $stamps"
+ogrinfo -ro -q "$T/gen.gpkg" -sql "SELECT DISTINCT last_change FROM gpkg_contents" | grep -q "2023-11-14" \
+  && fail "without SOURCE_DATE_EPOCH the export was stamped with it"
+echo "ok: SOURCE_DATE_EPOCH makes the GeoPackage byte-identical ($stamps)"
+
 # 5. Bad input: message, exit 1, nothing new, an existing output untouched.
 cp "$T/gen.gpkg" "$T/keep.gpkg"
 cp "$T/gen.qml" "$T/keep.qml"
@@ -219,6 +236,12 @@ sed -i 's|"crs": \[1\]|"crs": "EPSG:2154",|' "$T/badcrs/run.json"
 expect 1 "karst export: $T/badcrs/run.json:$line:" "$KARST" export "$T/badcrs" --gpkg "$T/keep.gpkg"
 sed -i 's|"crs": "EPSG:2154",,|"crs": null,|; s|"type": "spring"|"type": "fountain"|' "$T/badcrs/run.json"
 expect 1 "type must be sink, spring or waypoint, got 'fountain'" "$KARST" export "$T/badcrs" --gpkg "$T/keep.gpkg"
+for v in 12x -5 ' 7' 999999999999999999999; do
+  expect 1 "karst export: SOURCE_DATE_EPOCH: '$v' is not a number of seconds since 1970-01-01 UTC" \
+    env SOURCE_DATE_EPOCH="$v" "$KARST" export "$T/gen" --gpkg "$T/keep.gpkg"
+done
+expect 1 "timestamp 99999999999999 is not a date before year 10000" \
+  env SOURCE_DATE_EPOCH=99999999999999 "$KARST" export "$T/gen" --gpkg "$T/keep.gpkg"
 [ "$(cat "$T/keep.gpkg" "$T/keep.qml" | md5sum)" = "$sum" ] || fail "a failed export changed the previous output"
 expect 1 "a GeoPackage name must end in .gpkg" "$KARST" export "$T/gen" --gpkg "$T/out.shp"
 expect 1 "no network.vtp in this directory" "$KARST" export "$T" --gpkg "$T/x.gpkg"

@@ -160,7 +160,7 @@ def read_ensemble(directory):
     return Ensemble(os.fspath(directory))
 
 
-def export_gpkg(source, path, crs=None, qml=None):
+def export_gpkg(source, path, crs=None, qml=None, timestamp=None):
     """A GeoPackage for QGIS, as ``karst export SOURCE --gpkg PATH`` (docs/gis.md).
 
     source  a ``karst generate`` directory, an ensemble member directory, a network or survey
@@ -168,6 +168,10 @@ def export_gpkg(source, path, crs=None, qml=None):
     path    the GeoPackage (name ending in .gpkg), replaced atomically
     crs     coordinate system to write instead of the source's ("EPSG:2154", WKT, PROJ)
     qml     where to write the conduits' QGIS style (default: PATH with .qml)
+    timestamp  the file's clock readings (gpkg_contents.last_change, layer_styles.update_time)
+            as seconds since 1970-01-01 UTC or a timezone-aware datetime: the same input then
+            gives a byte-identical file; default: $SOURCE_DATE_EPOCH when set (as the CLI),
+            else the time of the export
     Returns {conduits, nodes, key_points, crs, crs_source}.
     """
     path = os.fspath(path)
@@ -175,7 +179,22 @@ def export_gpkg(source, path, crs=None, qml=None):
         qml = (path[:-5] if path.endswith(".gpkg") else path) + ".qml"
     if not isinstance(source, Network):
         source = os.fspath(source)
-    return _karst.export_gpkg(source, path, crs, os.fspath(qml))
+    if timestamp is None:
+        epoch = os.environ.get("SOURCE_DATE_EPOCH", "")
+        if epoch and not (epoch.isascii() and epoch.isdigit()):
+            err = InvalidValueError(
+                "SOURCE_DATE_EPOCH: '%s' is not a number of seconds since 1970-01-01 UTC" % epoch)
+            err.code = "KARST_EINVAL"
+            raise err
+        timestamp = int(epoch) if epoch else -1
+    elif hasattr(timestamp, "timestamp"):
+        if timestamp.utcoffset() is None:
+            raise ValueError("export_gpkg: timestamp is a naive datetime; give its timezone")
+        timestamp = int(timestamp.timestamp())
+    elif isinstance(timestamp, bool) or not isinstance(timestamp, int) or timestamp < 0:
+        raise ValueError("export_gpkg: timestamp must be seconds since 1970-01-01 UTC (an int "
+                         ">= 0) or a datetime, not %r" % (timestamp,))
+    return _karst.export_gpkg(source, path, crs, os.fspath(qml), timestamp)
 
 
 def published(path=None):

@@ -101,10 +101,10 @@ class Network:
         """Write the network as a .vtp file for ParaView (atomically), as ``karst generate``."""
         _karst.write_vtp(self, path)
 
-    def export_gpkg(self, path, crs=None, qml=None):
+    def export_gpkg(self, path, crs=None, qml=None, timestamp=None):
         """Write the network as a GeoPackage for QGIS (:func:`karst.export_gpkg`)."""
         from . import export_gpkg
-        return export_gpkg(self, path, crs=crs, qml=qml)
+        return export_gpkg(self, path, crs=crs, qml=qml, timestamp=timestamp)
 
     def to_networkx(self, multigraph=False):
         """The network as a networkx graph.
