@@ -503,11 +503,12 @@ static karst_error_t check_source(karst_ctx_t *ctx, const char *path,
  * @param ctx   context: errors, warnings from GDAL, progress ("export", features), interrupt.
  * @param path  the GeoPackage; must end in ".gpkg". Replaced atomically when it exists.
  * @param src   what to write (karst_export_source_load).
- * @param opt   coordinate system override and style file; NULL: the defaults.
+ * @param opt   coordinate system override, style file, timestamp; NULL: the defaults.
  * @return KARST_SUCCESS; KARST_EINVAL (a name not ending in .gpkg, a coordinate that is not
- *         finite, an edge naming a missing node, a timestamp before 1970 or after 9999); KARST_EPARSE (a coordinate system GDAL/PROJ
- *         does not know, naming where it came from); KARST_EIO (the directory cannot be
- *         written); KARST_EEXTERNAL (GDAL failed, quoting it); KARST_EINTERRUPTED; KARST_ENOMEM.
+ *         finite, an edge naming a missing node, a timestamp before 1970 or after 9999);
+ *         KARST_EPARSE (a coordinate system GDAL/PROJ does not know, naming where it came
+ *         from); KARST_EIO (the directory cannot be written); KARST_EEXTERNAL (GDAL failed,
+ *         quoting it); KARST_EINTERRUPTED; KARST_ENOMEM.
  * Time complexity: O(nodes + edges) features, each an SQLite insert (O(log features)).
  */
 karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
