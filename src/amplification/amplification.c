@@ -11,9 +11,7 @@
 
 /** Fill @p opt with the documented defaults (see the field comments). O(1). */
 void karst_amplification_options_init(karst_amplification_options_t *opt) {
-  opt->displacement_at_theta0 = 0.05;
-  opt->displacement_at_theta1 = 4.0;
-  opt->max_displacement_ratio = 0.5;
+  opt->ratio_at_theta1 = 0.5;
   opt->min_segment = 1.0;
   opt->max_levels = 3;
   opt->max_tries = 32;
@@ -21,16 +19,19 @@ void karst_amplification_options_init(karst_amplification_options_t *opt) {
 }
 
 /**
- * Tortuosity θ → maximum first-level midpoint displacement, linear between
- * the two ends Paris et al. 2021, §5.2 give: "from a few centimeters (θ = 0)
- * to 4 meters (θ = 1)": A(θ) = A0 + θ (A1 − A0), A0 = 0.05 m, A1 = 4 m by
- * default. θ is clamped to [0, 1]. O(1).
+ * Tortuosity θ → the largest midpoint displacement as a fraction of the piece being split:
+ * ρ(θ) = θ × ratio_at_theta1 (0.5 by default), θ clamped to [0, 1]. The displacement scales with
+ * the length it is applied to, as in the fractal midpoint displacement of Fournier, Fussell &
+ * Carpenter (1982) with Hurst exponent 1, so the tortuosity it adds depends on θ alone — not on
+ * the sampling radius, which sets the length of the graph's edges (Paris et al. 2021, §5.2 give
+ * an absolute amplitude, "from a few centimeters to 4 meters", which on 10 m edges leaves
+ * branchworks straighter than any of the 34 caves of Collon et al. 2017; docs/generation.md).
+ * O(1).
  */
-double karst_amplification_max_displacement(const karst_amplification_options_t *opt,
-                                            double theta) {
+double karst_amplification_displacement_ratio(const karst_amplification_options_t *opt,
+                                              double theta) {
   double t = theta < 0 ? 0 : (theta > 1 ? 1 : theta);
-  return opt->displacement_at_theta0 +
-         t * (opt->displacement_at_theta1 - opt->displacement_at_theta0);
+  return t * opt->ratio_at_theta1;
 }
 
 /**
@@ -281,12 +282,12 @@ static int push_point(subdiv_t *sd, const double p[3]) {
 }
 
 /* Midpoint displacement of segment a–b: emits the interior points in order. */
-static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double amp, int level) {
+static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double ratio, int level) {
   double len = dist3(a, b);
-  if (level >= sd->opt->max_levels || len < 2 * sd->opt->min_segment) return 0;
+  if (level >= sd->opt->max_levels || len < 2 * sd->opt->min_segment || !(ratio > 0)) return 0;
   double t[3] = {(b[0] - a[0]) / len, (b[1] - a[1]) / len, (b[2] - a[2]) / len};
   double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-  double A = fmin(amp, sd->opt->max_displacement_ratio * len);
+  double A = ratio * len;
   double q[3];
   memcpy(q, m, sizeof q);
   for (int tries = 0; tries < sd->opt->max_tries; tries++) {
@@ -299,26 +300,25 @@ static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double 
       break;
     }
   }
-  if (subdivide(sd, a, q, 0.5 * amp, level + 1)) return -1;
+  if (subdivide(sd, a, q, ratio, level + 1)) return -1;
   if (push_point(sd, q)) return -1;
-  return subdivide(sd, q, b, 0.5 * amp, level + 1);
+  return subdivide(sd, q, b, ratio, level + 1);
 }
 
 /**
  * Stochastic midpoint displacement (Paris et al. 2021, §5.2; Fournier,
  * Fussell & Carpenter 1982): every edge a–b longer than 2 × min_segment is
  * split at its midpoint, displaced perpendicular to a–b in a uniformly random
- * direction by a uniform distance in [0, A], A = min(A(θ) / 2^level,
- * max_displacement_ratio × length), A(θ) from
- * karst_amplification_max_displacement; both halves are refined again up to
- * max_levels. A displacement that would put the point outside the domain or
- * above the terrain is rejected and redrawn (max_tries times; then the
- * midpoint stays on the segment), so no node leaves the bedrock. Original
- * nodes keep their position and attributes; new nodes get zero attributes
- * (kind interior) but their edge's "spring"; each piece copies its edge's
+ * direction by a uniform distance in [0, ρ L], L the length of the piece split and
+ * ρ = karst_amplification_displacement_ratio(θ); both halves are refined again up to
+ * max_levels, each with the same ratio of its own length (so the added tortuosity does
+ * not depend on the length of the graph's edges). A displacement that would put the
+ * point outside the bedrock is rejected and redrawn (max_tries times; then the
+ * midpoint stays on the segment), so no node leaves the bedrock. θ = 0 displaces
+ * nothing. Original nodes keep their position and attributes; new nodes get zero
+ * attributes (kind interior) but their edge's "spring"; each piece copies its edge's
  * attributes, except "cost", which is shared among the pieces in proportion to
- * their length.
- * Edges are processed in index order with @p rng, so the output is
+ * their length. Edges are processed in index order with @p rng, so the output is
  * deterministic.
  *
  * @param in   the network to refine (unchanged).
@@ -336,7 +336,7 @@ karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_geology
     return karst_set_error(ctx, KARST_EINVAL, "tortuosity must be within [0, 1], got %g", theta);
   karst_error_t err = KARST_SUCCESS;
   subdiv_t sd = {geo, opt, rng, NULL, 0, 0};
-  const double amp = karst_amplification_max_displacement(opt, theta);
+  const double ratio = karst_amplification_displacement_ratio(opt, theta);
   karst_network_t tmp;
   karst_network_init(&tmp);
   for (karst_int_t v = 0; v < in->n_nodes; v++)
@@ -362,7 +362,7 @@ karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_geology
     karst_int_t u = in->edges[2 * e], w = in->edges[2 * e + 1];
     const double *a = &in->xyz[3 * u], *b = &in->xyz[3 * w];
     sd.n = 0;
-    if (subdivide(&sd, a, b, amp, 0)) goto nomem;
+    if (subdivide(&sd, a, b, ratio, 0)) goto nomem;
     /* Lengths of the pieces, for sharing the cost. */
     double total = 0;
     const double *prev = a;

@@ -13,15 +13,15 @@
 #include "graph_fixture.h"
 #include "test_util.h"
 
-/* θ → maximum displacement, from the paper's two ends: 0.05 m at θ = 0, 4 m at θ = 1, linear. */
+/* θ → the largest displacement as a fraction of the piece split: θ × 0.5, clamped. */
 static void test_theta_mapping(void **state) {
   (void)state;
   karst_amplification_options_t opt;
   karst_amplification_options_init(&opt);
-  assert_close(karst_amplification_max_displacement(&opt, 0.0), 0.05, 1e-15);
-  assert_close(karst_amplification_max_displacement(&opt, 1.0), 4.0, 1e-15);
-  assert_close(karst_amplification_max_displacement(&opt, 0.5), 2.025, 1e-15);
-  assert_close(karst_amplification_max_displacement(&opt, 7.0), 4.0, 1e-15); /* clamped */
+  assert_close(karst_amplification_displacement_ratio(&opt, 0.0), 0.0, 0);
+  assert_close(karst_amplification_displacement_ratio(&opt, 1.0), 0.5, 1e-15);
+  assert_close(karst_amplification_displacement_ratio(&opt, 0.5), 0.25, 1e-15);
+  assert_close(karst_amplification_displacement_ratio(&opt, 7.0), 0.5, 1e-15); /* clamped */
 }
 
 /* Distance from p to the line through a and b. */
@@ -34,10 +34,12 @@ static double line_dist(const double *p, const double *a, const double *b) {
          sqrt(ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]);
 }
 
-/* One 16 m edge just below a flat terrain (z = 10, edge at z = 9.9), min segment 1 m, 3 levels:
- * 16 → 8 → 4 → 2 m pieces, so 7 new nodes and 8 edges (displaced pieces are longer than half
- * their parent, so every split still happens). Displacements sum to at most A(1 + 1/2 + 1/4) <
- * 2A from the original line; no point rises to the terrain. */
+/* One 16 m edge just below a flat terrain (z = 10, edge at z = 9.9), min segment 1 m, 3 levels.
+ * θ = 1 (ρ = 0.5): 16 → 8 → 4 → 2 m pieces (displaced pieces are longer than half their parent,
+ * so every split happens), 7 new nodes and 8 edges. A piece of length L split with displacement
+ * h <= ρ L gives halves of length <= (L/2) sqrt(1 + 4ρ²), so the point of level k lies at most
+ * ρ (L0 + L1 + L2) from the original line, L_{k+1} = L_k/2 sqrt(1 + 4ρ²). θ = 0 displaces
+ * nothing: the edge is kept whole. No point rises to the terrain. */
 static void test_displacement(void **state) {
   (void)state;
   karst_ctx_t ctx;
@@ -50,7 +52,10 @@ static void test_displacement(void **state) {
   karst_amplification_options_t opt;
   karst_amplification_options_init(&opt);
   for (int th = 0; th <= 1; th++) {
-    double A = karst_amplification_max_displacement(&opt, th);
+    double rho = karst_amplification_displacement_ratio(&opt, th);
+    double L1 = 8 * sqrt(1 + 4 * rho * rho), L2 = L1 / 2 * sqrt(1 + 4 * rho * rho);
+    double A = rho * (16 + L1 + L2);
+    const karst_int_t nn = th ? 9 : 2, ne = th ? 8 : 1;
     double maxdev_all = 0;
     for (uint64_t seed = 1; seed <= 30; seed++) {
       karst_network_t in, out, out2;
@@ -74,31 +79,31 @@ static void test_displacement(void **state) {
                        KARST_SUCCESS);
       assert_int_equal(karst_amplification_displace(&ctx, geo, th, &r2, &opt, &in, &out2),
                        KARST_SUCCESS);
-      assert_int_equal(out.n_nodes, 9);
-      assert_int_equal(out.n_edges, 8);
-      assert_memory_equal(out.xyz, out2.xyz, 9 * 3 * sizeof(double)); /* same stream, same result */
+      assert_int_equal(out.n_nodes, nn);
+      assert_int_equal(out.n_edges, ne);
+      assert_memory_equal(out.xyz, out2.xyz, (size_t)nn * 3 * sizeof(double)); /* same stream */
       assert_string_equal(out.node_labels[0], "sink1");
       /* endpoints unchanged; the pieces form one chain 0 → ... → 1 */
       assert_memory_equal(out.xyz, in.xyz, 6 * sizeof(double));
       double csum = 0;
       const double *oc = karst_network_attr_find(&out, KARST_ATTR_EDGE, "cost")->data;
       const double *ob = karst_network_attr_find(&out, KARST_ATTR_EDGE, "branch_id")->data;
-      for (karst_int_t e = 0; e < 8; e++) {
+      for (karst_int_t e = 0; e < ne; e++) {
         csum += oc[e];
         assert_close(ob[e], 7, 0);
       }
       assert_close(csum, 32.0, 1e-12);
       karst_int_t deg[9] = {0};
-      for (karst_int_t e = 0; e < 8; e++)
+      for (karst_int_t e = 0; e < ne; e++)
         deg[out.edges[2 * e]]++, deg[out.edges[2 * e + 1]]++;
       assert_int_equal(deg[0], 1);
       assert_int_equal(deg[1], 1);
-      for (int v = 2; v < 9; v++)
+      for (int v = 2; v < nn; v++)
         assert_int_equal(deg[v], 2);
-      for (karst_int_t v = 0; v < 9; v++) {
+      for (karst_int_t v = 0; v < nn; v++) {
         assert_true(out.xyz[3 * v + 2] < 10.0); /* never above the terrain */
         double dev = line_dist(&out.xyz[3 * v], &in.xyz[0], &in.xyz[3]);
-        assert_true(dev <= 2 * A);
+        assert_true(dev <= A + 1e-12);
         maxdev_all = fmax(maxdev_all, dev);
       }
       karst_geology_free(geo);
@@ -106,8 +111,9 @@ static void test_displacement(void **state) {
       karst_network_destroy(&out);
       karst_network_destroy(&out2);
     }
-    print_message("theta %d: max deviation %.3f m (bound 2A = %.3f m)\n", th, maxdev_all, 2 * A);
+    print_message("theta %d: max deviation %.3f m (bound %.3f m)\n", th, maxdev_all, A);
     if (th == 1) assert_true(maxdev_all > 1.0); /* θ = 1 does displace by metres */
+    if (th == 0) assert_close(maxdev_all, 0.0, 0);
   }
   karst_rng_t r;
   karst_rng_init(&r, 1, 0);
@@ -223,10 +229,65 @@ static void test_ramify(void **state) {
                 (long long)cyc);
 }
 
+/* Length of the chain @p out after displacing one straight edge of length L (ends at
+ * (0,0,-500) and (L,0,-500), deep in a 10 km box). */
+static double displaced_length(double L, double theta, uint64_t seed) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  sc.terrain.elevation = 0;
+  for (int a = 0; a < 3; a++)
+    sc.domain_min[a] = -5000, sc.domain_max[a] = 5000;
+  sc.domain_max[2] = 0;
+  karst_network_t in, out;
+  karst_network_init(&in);
+  karst_network_init(&out);
+  karst_network_add_node(&in, 0, 0, -500, NULL);
+  karst_network_add_node(&in, L, 0, -500, NULL);
+  karst_network_add_edge(&in, 0, 1, NULL);
+  karst_rng_t r;
+  karst_rng_init(&r, seed, 0);
+  karst_geology_t *geo = geo_make(&sc);
+  assert_int_equal(karst_amplification_displace(&ctx, geo, theta, &r, NULL, &in, &out),
+                   KARST_SUCCESS);
+  double len = 0;
+  for (karst_int_t e = 0; e < out.n_edges; e++)
+    len += karst_network_edge_length(&out, e);
+  karst_geology_free(geo);
+  karst_network_destroy(&in);
+  karst_network_destroy(&out);
+  karst_scenario_destroy(&sc);
+  return len;
+}
+
+/* The tortuosity the displacement adds depends on θ, not on the edge's length: with the same
+ * draws a 20 m and a 200 m edge (both split 3 times) give the same length ratio to rounding, it
+ * grows with θ, and for θ = 1 it is that of three levels of splits with h uniform in [0, L/2]:
+ * E[sqrt(1 + 4 h²/L²)] = E[sqrt(1 + U²)] = (√2 + asinh 1)/2 = 1.1478 per level, at most
+ * 1.1478³ = 1.512 (the directions of successive levels are random, so a little less). */
+static void test_displacement_scale_invariant(void **state) {
+  (void)state;
+  double prev = 1.0;
+  for (int k = 1; k <= 4; k++) {
+    double theta = 0.25 * k, m20 = 0, m200 = 0;
+    for (uint64_t s = 1; s <= 400; s++) {
+      m20 += displaced_length(20, theta, s) / 20 / 400;
+      m200 += displaced_length(200, theta, s) / 200 / 400;
+    }
+    print_message("theta %.2f: mean length ratio %.4f (20 m), %.4f (200 m)\n", theta, m20, m200);
+    assert_rel(m20, m200, 1e-9);
+    assert_true(m20 > prev);
+    prev = m20;
+    if (k == 4) assert_true(m20 > 1.3 && m20 <= 1.512);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_theta_mapping),
       cmocka_unit_test(test_displacement),
+      cmocka_unit_test(test_displacement_scale_invariant),
       cmocka_unit_test(test_ramify),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
