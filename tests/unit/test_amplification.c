@@ -1,7 +1,9 @@
 /* Amplification (src/amplification, Paris et al. 2021 §5.2): the θ mapping,
  * midpoint displacement (bounds, bedrock, subdivision count, attributes,
  * determinism) and ramification (dead ends keep a tree, interior points make
- * loops, everything stays connected). */
+ * loops, everything stays connected; the hierarchical draw stays near the previous
+ * step and tributaries join passages, not junctions). */
+#include <limits.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -229,6 +231,117 @@ static void test_ramify(void **state) {
                 (long long)cyc);
 }
 
+/* Distance from p to the segment [a, b]. */
+static double seg_dist(const double *p, const double *a, const double *b) {
+  double ab[3], ap[3], t = 0, l2 = 0;
+  for (int k = 0; k < 3; k++)
+    ab[k] = b[k] - a[k], ap[k] = p[k] - a[k], t += ab[k] * ap[k], l2 += ab[k] * ab[k];
+  t = l2 > 0 ? fmax(0, fmin(1, t / l2)) : 0;
+  double d2 = 0;
+  for (int k = 0; k < 3; k++)
+    d2 += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
+  return sqrt(d2);
+}
+
+/* Hierarchical ramification on the lattice of run_ramify (spacing h = 5 m): 2 steps, 8 then
+ * 8 × points_ratio 4 = 32 dead ends, first reach 30 m, second 30 × reach_ratio 1/12 = 2.5 m,
+ * anchored on the previous step. Returns the largest distance from a step-2 amplification node
+ * (the vertex a step-2 path starts from) to the step-1 paths, the number of step-2 nodes, and
+ * the largest node degree. */
+static void run_hierarchy(double reach, double *far, int *n2, int *max_degree) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_rng_t r;
+  karst_rng_init(&r, 4, 0);
+  const double o[3] = {0, 0, 0};
+  double *xyz = fx_jittered_grid(20, 20, 4, 5.0, o, 0.3, &r);
+  const karst_int_t n = 20 * 20 * 4;
+  karst_graph_t g;
+  fx_knn_graph(&g, n, xyz, 14, fx_euclid_cost, NULL);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  sc.terrain.elevation = 1000;
+  sc.domain_min[0] = sc.domain_min[1] = sc.domain_min[2] = -10;
+  sc.domain_max[0] = sc.domain_max[1] = sc.domain_max[2] = 110;
+  sc.amplification.steps = 2;
+  sc.amplification.points = 8;
+  sc.amplification.points_ratio = 4;
+  sc.amplification.reach = reach;
+  sc.amplification.reach_ratio = 1.0 / 12;
+  sc.amplification.anchor = KARST_ANCHOR_PREVIOUS;
+  sc.amplification.dead_end_fraction = 1;
+  karst_search_t *s;
+  karst_search_create(&ctx, &g, &s);
+  karst_path_t p;
+  karst_path_init(&p);
+  assert_int_equal(karst_paths_astar(&ctx, s, 0, n - 1, 1.0, &p), KARST_SUCCESS);
+  karst_skeleton_t sk;
+  assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_add_path(&ctx, &sk, &g, &p, 0), KARST_SUCCESS);
+  karst_rng_t ra;
+  karst_rng_init(&ra, 78, 0);
+  karst_geology_t *geo = geo_make(&sc);
+  assert_int_equal(karst_amplification_ramify(&ctx, geo, &g, NULL, &ra, NULL, &sk, NULL, NULL),
+                   KARST_SUCCESS);
+  karst_geology_free(geo);
+  const karst_network_t *net = &sk.net;
+  const double *kind = karst_network_attr_find(net, KARST_ATTR_NODE, "kind")->data;
+  const double *step = karst_network_attr_find(net, KARST_ATTR_EDGE, "amplification_step")->data;
+  int *deg = calloc((size_t)net->n_nodes, sizeof *deg);
+  for (karst_int_t e = 0; e < net->n_edges; e++)
+    deg[net->edges[2 * e]]++, deg[net->edges[2 * e + 1]]++;
+  *far = 0, *n2 = 0, *max_degree = 0;
+  for (karst_int_t v = 0; v < net->n_nodes; v++) {
+    if (deg[v] > *max_degree) *max_degree = deg[v];
+    if (kind[v] != KARST_NODE_AMPLIFICATION) continue;
+    int vstep = INT_MAX; /* the step of the path that starts at v (a later one may end there) */
+    for (karst_int_t e = 0; e < net->n_edges; e++)
+      if ((net->edges[2 * e] == v || net->edges[2 * e + 1] == v) && (int)step[e] < vstep)
+        vstep = (int)step[e];
+    if (vstep != 2) continue;
+    (*n2)++;
+    double d = INFINITY;
+    for (karst_int_t e = 0; e < net->n_edges; e++)
+      if ((int)step[e] == 1)
+        d = fmin(d, seg_dist(&net->xyz[3 * v], &net->xyz[3 * net->edges[2 * e]],
+                             &net->xyz[3 * net->edges[2 * e + 1]]));
+    if (d > *far) *far = d;
+  }
+  free(deg);
+  karst_skeleton_destroy(&sk);
+  karst_path_destroy(&p);
+  karst_search_free(s);
+  fx_graph_free(&g);
+  free(xyz);
+  karst_scenario_destroy(&sc);
+}
+
+/* A step-2 point is drawn within reach_2 = 2.5 m of a step-1 path and snapped to the nearest
+ * free vertex, which lies at most reach_2 + (reach_2 + 2h) from that path (triangle inequality,
+ * the free vertex nearest a point of a path being within about 2h = 10 m on this lattice): so
+ * every step-2 node is within 2 × 2.5 + 10 = 15 m of the step-1 paths. The paper's draw
+ * (reach 0: the network's bounding box, 95 × 95 × 15 m) puts some farther: the bound tests the
+ * draw. Amplification paths join passages, not junctions: the skeleton is one path (degree
+ * <= 2) and each dead end raises one passage vertex to 3, so no node exceeds degree 3. */
+static void test_ramify_hierarchy(void **state) {
+  (void)state;
+  double far;
+  int n2, max_degree;
+  run_hierarchy(30, &far, &n2, &max_degree);
+  print_message("hierarchical: %d step-2 nodes, farthest %.2f m from step 1, max degree %d\n", n2,
+                far, max_degree);
+  /* 32 drawn; within 2.5 m of eight short paths on a 5 m lattice there are few free vertices,
+   * and a point whose nearest free vertex an earlier point took is dropped */
+  assert_true(n2 >= 16 && n2 <= 32);
+  assert_true(far <= 15.0);
+  assert_int_equal(max_degree, 3);
+  run_hierarchy(0, &far, &n2, &max_degree);
+  print_message("bounding box: %d step-2 nodes, farthest %.2f m from step 1\n", n2, far);
+  assert_true(n2 >= 24 && n2 <= 32);
+  assert_true(far > 15.0);
+  assert_int_equal(max_degree, 3);
+}
+
 /* Length of the chain @p out after displacing one straight edge of length L (ends at
  * (0,0,-500) and (L,0,-500), deep in a 10 km box). */
 static double displaced_length(double L, double theta, uint64_t seed) {
@@ -289,6 +402,7 @@ int main(void) {
       cmocka_unit_test(test_displacement),
       cmocka_unit_test(test_displacement_scale_invariant),
       cmocka_unit_test(test_ramify),
+      cmocka_unit_test(test_ramify_hierarchy),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
