@@ -313,11 +313,14 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   fprintf(fp, "    \"amplification\": {\"steps\": %d, \"points\": %d, \"dead_end_fraction\": ",
           sc->amplification.steps, sc->amplification.points);
   json_num(fp, sc->amplification.dead_end_fraction);
-  fputs(", \"max_displacement\": ", fp),
-      json_num(fp, karst_amplification_max_displacement(&ao, sc->tortuosity));
-  fputs(", \"displacement_at_theta0\": ", fp), json_num(fp, ao.displacement_at_theta0);
-  fputs(", \"displacement_at_theta1\": ", fp), json_num(fp, ao.displacement_at_theta1);
-  fputs(", \"max_displacement_ratio\": ", fp), json_num(fp, ao.max_displacement_ratio);
+  fputs(", \"reach\": ", fp), json_num(fp, sc->amplification.reach);
+  fputs(", \"reach_ratio\": ", fp), json_num(fp, sc->amplification.reach_ratio);
+  fputs(", \"points_ratio\": ", fp), json_num(fp, sc->amplification.points_ratio);
+  fprintf(fp, ", \"anchor\": \"%s\"",
+          sc->amplification.anchor == KARST_ANCHOR_NETWORK ? "network" : "previous");
+  fputs(", \"displacement_ratio\": ", fp),
+      json_num(fp, karst_amplification_displacement_ratio(&ao, sc->tortuosity));
+  fputs(", \"ratio_at_theta1\": ", fp), json_num(fp, ao.ratio_at_theta1);
   fputs(", \"min_segment\": ", fp), json_num(fp, ao.min_segment);
   fprintf(fp, ", \"max_levels\": %d, \"max_tries\": %d, \"loop_separation\": ", ao.max_levels,
           ao.max_tries);
