@@ -32,6 +32,7 @@
 #include "karst/sampling.h"
 #include "karst/scenario.h"
 #include "karst/skeleton.h"
+#include "karst/view.h"
 #include "karst/vtk.h"
 
 #endif

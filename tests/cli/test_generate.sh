@@ -160,10 +160,10 @@ cp -r "$TMP/b" "$TMP/g"
 rm "$TMP/g/run.json" && mkdir -p "$TMP/g/run.json/x"
 "$KARST" generate "$TMP/small.yaml" -o "$TMP/g" --seed 6 --samples --quiet 2>/dev/null
 [ $? -eq 1 ] || fail "a rerun that cannot write run.json should exit 1"
-for f in network.vtp network_nodes.dat network_links.dat samples.vtp; do
+for f in network.vtp network_nodes.dat network_links.dat samples.vtp network.paraview.py; do
   cmp -s "$TMP/b/$f" "$TMP/g/$f" || fail "$f of the previous set changed by a failed run"
 done
-[ "$(ls -A "$TMP/g" | wc -l)" -eq 5 ] || fail "a failed rerun left temporaries: $(ls -A "$TMP/g")"
+[ "$(ls -A "$TMP/g" | wc -l)" -eq 6 ] || fail "a failed rerun left temporaries: $(ls -A "$TMP/g")"
 
 # A file system that refuses the writes (a full disk; here the file-size limit of ulimit -f, with
 # SIGXFSZ ignored so that write(2) fails with EFBIG instead): exit 1, a message naming the output
