@@ -57,6 +57,18 @@ static void fmt(char *out, size_t size, double v) {
   snprintf(out, size, "%.4g", v);
 }
 
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* Dash patterns of the survey lines, one per survey (in the order of --survey). */
+static const char *const survey_dashes[4] = {"5 3", "1.5 2.5", "9 3 2 3", "3 1.5"};
+
+const char *karst_i_survey_dash(int survey) {
+  return survey_dashes[(survey < 0 ? 0 : survey) % 4];
+}
+
 /* One segment of a (possibly broken) x axis: values [v0, v1] on pixels [x0, x0 + w]. */
 typedef struct {
   karst_i_plot_t p;
@@ -162,10 +174,11 @@ void karst_i_plot_histogram(karst_i_buf_t *b, const karst_ensemble_table_t *t, i
   double span = hi - lo, near_lo = lo - HIST_NEAR_RANGES * span,
          near_hi = hi + HIST_NEAR_RANGES * span;
   double vlo = blo, vhi = bhi, left[16], right[16], all[16];
-  int nl = 0, nr = 0, na = 0;
+  int nl = 0, nr = 0, na = 0, which[16];
   for (int s = 0; s < n_res && na < 16; s++) {
     double v = res[s].rows[col].survey;
     if (!isfinite(v)) continue;
+    which[na] = s;
     all[na++] = v;
     if (v < near_lo)
       left[nl++] = v;
@@ -210,11 +223,17 @@ void karst_i_plot_histogram(karst_i_buf_t *b, const karst_ensemble_table_t *t, i
   }
   /* Notes, each on its own row above the plot. */
   char note[256], fitted[256], v1[32], v2[32];
+  qsort(left, (size_t)nl, sizeof *left, cmp_double); /* tick labels left to right */
+  qsort(right, (size_t)nr, sizeof *right, cmp_double);
   if (na > 0) {
-    int m = snprintf(note, sizeof note, "survey%s: ", na > 1 ? "s" : "");
+    int m = snprintf(note, sizeof note, "survey: ");
     for (int s = 0; s < na && m < (int)sizeof note - 40; s++) {
       fmt(v1, sizeof v1, all[s]);
-      m += snprintf(note + m, sizeof note - (size_t)m, "%s%s", s ? ", " : "", v1);
+      if (n_res > 1)
+        m += snprintf(note + m, sizeof note - (size_t)m, "%s%d: %s", s ? ", " : "", which[s] + 1,
+                      v1);
+      else
+        m += snprintf(note + m, sizeof note - (size_t)m, "%s", v1);
     }
     if (nl + nr > 0)
       snprintf(note + m, sizeof note - (size_t)m, " (far from the members: axis broken)");
@@ -261,7 +280,8 @@ void karst_i_plot_histogram(karst_i_buf_t *b, const karst_ensemble_table_t *t, i
       if (in_segment(&seg[k], all[s])) {
         double px = karst_i_plot_px(&seg[k].p, all[s]);
         karst_i_svg_line_class(b, px, seg[k].p.y, px, seg[k].p.y + seg[k].p.h,
-                               colour(KARST_PALETTE_ROLE_SURVEY), 2, "5 3", "survey");
+                               colour(KARST_PALETTE_ROLE_SURVEY), 2, karst_i_survey_dash(which[s]),
+                               "survey");
       }
   double rightmost = -INFINITY;
   for (int k = 0; k < ns; k++) {

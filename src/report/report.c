@@ -498,11 +498,20 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   const int n_sv = opt->n_surveys > 0 ? n_res : 0;
   karst_i_buf_puts(&b, "<h2>Metrics of the members</h2>\n");
   html_constant_metrics(&b, &table, res, n_sv);
-  karst_i_buf_printf(&b,
-                     "<p>Bars: members per bin. Dashed %s lines: survey values (an axis broken "
-                     "by // gives a survey far from the members its own stretch). Grey band: "
-                     "range of the 34 published caves.</p>\n<div class=\"grid\">\n",
-                     "red");
+  karst_i_buf_puts(&b, "<p>Bars: members per bin. Dashed red lines: survey values (an axis "
+                       "broken by // gives a survey far from the members its own stretch). Grey "
+                       "band: range of the 34 published caves.");
+  for (int s = 0; n_sv > 1 && s < n_sv; s++) {
+    karst_i_buf_printf(&b,
+                       " <svg width=\"30\" height=\"8\" role=\"img\"><title>survey %d</title>"
+                       "<line x1=\"1\" y1=\"4\" x2=\"29\" y2=\"4\" stroke=\"%s\" "
+                       "stroke-width=\"2\" stroke-dasharray=\"%s\"/></svg> survey %d: ",
+                       s + 1, karst_palette_role(KARST_PALETTE_ROLE_SURVEY), karst_i_survey_dash(s),
+                       s + 1);
+    karst_i_buf_escape(&b, labels[s] ? labels[s] : "");
+    karst_i_buf_puts(&b, s + 1 < n_sv ? ";" : ".");
+  }
+  karst_i_buf_puts(&b, "</p>\n<div class=\"grid\">\n");
   for (int c = 0; c < table.n_cols; c++) {
     double v;
     karst_int_t k;

@@ -30,6 +30,9 @@ void karst_i_metric_axis_label(char *out, size_t size, const char *key);
 int karst_i_column_constant(const karst_ensemble_table_t *t, int col, double *value,
                             karst_int_t *n);
 
+/** Dash pattern of survey @p survey's lines (0-based, in the order given). */
+const char *karst_i_survey_dash(int survey);
+
 /** Histogram of a non-constant column with the survey values of @p res (n_res results; 0:
  *  no survey) and the range of the 34 published caves; a broken axis when a survey value is
  *  far from the ensemble. */

@@ -40,9 +40,9 @@ char *karst_view_script_path(const char *path) {
   return out;
 }
 
-/* A Python str literal of ASCII text (names and sentences of karst's own tables). */
-static void py_str(FILE *fp, const char *s) {
-  fputc('\'', fp);
+/* The bytes of @p s inside a Python string literal: quotes and backslashes escaped, control
+ * and non-ASCII bytes as \xNN. */
+static void py_escaped(FILE *fp, const char *s) {
   for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
     if (*p == '\\' || *p == '\'')
       fprintf(fp, "\\%c", *p);
@@ -51,6 +51,12 @@ static void py_str(FILE *fp, const char *s) {
     else
       fputc(*p, fp);
   }
+}
+
+/* A Python str literal of ASCII text (names and sentences of karst's own tables). */
+static void py_str(FILE *fp, const char *s) {
+  fputc('\'', fp);
+  py_escaped(fp, s);
   fputc('\'', fp);
 }
 
@@ -58,14 +64,7 @@ static void py_str(FILE *fp, const char *s) {
  * so that any byte (not only UTF-8) names the same file. */
 static void py_path(FILE *fp, const char *s) {
   fputs("os.fsdecode(b'", fp);
-  for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
-    if (*p == '\\' || *p == '\'')
-      fprintf(fp, "\\%c", *p);
-    else if (*p < 0x20 || *p >= 0x7f)
-      fprintf(fp, "\\x%02x", *p);
-    else
-      fputc(*p, fp);
-  }
+  py_escaped(fp, s);
   fputs("')", fp);
 }
 

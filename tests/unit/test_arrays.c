@@ -38,19 +38,6 @@ static void expected_row(const karst_array_info_t *a, char *out, size_t size) {
   snprintf(out + n, size - (size_t)n, " |");
 }
 
-static char *read_all(const char *path) {
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return NULL;
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  fseek(fp, 0, SEEK_SET);
-  char *s = malloc((size_t)n + 1);
-  size_t got = fread(s, 1, (size_t)n, fp);
-  s[got] = '\0';
-  fclose(fp);
-  return s;
-}
-
 static void test_entries(void **state) {
   (void)state;
   int n = 0;
@@ -91,7 +78,7 @@ static void test_entries(void **state) {
 /* docs/arrays.md: one row per entry, identical to what the dictionary says, and no other. */
 static void test_docs_agree(void **state) {
   (void)state;
-  char *md = read_all(KARST_SOURCE_DIR "/docs/arrays.md");
+  char *md = test_util_read_file(KARST_SOURCE_DIR "/docs/arrays.md");
   assert_non_null(md);
   int n = 0, bad = 0;
   const karst_array_info_t *a = karst_arrays_list(&n);

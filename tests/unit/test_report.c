@@ -171,19 +171,6 @@ static int teardown(void **state) {
   return rc;
 }
 
-static char *read_all(const char *path) {
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return NULL;
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  fseek(fp, 0, SEEK_SET);
-  char *s = malloc((size_t)n + 1);
-  size_t got = fread(s, 1, (size_t)n, fp);
-  s[got] = '\0';
-  fclose(fp);
-  return s;
-}
-
 static int count(const char *s, const char *what) {
   int n = 0;
   for (const char *p = strstr(s, what); p; p = strstr(p + 1, what))
@@ -253,7 +240,7 @@ static void test_report_content(void **state) {
   char out[1200];
   snprintf(out, sizeof out, "%s/report.html", ens_dir);
   assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
-  char *html = read_all(out);
+  char *html = test_util_read_file(out);
   assert_non_null(html);
   /* 3 histograms ("undefined" is a row of the table of values) + rose, stereonet and degrees
    * + 3 members × 4 views (+ 4 for the survey in its own frame). */
@@ -356,7 +343,7 @@ static void test_report_parameter_rows(void **state) {
   char out[1200];
   snprintf(out, sizeof out, "%s/rows.html", ens_dir);
   assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
-  char *html = read_all(out);
+  char *html = test_util_read_file(out);
   assert_non_null(html);
   /* key_points, fractures and lenses; not mixed. */
   assert_int_equal(count(html, "<table class=\"json rows\">"), 3);
@@ -440,7 +427,7 @@ static void test_report_degraded(void **state) {
   snprintf(out, sizeof out, "%s/report_default_reader.html", ens_dir);
   /* The default reader (karst_read_network) cannot read the fake's text "network.vtp". */
   assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
-  char *html = read_all(out);
+  char *html = test_util_read_file(out);
   assert_non_null(strstr(html, "Members that could not be read"));
   assert_non_null(strstr(html, "ensemble statistics (no survey given)"));
   assert_non_null(strstr(html, "no horizontal conduits"));
@@ -490,7 +477,7 @@ static void test_report_real_files(void **state) {
   char out[1200];
   snprintf(out, sizeof out, "%s/report.html", dir);
   assert_int_equal(karst_report_write(&ctx, dir, out, &opt), KARST_SUCCESS);
-  char *html = read_all(out);
+  char *html = test_util_read_file(out);
   assert_non_null(html);
   assert_null(strstr(html, "could not be read"));
   /* histograms of the metrics that vary + rose, stereonet, degrees + 4 members x 4 views */
@@ -526,7 +513,7 @@ static void test_report_chromium(void **state) {
   snprintf(out, sizeof out, "%s/chromium.html", ens_dir);
   assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
   karst_report_survey_destroy(&sv);
-  char *html = read_all(out);
+  char *html = test_util_read_file(out);
   assert_non_null(html);
   const int plots = expected_plots(ens_dir, html, 4);
   free(html);
