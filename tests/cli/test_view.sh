@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # karst view: finds the ParaView script karst wrote, runs ParaView on it in the script's
 # directory ($KARST_PARAVIEW stands in for paraview here: a fake that records how it was run),
-# prints the command when ParaView is missing, and says clearly what is wrong otherwise.
+# prints the command when ParaView is missing, and says clearly what is wrong otherwise; and
+# every array of the outputs (generate --samples, mesh --sdf) states a unit karst knows.
 # ParaView itself runs the scripts in test_paraview.sh.
 #   bash test_view.sh KARST_BINARY SOURCE_DIR
 set -u
@@ -13,7 +14,8 @@ fail=0
 no() { echo "FAIL: $*"; fail=1; }
 
 gen="$out/run 'one'"
-"$KARST" generate "$SRC/datasets/scenarios/branchwork.yaml" -o "$gen" --quiet || { echo "FAIL: generate"; exit 1; }
+"$KARST" generate "$SRC/datasets/scenarios/branchwork.yaml" -o "$gen" --samples --quiet ||
+  { echo "FAIL: generate"; exit 1; }
 [ -f "$gen/network.paraview.py" ] || no "karst generate wrote no network.paraview.py"
 
 # No ParaView: the command to run, shell-quoted, exit 0.
@@ -46,7 +48,24 @@ err=$(FAKE_STATUS=3 KARST_PARAVIEW="$fake" "$KARST" view "$gen" 2>&1); rc=$?
 [ $rc -eq 1 ] && [[ "$err" == *"exited with status 3"* ]] || no "a failing ParaView: exit $rc, '$err'"
 
 # Two scripts in one directory: name one; a data file finds the script beside it.
-"$KARST" mesh "$gen/network.vtp" -o "$gen/cave.vtp" --voxel 3 --quiet || no "mesh"
+"$KARST" mesh "$gen/network.vtp" -o "$gen/cave.vtp" --voxel 3 --sdf "$gen/cave.vti" --quiet || no "mesh"
+# Every array of every output states a unit karst knows (docs/arrays.md): read with VTK.
+/usr/bin/python3 - "$gen" <<'PY' || no "an output holds an array without a known unit"
+import sys, vtk
+for name, reader in (("network.vtp", vtk.vtkXMLPolyDataReader), ("samples.vtp", vtk.vtkXMLPolyDataReader),
+                     ("cave.vtp", vtk.vtkXMLPolyDataReader), ("cave.vti", vtk.vtkXMLImageDataReader)):
+    r = reader()
+    r.SetFileName(sys.argv[1] + "/" + name)
+    r.Update()
+    o = r.GetOutput()
+    t = o.GetFieldData().GetAbstractArray("array_units")
+    rows = {t.GetValue(3 * i): t.GetValue(3 * i + 1) for i in range(t.GetNumberOfTuples())}
+    arrays = [o.GetPointData().GetArrayName(i) for i in range(o.GetPointData().GetNumberOfArrays())]
+    arrays += [o.GetCellData().GetArrayName(i) for i in range(o.GetCellData().GetNumberOfArrays())]
+    for a in arrays:
+        assert rows.get(a) not in (None, "unknown"), "%s: %s has unit %r" % (name, a, rows.get(a))
+    print("ok: %s: %s" % (name, ", ".join("%s [%s]" % (a, rows[a]) for a in arrays)))
+PY
 [ -f "$gen/cave.paraview.py" ] || no "karst mesh wrote no cave.paraview.py"
 err=$("$KARST" view "$gen" --print 2>&1); rc=$?
 [ $rc -eq 1 ] && [[ "$err" == *"2 ParaView scripts (cave.paraview.py, network.paraview.py)"* ]] ||
