@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "ensemble/ensemble_internal.h"
 #include "karst/compare.h"
@@ -298,6 +299,14 @@ static char *shown_path(const char *page_dir, const char *file) {
   return karst_path_normalize(file);
 }
 
+/* The scenario file as ensemble.json records it, shown relative to the page when it can be
+ * found (absolute, or relative to the working directory, where karst ensemble most likely
+ * ran), else as recorded, normalised. Caller frees. */
+static char *scenario_path(const char *page_dir, const char *recorded) {
+  if (access(recorded, F_OK) == 0) return shown_path(page_dir, recorded);
+  return karst_path_normalize(recorded);
+}
+
 /* The legend of tunnel-type colours (and the survey's) above the members' views. */
 static void html_type_legend(karst_i_buf_t *b, int with_survey) {
   const karst_palette_t *pal = karst_palette_find("tunnel_type");
@@ -460,7 +469,7 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   karst_i_buf_puts(&b, "</td></tr>");
   for (int i = 0; i < 5; i++) {
     const char *v = json_scalar_text(karst_json_get(summary, keys[i]));
-    char *norm = i == 0 && v ? karst_path_normalize(v) : NULL; /* as recorded, normalised */
+    char *norm = i == 0 && v ? scenario_path(page_dir, v) : NULL;
     karst_i_buf_printf(&b, "<tr><th class=\"l\">%s</th><td class=\"l\">", key_labels[i]);
     karst_i_buf_escape(&b, norm ? norm : v ? v : "–");
     karst_i_buf_puts(&b, "</td></tr>");
