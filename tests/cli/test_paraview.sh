@@ -33,13 +33,31 @@ for f in gen/network.paraview.py mesh/cave.paraview.py ens/ensemble.paraview.py 
 done
 [ $fail -eq 0 ] || exit 1
 
+# X displays: xvfb-run -a searches upwards from a number of this run's own (the host's other
+# X servers and concurrent runs use others), a new one for each call: an X server that has
+# just exited may hold its display's abstract socket a moment longer.
+display=$((200 + ($$ % 400) * 10))
+# xvfb-run inside the chroot; an X server that could not be reached (an environment failure,
+# not ParaView's) is retried with the next display, twice at most.
+xrun() { # LOG DIR COMMAND [ARG]...: COMMAND run in DIR under xvfb-run
+  local log=$1 dir=$2 try
+  shift 2
+  for try in 1 2 3; do
+    display=$((display + 1))
+    "$CHROOT" run --bind "$out" -- /bin/sh -c 'cd "$1" && shift && exec "$@"' sh "$dir" \
+      xvfb-run -a -n "$display" -s "-screen 0 1280x1024x24" "$@" >"$log" 2>&1 && return 0
+    grep -q "bad X server connection\|Xvfb failed to start\|cannot open display" "$log" || return 1
+    echo "  (no X server on display $display: $(grep -m1 -o "bad X server connection[^.]*\|Xvfb failed to start\|cannot open display[^.]*" "$log"); again)"
+  done
+  return 1
+}
 # pvbatch DIR SCRIPT NAME [ARGS]: screenshot $out/NAME.png and legend $out/NAME.json
 pvbatch() {
   local dir=$1 script=$2 name=$3
   shift 3
   echo "+ pvbatch $dir/$script $*"
-  if ! "$CHROOT" run --bind "$out" -- /bin/sh -c "cd '$out/$dir' && xvfb-run -a -s '-screen 0 1280x1024x24' \
-      pvbatch '$script' --screenshot '$out/$name.png' --legend '$out/$name.json' $*" >"$out/$name.log" 2>&1; then
+  if ! xrun "$out/$name.log" "$out/$dir" pvbatch "$script" --screenshot "$out/$name.png" \
+      --legend "$out/$name.json" "$@"; then
     echo "FAIL: pvbatch $script"; cat "$out/$name.log"; exit 1
   fi
   if grep -q "Traceback\|Error" "$out/$name.log"; then
@@ -71,9 +89,9 @@ check ensemble ens/ensemble.paraview.py ens/realisations/0000/network.vtp tunnel
 
 # ParaView's GUI, as karst view starts it: in the script's directory, no __file__, no options.
 echo "+ paraview --script=network.paraview.py --exit (GUI under Xvfb)"
-"$CHROOT" run --bind "$out" -- /bin/sh -c "cd '$out/gen' && xvfb-run -a -s '-screen 0 1280x1024x24' \
-  paraview --script=network.paraview.py --exit" >"$out/gui.log" 2>&1
-if grep -q "Traceback\|Error\|is missing" "$out/gui.log"; then
+if ! xrun "$out/gui.log" "$out/gen" paraview --script=network.paraview.py --exit; then
+  echo "FAIL: ParaView's GUI did not run the script:"; cat "$out/gui.log"; fail=1
+elif grep -q "Traceback\|Error\|is missing" "$out/gui.log"; then
   echo "FAIL: ParaView's GUI reported an error running the script:"; cat "$out/gui.log"; fail=1
 else
   echo "ok: ParaView's GUI ran network.paraview.py without an error"
