@@ -2,7 +2,8 @@
 # karst view: finds the ParaView script karst wrote, runs ParaView on it in the script's
 # directory ($KARST_PARAVIEW stands in for paraview here: a fake that records how it was run),
 # prints the command when ParaView is missing, and says clearly what is wrong otherwise; and
-# every array of the outputs (generate --samples, mesh --sdf) states a unit karst knows.
+# every array of the outputs (generate --samples with geology.vtp, mesh --sdf) states a unit
+# karst knows.
 # ParaView itself runs the scripts in test_paraview.sh.
 #   bash test_view.sh KARST_BINARY SOURCE_DIR
 set -u
@@ -53,6 +54,7 @@ err=$(FAKE_STATUS=3 KARST_PARAVIEW="$fake" "$KARST" view "$gen" 2>&1); rc=$?
 /usr/bin/python3 - "$gen" <<'PY' || no "an output holds an array without a known unit"
 import sys, vtk
 for name, reader in (("network.vtp", vtk.vtkXMLPolyDataReader), ("samples.vtp", vtk.vtkXMLPolyDataReader),
+                     ("geology.vtp", vtk.vtkXMLPolyDataReader),
                      ("cave.vtp", vtk.vtkXMLPolyDataReader), ("cave.vti", vtk.vtkXMLImageDataReader)):
     r = reader()
     r.SetFileName(sys.argv[1] + "/" + name)
@@ -64,6 +66,13 @@ for name, reader in (("network.vtp", vtk.vtkXMLPolyDataReader), ("samples.vtp", 
     arrays += [o.GetCellData().GetArrayName(i) for i in range(o.GetCellData().GetNumberOfArrays())]
     for a in arrays:
         assert rows.get(a) not in (None, "unknown"), "%s: %s has unit %r" % (name, a, rows.get(a))
+    # "feature" means what a polygon is in geology.vtp, a surface detail in a mesh: each file
+    # states its own meaning (the entries of src/arrays/arrays.c for that kind of file).
+    meaning = {t.GetValue(3 * i): t.GetValue(3 * i + 2) for i in range(t.GetNumberOfTuples())}
+    if name == "geology.vtp":
+        assert meaning["feature"].startswith("what the polygon is"), meaning["feature"]
+    if name == "cave.vtp" and "feature" in meaning:
+        assert meaning["feature"].startswith("what the triangle belongs to"), meaning["feature"]
     print("ok: %s: %s" % (name, ", ".join("%s [%s]" % (a, rows[a]) for a in arrays)))
 PY
 [ -f "$gen/cave.paraview.py" ] || no "karst mesh wrote no cave.paraview.py"
