@@ -31,7 +31,7 @@ typedef enum {
   KARST_VIEW_MESH = 2,    /**< a surface (.vtp, .ply, .stl), coloured by its label array */
   KARST_VIEW_FIELD = 3,   /**< a scalar field on a grid (.vti): its 0 isosurface and a slice */
   KARST_VIEW_COLLECTION = 4, /**< a ParaView collection (.pvd) of networks, one member a step */
-  KARST_VIEW_GEOLOGY = 5,    /**< geological surfaces (geology.vtp), translucent */
+  KARST_VIEW_GEOLOGY = 5,    /**< geological surfaces (geology.vtp), translucent, hidden at start */
   KARST_VIEW_ROLE_COUNT
 } karst_view_role_t;
 

@@ -10,7 +10,7 @@
 #   --screenshot FILE.png   save the view (1200 x 800 unless --size W H)
 #   --legend FILE.json      save what each lookup table and colour bar holds (for tests)
 #   --show ROLE[,ROLE...]   show only the files of these roles (network, samples, mesh,
-#                           field, collection, geology)
+#                           field, collection, geology; samples and geology are hidden at start)
 # ---------------------------------------------------------------------------------------------
 import json
 import math
@@ -23,6 +23,8 @@ from paraview.simple import (ColorBy, Contour, GetActiveViewOrCreate, GetColorTr
 
 # paraview --script gives a script no __file__: `karst view` starts ParaView in its directory.
 HERE = os.path.dirname(os.path.abspath(__file__)) if '__file__' in globals() else os.getcwd()
+# Shown only when asked (the eye icon of ParaView's pipeline browser): they would hide the rest.
+HIDDEN_AT_START = ('samples', 'geology')
 # Colour bars, in this order (the orientation axes sit in the lower left corner).
 CORNERS = ['Lower Right Corner', 'Upper Right Corner', 'Upper Left Corner', 'Lower Left Corner']
 
@@ -69,6 +71,11 @@ def file_unit(source, name):
     return None
 
 
+def spec_for(name, role):
+    """What karst's dictionary says of array @name in a file of kind @role."""
+    return ROLE_ARRAYS.get(role, {}).get(name) or ARRAYS.get(name)
+
+
 def arrays_of(source):
     """(association, name, range) of every numeric point and cell array."""
     out = []
@@ -79,7 +86,7 @@ def arrays_of(source):
                 lo, hi = info.GetRange(-1 if info.GetNumberOfComponents() > 1 else 0)
             except Exception:
                 continue
-            if ARRAYS.get(name, {}).get('unit') == 'text':
+            if (ARRAYS.get(name) or {}).get('unit') == 'text':
                 continue
             out.append((assoc, name, (lo, hi)))
     return out
@@ -98,11 +105,11 @@ def categorical_lut(name, spec, names, lo, hi):
         annotations += [str(code), label]
         colours += list(rgb)
         seen.add(code)
-    # Categories the file names but this palette does not know: neutral grey.
+    # Categories the file names but the palette does not list (springs ...): in turn.
     for code, label in enumerate(names or []):
         if code not in seen and label:
             annotations += [str(code), label]
-            colours += list(NEUTRAL)
+            colours += list(CYCLE[code % len(CYCLE)])
     lut.Annotations = annotations
     lut.IndexedColors = colours
     lut.IndexedOpacities = [1.0] * (len(colours) // 3)
@@ -196,7 +203,7 @@ def show_source(view, item, source):
         if role == 'geology':
             display.Opacity = 0.35
     if not colour_by or colour_by not in arrays:
-        colour_by = next((n for n in arrays if ARRAYS.get(n, {}).get('colouring') ==
+        colour_by = next((n for n in arrays if (spec_for(n, role) or {}).get('colouring') ==
                           'categorical'), None)
     if colour_by:
         ColorBy(display, (arrays[colour_by], colour_by))
@@ -251,19 +258,20 @@ def main(argv):
         source = OpenDataFile(path)
         source.UpdatePipeline()
         sources.append((item, source))
-    ranges, names_of, units_of = {}, {}, {}
+    ranges, names_of, units_of, role_of = {}, {}, {}, {}
     for item, source in sources:
         for assoc, name, (lo, hi) in arrays_of(source):
             a, b = ranges.get(name, (lo, hi))
             ranges[name] = (min(a, lo), max(b, hi))
-            spec = ARRAYS.get(name)
+            role_of.setdefault(name, item['role'])
+            spec = spec_for(name, role_of[name])
             if spec and spec.get('names') and name not in names_of:
                 names_of[name] = file_strings(source, spec['names'])
             if name not in units_of:
                 units_of[name] = file_unit(source, name)
     shown_bars = []
     for item, source in sources:
-        visible = item['role'] != 'samples' if opts['show'] is None else \
+        visible = item['role'] not in HIDDEN_AT_START if opts['show'] is None else \
             item['role'] in opts['show']
         for display, name in show_source(view, item, source):
             if not visible:
@@ -276,7 +284,7 @@ def main(argv):
     # (showing and colouring rescale tables), so that colouring by another array in
     # ParaView's GUI also finds its categories and its titled bar.
     for name, (lo, hi) in sorted(ranges.items()):
-        spec = ARRAYS.get(name)
+        spec = spec_for(name, role_of[name])
         if spec is None:  # not in karst's dictionary: titled with the unit the file states
             unit = units_of.get(name)
             spec = {'title': '%s (%s)' % (name, unit) if unit else name, 'colouring': 'sequential'}

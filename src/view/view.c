@@ -22,6 +22,10 @@ static const char *const role_names[KARST_VIEW_ROLE_COUNT] = {"network", "sample
 static const char *const role_default[KARST_VIEW_ROLE_COUNT] = {"tunnel_type", "source",      NULL,
                                                                 "sdf",         "tunnel_type", NULL};
 
+/** Colours of unlisted categories written into a script (codes 0 .. KARST_VIEW_CYCLE - 1;
+ *  beyond, the script cycles through them: karst_palette_cycle does the same). */
+#define KARST_VIEW_CYCLE 7
+
 /* Page background and text: the report's white page and black text. */
 static const double background[3] = {1, 1, 1}, foreground[3] = {0, 0, 0};
 
@@ -84,6 +88,35 @@ static const char *colouring_name(karst_palette_kind_t k) {
                                         : "sequential";
 }
 
+/* One entry of the dictionary with its palette, as a Python dict item. */
+static void py_array(FILE *fp, const karst_array_info_t *a) {
+  fputs("    ", fp);
+  py_str(fp, a->name);
+  fputs(": {'title': ", fp);
+  py_str(fp, a->title);
+  fputs(", 'unit': ", fp);
+  py_str(fp, a->unit);
+  fputs(", 'colouring': ", fp);
+  py_str(fp, colouring_name(a->colouring));
+  if (a->names) {
+    fputs(", 'names': ", fp);
+    py_str(fp, a->names);
+  }
+  const karst_palette_t *p = karst_palette_find_role(a->name, a->role);
+  if (p && p->kind == KARST_PALETTE_CATEGORICAL) {
+    fputs(",\n        'categories': [", fp);
+    for (int k = 0; k < p->n; k++) {
+      fprintf(fp, "\n            (%d, ", p->categories[k].code);
+      py_str(fp, p->categories[k].name);
+      fputs(", ", fp);
+      py_hex(fp, p->categories[k].hex);
+      fprintf(fp, "),  # %s", p->categories[k].hex);
+    }
+    fputs("\n        ]", fp);
+  }
+  fputs("},\n", fp);
+}
+
 /* The data part: version, files, colours, the dictionary of arrays with their palettes, and
  * the ramps. */
 static void write_data(FILE *fp, const char *script_name, char *const *rel,
@@ -125,34 +158,29 @@ static void write_data(FILE *fp, const char *script_name, char *const *rel,
         fp);
   int na = 0;
   const karst_array_info_t *a = karst_arrays_list(&na);
-  for (int i = 0; i < na; i++) {
-    fputs("    ", fp);
-    py_str(fp, a[i].name);
-    fputs(": {'title': ", fp);
-    py_str(fp, a[i].title);
-    fputs(", 'unit': ", fp);
-    py_str(fp, a[i].unit);
-    fputs(", 'colouring': ", fp);
-    py_str(fp, colouring_name(a[i].colouring));
-    if (a[i].names) {
-      fputs(", 'names': ", fp);
-      py_str(fp, a[i].names);
+  for (int i = 0; i < na; i++)
+    if (!a[i].role) py_array(fp, &a[i]);
+  fputs("}\n# Arrays whose name means something else in another kind of file (as \"feature\").\n"
+        "ROLE_ARRAYS = {\n",
+        fp);
+  for (int r = 0; r < KARST_VIEW_ROLE_COUNT; r++) {
+    int any = 0;
+    for (int i = 0; i < na; i++) {
+      if (!a[i].role || strcmp(a[i].role, role_names[r]) != 0) continue;
+      if (!any) fprintf(fp, "  '%s': {\n", role_names[r]);
+      any = 1;
+      py_array(fp, &a[i]);
     }
-    const karst_palette_t *p = karst_palette_find(a[i].name);
-    if (p && p->kind == KARST_PALETTE_CATEGORICAL) {
-      fputs(",\n        'categories': [", fp);
-      for (int k = 0; k < p->n; k++) {
-        fprintf(fp, "\n            (%d, ", p->categories[k].code);
-        py_str(fp, p->categories[k].name);
-        fputs(", ", fp);
-        py_hex(fp, p->categories[k].hex);
-        fprintf(fp, "),  # %s", p->categories[k].hex);
-      }
-      fputs("\n        ]", fp);
-    }
-    fputs("},\n", fp);
+    if (any) fputs("  },\n", fp);
   }
-  fputs("}\nRAMPS = {\n", fp);
+  fputs("}\n# Colours of categories a palette entry does not list (springs, strata ...), by code.\n"
+        "CYCLE = [",
+        fp);
+  for (int k = 0; k < KARST_VIEW_CYCLE; k++) {
+    fputs(k ? ", " : "", fp);
+    py_hex(fp, karst_palette_cycle(k));
+  }
+  fputs("]\nRAMPS = {\n", fp);
   const karst_palette_kind_t kinds[2] = {KARST_PALETTE_SEQUENTIAL, KARST_PALETTE_DIVERGING};
   for (int r = 0; r < 2; r++) {
     const karst_palette_ramp_t *ramp = karst_palette_ramp(kinds[r]);

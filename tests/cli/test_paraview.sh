@@ -27,7 +27,7 @@ run "$KARST" generate "$SRC/datasets/scenarios/branchwork.yaml" -o "$out/gen" --
 mkdir -p "$out/mesh"
 run "$KARST" mesh "$out/gen/network.vtp" -o "$out/mesh/cave.vtp" --voxel 2 --sdf "$out/mesh/cave.vti" --quiet
 run "$KARST" ensemble "$SRC/datasets/scenarios/branchwork.yaml" -n 2 -o "$out/ens" -j 2 --seed 3 --quiet
-for f in gen/network.paraview.py mesh/cave.paraview.py ens/ensemble.paraview.py \
+for f in gen/network.paraview.py gen/geology.vtp mesh/cave.paraview.py ens/ensemble.paraview.py \
   ens/realisations/0000/network.paraview.py; do
   [ -f "$out/$f" ] || { echo "FAIL: karst wrote no $f"; fail=1; }
 done
@@ -64,7 +64,7 @@ pvbatch() {
     echo "FAIL: pvbatch $script reported an error:"; cat "$out/$name.log"; exit 1
   fi
 }
-check() { # NAME SCRIPT DATA ARRAY [--shaded]
+check() { # NAME SCRIPT DATA ARRAY [FLAGS]
   /usr/bin/python3 "$SRC/tests/python/check_paraview.py" "$out/$2" "$out/$1.json" "$out/$1.png" \
     "$out/$3" "$4" ${5:-} || fail=1
 }
@@ -73,6 +73,9 @@ pvbatch gen network.paraview.py network
 check network gen/network.paraview.py gen/network.vtp tunnel_type
 pvbatch gen network.paraview.py samples --show samples
 check samples gen/network.paraview.py gen/samples.vtp source
+# The geology (hidden at start, translucent): its own "feature" categories, legend only.
+pvbatch gen network.paraview.py geology --show geology
+check geology gen/network.paraview.py gen/geology.vtp feature "--legend-only --role geology"
 pvbatch mesh cave.paraview.py mesh-only --show mesh
 check mesh-only mesh/cave.paraview.py mesh/cave.vtp tunnel_type --shaded
 pvbatch mesh cave.paraview.py mesh

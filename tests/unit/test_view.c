@@ -103,21 +103,31 @@ static void test_write_and_read_back(void **state) {
       0);
 
   /* The palette and the dictionary, as include/karst/palette.h and arrays.h give them. */
-  char code[16384];
+  static char code[32768];
   int m = snprintf(code, sizeof code,
                    "def near(a, b): assert all(abs(x - y) < 5e-6 for x, y in "
                    "zip(a, b)), (a, b)\n");
   int na = 0;
   const karst_array_info_t *a = karst_arrays_list(&na);
-  m += snprintf(code + m, sizeof code - (size_t)m, "assert len(ARRAYS) == %d\n", na);
+  int plain = 0;
+  for (int i = 0; i < na; i++)
+    plain += !a[i].role;
+  m += snprintf(code + m, sizeof code - (size_t)m,
+                "assert len(ARRAYS) == %d and sum(map(len, ROLE_ARRAYS.values())) == %d\n", plain,
+                na - plain);
   for (int i = 0; i < na; i++) {
+    char spec[96];
+    if (a[i].role)
+      snprintf(spec, sizeof spec, "ROLE_ARRAYS['%s']['%s']", a[i].role, a[i].name);
+    else
+      snprintf(spec, sizeof spec, "ARRAYS['%s']", a[i].name);
     m += snprintf(code + m, sizeof code - (size_t)m,
-                  "assert ARRAYS['%s']['title'] == '%s' and ARRAYS['%s']['unit'] == '%s'\n",
-                  a[i].name, a[i].title, a[i].name, a[i].unit);
-    const karst_palette_t *p = karst_palette_find(a[i].name);
+                  "assert %s['title'] == '%s' and %s['unit'] == '%s'\n", spec, a[i].title, spec,
+                  a[i].unit);
+    const karst_palette_t *p = karst_palette_find_role(a[i].name, a[i].role);
     if (!p || p->kind != KARST_PALETTE_CATEGORICAL) continue;
-    m += snprintf(code + m, sizeof code - (size_t)m,
-                  "c = ARRAYS['%s']['categories']\nassert len(c) == %d\n", a[i].name, p->n);
+    m += snprintf(code + m, sizeof code - (size_t)m, "c = %s['categories']\nassert len(c) == %d\n",
+                  spec, p->n);
     for (int k = 0; k < p->n; k++) {
       double rgb[3];
       karst_palette_hex_rgb(p->categories[k].hex, rgb);
@@ -132,6 +142,12 @@ static void test_write_and_read_back(void **state) {
                 "(%.9f, %.9f, %.9f, %.9f))\n",
                 r->n, r->n / 2, r->points[r->n / 2][0], r->points[r->n / 2][1],
                 r->points[r->n / 2][2], r->points[r->n / 2][3]);
+  for (int k = 0; k < 7; k++) {
+    double rgb[3];
+    karst_palette_hex_rgb(karst_palette_cycle(k), rgb);
+    m += snprintf(code + m, sizeof code - (size_t)m, "near(CYCLE[%d], (%.9f, %.9f, %.9f))\n", k,
+                  rgb[0], rgb[1], rgb[2]);
+  }
   assert_true(m < (int)sizeof code);
   assert_int_equal(python_check(script, code), 0);
 }
