@@ -33,23 +33,46 @@ for f in gen/network.paraview.py gen/geology.vtp mesh/cave.paraview.py ens/ensem
 done
 [ $fail -eq 0 ] || exit 1
 
-# X displays: xvfb-run -a searches upwards from a number of this run's own (the host's other
-# X servers and concurrent runs use others), a new one for each call: an X server that has
-# just exited may hold its display's abstract socket a moment longer.
-display=$((200 + ($$ % 400) * 10))
-# xvfb-run inside the chroot; an X server that could not be reached (an environment failure,
-# not ParaView's) is retried with the next display, twice at most.
-xrun() { # LOG DIR COMMAND [ARG]...: COMMAND run in DIR under xvfb-run
-  local log=$1 dir=$2 try
+# X server: Xvfb started here, not by xvfb-run. xvfb-run waits for Xvfb's "ready" signal with
+# a trap set before `wait`; on a loaded machine the signal can come first and xvfb-run then
+# waits forever (seen: a run hung for 9 minutes). Xvfb -displayfd picks a free display itself
+# (the host's X servers and concurrent runs hold others: the lock files are in the host's /tmp,
+# the abstract sockets are shared) and writes its number once it accepts connections. Every
+# call runs under `timeout`, the init of the chroot's PID namespace (when it ends, Xvfb ends),
+# so a hang fails the test instead of stalling CI.
+XVFB_WAIT=60   # s for Xvfb to accept connections
+PV_TIMEOUT=300 # s for one ParaView run (seconds on a quiet machine)
+XRUN='cd "$1" && shift
+df=$(mktemp /tmp/karst-xvfb.XXXXXX)
+Xvfb -displayfd 3 -screen 0 1280x1024x24 -nolisten tcp 3>"$df" 2>"$df.log" &
+xpid=$!
+t=0
+while [ ! -s "$df" ]; do
+  if ! kill -0 $xpid 2>/dev/null || [ $t -ge $((XVFB_WAIT * 10)) ]; then
+    echo "Xvfb failed to start:"; cat "$df.log"; rm -f "$df" "$df.log"; exit 97
+  fi
+  sleep 0.1; t=$((t + 1))
+done
+DISPLAY=":$(cat "$df")" "$@"
+rc=$?
+kill $xpid; wait $xpid 2>/dev/null
+rm -f "$df" "$df.log"
+exit $rc'
+# An X server that could not be reached (an environment failure, not ParaView's: seen once, a
+# display whose abstract socket another namespace's server held) is retried, twice at most.
+X_FAILURE="bad X server connection\|Xvfb failed to start\|cannot open display"
+xrun() { # LOG DIR COMMAND [ARG]...: COMMAND run in DIR with an Xvfb display
+  local log=$1 dir=$2 rc try
   shift 2
   for try in 1 2 3; do
-    display=$((display + 1))
-    "$CHROOT" run --bind "$out" -- /bin/sh -c 'cd "$1" && shift && exec "$@"' sh "$dir" \
-      xvfb-run -a -n "$display" -s "-screen 0 1280x1024x24" "$@" >"$log" 2>&1 && return 0
-    grep -q "bad X server connection\|Xvfb failed to start\|cannot open display" "$log" || return 1
-    echo "  (no X server on display $display: $(grep -m1 -o "bad X server connection[^.]*\|Xvfb failed to start\|cannot open display[^.]*" "$log"); again)"
+    "$CHROOT" run --bind "$out" -- timeout -k 10 "$PV_TIMEOUT" /usr/bin/env \
+      XVFB_WAIT="$XVFB_WAIT" /bin/sh -c "$XRUN" sh "$dir" "$@" >"$log" 2>&1
+    rc=$?
+    [ $rc -eq 124 ] && echo "timed out after $PV_TIMEOUT s" >>"$log"
+    [ $rc -eq 0 ] || ! grep -q "$X_FAILURE" "$log" && return $rc
+    echo "  (no X server: $(grep -m1 -o "$X_FAILURE" "$log")$(grep -m1 -o "DISPLAY=:[0-9]*" "$log"); again)"
   done
-  return 1
+  return $rc
 }
 # pvbatch DIR SCRIPT NAME [ARGS]: screenshot $out/NAME.png and legend $out/NAME.json
 pvbatch() {
