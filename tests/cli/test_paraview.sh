@@ -35,11 +35,10 @@ done
 
 # X server: Xvfb started here, not by xvfb-run. xvfb-run waits for Xvfb's "ready" signal with
 # a trap set before `wait`; on a loaded machine the signal can come first and xvfb-run then
-# waits forever (seen: a run hung for 9 minutes). Xvfb -displayfd picks a free display itself
-# (the host's X servers and concurrent runs hold others: the lock files are in the host's /tmp,
-# the abstract sockets are shared) and writes its number once it accepts connections. Every
-# call runs under `timeout`, the init of the chroot's PID namespace (when it ends, Xvfb ends),
-# so a hang fails the test instead of stalling CI.
+# waits forever (seen: a run hung for 9 minutes). Xvfb -displayfd writes its display once it
+# accepts connections (each run has its own /tmp and network namespace, so its own displays:
+# scripts/paraview-chroot run). Every call runs under `timeout`, the init of the chroot's PID
+# namespace (when it ends, Xvfb ends), so a hang fails the test instead of stalling CI.
 XVFB_WAIT=60   # s for Xvfb to accept connections
 PV_TIMEOUT=300 # s for one ParaView run (seconds on a quiet machine)
 XRUN='cd "$1" && shift
@@ -58,8 +57,8 @@ rc=$?
 kill $xpid; wait $xpid 2>/dev/null
 rm -f "$df" "$df.log"
 exit $rc'
-# An X server that could not be reached (an environment failure, not ParaView's: seen once, a
-# display whose abstract socket another namespace's server held) is retried, twice at most.
+# An X server that could not be reached (an environment failure, not ParaView's) is retried,
+# twice at most.
 X_FAILURE="bad X server connection\|Xvfb failed to start\|cannot open display"
 xrun() { # LOG DIR COMMAND [ARG]...: COMMAND run in DIR with an Xvfb display
   local log=$1 dir=$2 rc try
