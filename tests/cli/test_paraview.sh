@@ -39,11 +39,13 @@ done
 # accepts connections (each run has its own /tmp and network namespace, so its own displays:
 # scripts/paraview-chroot run). Every call runs under `timeout`, the init of the chroot's PID
 # namespace (when it ends, Xvfb ends), so a hang fails the test instead of stalling CI.
+# -noreset: pvbatch probes OpenGL on a first connection and reconnects; a server resetting
+# after its last client refused the second one ("bad X server connection", seen at load 28).
 XVFB_WAIT=60   # s for Xvfb to accept connections
 PV_TIMEOUT=300 # s for one ParaView run (seconds on a quiet machine)
 XRUN='cd "$1" && shift
 df=$(mktemp /tmp/karst-xvfb.XXXXXX)
-Xvfb -displayfd 3 -screen 0 1280x1024x24 -nolisten tcp 3>"$df" 2>"$df.log" &
+Xvfb -displayfd 3 -noreset -screen 0 1280x1024x24 -nolisten tcp 3>"$df" 2>"$df.log" &
 xpid=$!
 t=0
 while [ ! -s "$df" ]; do
