@@ -1,19 +1,25 @@
 # Convenience front end to CMake. The two commands of the README:
 #   make demo   install what is missing, build, run karst on the default scenario
-#   make test   install what is missing, build with -Werror, run the tests, then
-#               build with AddressSanitizer + UndefinedBehaviorSanitizer and run them again
+#   make test   install what is missing, build Debian's ParaView chroot for the ParaView test
+#               once (scripts/paraview-chroot; a complete one is kept), build with -Werror,
+#               run the tests, then build with AddressSanitizer + UndefinedBehaviorSanitizer
+#               and run them again
 JOBS     ?= $(shell nproc)
 BUILD    ?= build
 ASAN     ?= build-asan
 SCENARIO ?= datasets/scenarios/branchwork.yaml
 DEMO_OUT ?= out/branchwork
 
-.PHONY: all deps build demo test test-fast test-asan bench clean format
+.PHONY: all deps paraview-chroot build demo test test-fast test-asan bench clean format
 
 all: build
 
 deps:
 	scripts/install-deps
+
+# Debian's ParaView beside python3-vtk9 (they conflict): tests/cli/test_paraview.sh runs it here.
+paraview-chroot: deps
+	scripts/paraview-chroot build
 
 $(BUILD)/Makefile:
 	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release -DKARST_WERROR=ON
@@ -26,8 +32,8 @@ demo: deps build
 	$(BUILD)/karst generate $(SCENARIO) -o $(DEMO_OUT) --samples
 	$(BUILD)/karst metrics $(DEMO_OUT)/network.vtp --observed
 	@echo
-	@echo "The network is in $(DEMO_OUT)/: open $(DEMO_OUT)/network.vtp in ParaView"
-	@echo "(File > Open, Apply, then colour by tunnel_type, radius or kind);"
+	@echo "The network is in $(DEMO_OUT)/: view it in ParaView with '$(BUILD)/karst view $(DEMO_OUT)'"
+	@echo "(tunnel types, node kinds and units named; or open $(DEMO_OUT)/network.vtp by hand);"
 	@echo "$(DEMO_OUT)/samples.vtp holds the sample cloud, $(DEMO_OUT)/run.json every parameter and timing."
 	@echo "Python: PYTHONPATH=$(CURDIR)/$(BUILD)/python /usr/bin/python3 -c 'import karst' (docs/python.md)."
 
@@ -42,7 +48,7 @@ test-asan: $(ASAN)/Makefile
 	cd $(ASAN) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j $(JOBS)
 
-test: deps
+test: paraview-chroot
 	$(MAKE) test-fast
 	$(MAKE) test-asan
 

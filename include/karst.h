@@ -37,6 +37,7 @@
 #include "karst/skeleton.h"
 #include "karst/surface.h"
 #include "karst/version.h"
+#include "karst/view.h"
 #include "karst/vtk.h"
 
 #endif

@@ -36,12 +36,18 @@ typedef struct karst_array_info {
   const char *meaning; /**< one sentence: what a value means, its sign convention */
   karst_palette_kind_t colouring; /**< categories, or the sequential or diverging ramp */
   const char *names; /**< field-data array naming the categories (value i: code i), or NULL */
+  const char *role;  /**< kind of file ("geology", "mesh", ...) when the name means different
+                          things in different files (as "feature"), else NULL */
 } karst_array_info_t;
 
 /** Every entry, in a fixed order; @p n (may be NULL) receives their count. O(1). */
 const karst_array_info_t *karst_arrays_list(int *n);
-/** The entry of the array named @p name, or NULL. O(number of entries). */
+/** The entry of the array named @p name, or NULL (the first, when the name has entries for
+ *  several kinds of file). O(number of entries). */
 const karst_array_info_t *karst_arrays_find(const char *name);
+/** The entry of @p name in a file of kind @p role ("network", "samples", "mesh", "field",
+ *  "geology"): the one of that role, else one without a role, else NULL. */
+const karst_array_info_t *karst_arrays_find_role(const char *name, const char *role);
 
 #ifdef __cplusplus
 }

@@ -93,6 +93,17 @@ void karst_json_string(FILE *fp, const char *s);
 /** Create directory @p dir and its parents (like mkdir -p). */
 karst_error_t karst_mkdir_p(karst_ctx_t *ctx, const char *dir);
 
+/**
+ * @p to relative to the directory @p from_dir, both normalised (".", ".." and the symbolic
+ * links of their directories resolved): from "out" to "build/../datasets/a.csv" gives
+ * "../datasets/a.csv". Both directories must exist, the file need not. *@p out: caller frees.
+ */
+karst_error_t karst_path_relative(karst_ctx_t *ctx, const char *from_dir, const char *to,
+                                  char **out);
+/** @p path lexically normalised ("a/./b/../c" gives "a/c"; no file system access). Caller
+ *  frees; NULL when out of memory. */
+char *karst_path_normalize(const char *path);
+
 #ifdef __cplusplus
 }
 #endif

@@ -54,11 +54,14 @@ void karst_metrics_options_init(karst_metrics_options_t *opt);
 karst_error_t karst_metrics_compute(karst_ctx_t *ctx, const karst_network_t *net,
                                     const karst_metrics_options_t *opt, karst_metrics_t *out);
 
-/** Metric table: name (JSON/CSV key), offset in karst_metrics_t, integer or double. */
+/** Metric table: name (JSON/CSV key), offset in karst_metrics_t, integer or double, unit
+ *  ("m", "count", "edges" for hop counts, "1" for dimensionless) and what it measures. */
 typedef struct karst_metric_field {
   const char *key;
   size_t offset;
   int is_int;
+  const char *unit;
+  const char *label; /**< the quantity in words, e.g. "mean branch length" */
 } karst_metric_field_t;
 /** The fields in output order; *n receives the count. */
 const karst_metric_field_t *karst_metric_fields(int *n);

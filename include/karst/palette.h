@@ -36,13 +36,19 @@ typedef enum {
   KARST_PALETTE_DIVERGING = 2    /**< signed values around 0: the cool-to-warm ramp */
 } karst_palette_kind_t;
 
-/** The presentation of one array karst writes. */
+/**
+ * The presentation of one array karst writes. A categorical array may also hold codes its
+ * entry does not list (springs, strata: as many as a scenario has): such a code c is named by
+ * the file's "<array>_names" and coloured karst_palette_cycle(c).
+ */
 typedef struct karst_palette {
   const char *array; /**< array name, e.g. "tunnel_type" */
   const char *where; /**< where karst writes it, e.g. "network.vtp cell data" */
   karst_palette_kind_t kind;
-  int n;                                      /**< categories (0 for ramps) */
+  int n;                                      /**< categories listed (0 for ramps) */
   const karst_palette_category_t *categories; /**< n categories in code order, or NULL */
+  const char *role; /**< the kind of file ("geology", "mesh", ...) when the name means different
+                         things in different files, else NULL */
 } karst_palette_t;
 
 /** A colour ramp: @c n control points (t in [0, 1], increasing), linear in sRGB between them. */
@@ -65,8 +71,15 @@ typedef enum {
 
 /** Every array with a palette entry, in a fixed order; @p n receives their count. O(1). */
 const karst_palette_t *karst_palette_list(int *n);
-/** The entry of array @p array, or NULL when karst gives it none. O(number of entries). */
+/** The entry of array @p array, or NULL when karst gives it none (the first one, when the name
+ *  has entries for several kinds of file). O(number of entries). */
 const karst_palette_t *karst_palette_find(const char *array);
+/** The entry of @p array in a file of kind @p role ("network", "samples", "mesh", "field",
+ *  "geology"; NULL: any): the one of that role, else one without a role, else NULL. */
+const karst_palette_t *karst_palette_find_role(const char *array, const char *role);
+/** Colour "#RRGGBB" of a category code an entry does not list (a cycle of Okabe & Ito colours
+ *  but black; the neutral grey below 0; never NULL). O(1). */
+const char *karst_palette_cycle(int code);
 /** The category of @p code in @p p, or NULL (not a category of it, or @p p is a ramp). O(n). */
 const karst_palette_category_t *karst_palette_category(const karst_palette_t *p, int code);
 /** The ramp a sequential or diverging entry uses (the viridis ramp for categorical ones). */

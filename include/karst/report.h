@@ -1,11 +1,15 @@
 /**
  * @file report.h
  * @brief One self-contained HTML page about an ensemble (inline SVG and CSS,
- *        no scripts, no external requests): scenario summary and seed,
- *        per-metric histograms with the survey value and the 34-cave range,
- *        a length-weighted orientation rose, the degree distribution, plan
- *        (x–y) and cross-section (x–z) views of a few members coloured by
- *        tunnel type, the comparison table and the software versions.
+ *        no scripts, no external requests): scenario summary and seed, the
+ *        comparison table, the metrics constant over the ensemble as values and
+ *        a histogram of each other metric with the survey value and the 34-cave
+ *        range (a broken axis for a survey far from the members), an equal-area
+ *        orientation rose, a lower-hemisphere equal-area stereonet with the
+ *        fracture families as great circles, the degree distribution, and a
+ *        plan, two sections and an oblique view of a few members on one scale,
+ *        coloured by tunnel type (include/karst/palette.h), with the survey; the
+ *        software versions. Files are named relative to the page. docs/ensembles.md.
  */
 #ifndef KARST_REPORT_H
 #define KARST_REPORT_H
@@ -42,8 +46,8 @@ typedef struct karst_report_options {
   const karst_report_survey_t *surveys;
   int n_surveys;
   const char *published_path; /**< NULL: karst_published_locate; missing file: ranges omitted */
-  int members_drawn;          /**< plan/section views of the first members (default 4) */
-  int members_pooled;         /**< members pooled for the rose and degree plots (default 50) */
+  int members_drawn;          /**< plan, section and oblique views of the first members (4) */
+  int members_pooled;         /**< members pooled for the rose, stereonet, degrees (default 50) */
   karst_report_reader_fn read_network;
   void *read_user;
 } karst_report_options_t;

@@ -66,7 +66,7 @@ karst_error_t karst_vtk_write_mesh(karst_ctx_t *ctx, const char *path, const kar
 /** Polygons with integer cell arrays and field-data string lists (karst_vtk_write_polydata). */
 typedef struct karst_polydata {
   karst_int_t n_points;
-  const double *xyz;          /**< 3 * n_points */
+  const double *xyz; /**< 3 * n_points */
   karst_int_t n_polys;
   const karst_int_t *offsets; /**< n_polys + 1: polygon c is conn[offsets[c] .. offsets[c + 1]) */
   const karst_int_t *conn;
@@ -75,6 +75,7 @@ typedef struct karst_polydata {
   const int *const *cell_arrays; /**< n_cell_arrays arrays of n_polys values */
   int n_strings;
   const karst_strings_t *strings; /**< field-data string lists (e.g. "feature_names") */
+  const char *role; /**< the kind of file ("geology"), for the units of its arrays (arrays.h) */
 } karst_polydata_t;
 
 /** Write polygons as .vtp (inline binary), atomically. */

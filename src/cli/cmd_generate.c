@@ -74,7 +74,7 @@ static int run(int argc, char **argv) {
   if (!have_seed) seed = sc.seed;
   if ((err = karst_generate(&ctx, &sc, seed, 0, &net, want_samples ? &samples : NULL, &stats)))
     goto fail;
-  /* The five files are one set: each is written to a temporary name, then all are renamed into
+  /* The six files are one set: each is written to a temporary name, then all are renamed into
    * place with run.json last, so a run that fails leaves no new file, and a previous set in DIR
    * stays whole (karst_fileset_commit). A samples.vtp left by an earlier run with --samples goes
    * when this run writes none, so it never sits beside a network it does not belong to. */
@@ -116,6 +116,25 @@ static int run(int argc, char **argv) {
   if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
   snprintf(writing, sizeof writing, "%s", path);
   if ((err = karst_geology_write_vtp(&ctx, geo, tmp))) goto fail_write;
+  free(path);
+  /* The ParaView script showing the network, the geology (and the samples) in karst's colours. */
+  if (!(path = join(outdir, "network" KARST_VIEW_SCRIPT_SUFFIX))) goto nomem;
+  if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
+  snprintf(writing, sizeof writing, "%s", path);
+  {
+    char *vtp = join(outdir, "network.vtp"), *gvtp = join(outdir, "geology.vtp"),
+         *svtp = join(outdir, "samples.vtp");
+    karst_view_item_t items[3] = {{vtp, KARST_VIEW_NETWORK, NULL},
+                                  {gvtp, KARST_VIEW_GEOLOGY, NULL},
+                                  {svtp, KARST_VIEW_SAMPLES, NULL}};
+    err = vtp && gvtp && svtp
+              ? karst_view_write_script(&ctx, tmp, path, items, want_samples ? 3 : 2)
+              : karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
+    free(vtp);
+    free(gvtp);
+    free(svtp);
+    if (err) goto fail_write;
+  }
   free(path);
   if (!(path = join(outdir, "run.json"))) goto nomem;
   if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
@@ -163,6 +182,8 @@ const cli_command_t cli_cmd_generate = {
     "                                     feature, feature_id)\n"
     "  DIR/network_nodes.dat, _links.dat  the network in Karstnet's format\n"
     "  DIR/samples.vtp                    the sample cloud tagged by source (with --samples)\n"
+    "  DIR/network.paraview.py            a ParaView script showing them with karst's colours,\n"
+    "                                     category names and units (karst view DIR)\n"
     "  DIR/run.json                       scenario path and hash, seed, every effective\n"
     "                                     parameter, counts and stage wall times\n\n"
     "  --seed S     base seed (default: the scenario's seed). The same seed gives byte-identical\n"

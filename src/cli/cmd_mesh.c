@@ -196,9 +196,15 @@ static int run(int argc, char **argv) {
   karst_error_t err;
   /* every output is checked before any work, written to a temporary, and
    * renamed into place only when all of them were written */
-  const char *tmp_out = NULL, *tmp_sdf = NULL, *writing = NULL;
+  const char *tmp_out = NULL, *tmp_sdf = NULL, *tmp_script = NULL, *writing = NULL;
+  char *script = karst_view_script_path(out);
+  if (!script) {
+    err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
+    goto fail;
+  }
   if ((err = add_output(&ctx, &outs, out, &tmp_out))) goto fail;
   if (sdf_path && (err = add_output(&ctx, &outs, sdf_path, &tmp_sdf))) goto fail;
+  if ((err = add_output(&ctx, &outs, script, &tmp_script))) goto fail;
   double t0 = now_s();
   if ((err = karst_read_network(&ctx, in, KARST_FORMAT_AUTO, &net))) goto fail;
   if (scen_path && (err = karst_scenario_load(&ctx, scen_path, &sc))) goto fail;
@@ -227,6 +233,10 @@ static int run(int argc, char **argv) {
   if ((err = karst_mesh_write(&ctx, tmp_out, &mesh))) goto fail_write;
   writing = sdf_path;
   if (sdf_path && (err = karst_mesh_write_sdf(&ctx, tmp_sdf, sdf, box, voxel))) goto fail_write;
+  writing = script;
+  karst_view_item_t items[2] = {{out, KARST_VIEW_MESH, NULL}, {sdf_path, KARST_VIEW_FIELD, NULL}};
+  if ((err = karst_view_write_script(&ctx, tmp_script, script, items, sdf_path ? 2 : 1)))
+    goto fail_write;
   /* the writers do not poll the interrupt: a Ctrl-C while they ran keeps nothing */
   if (karst_interrupted(&ctx)) {
     err = karst_set_error(&ctx, KARST_EINTERRUPTED, "interrupted; no output was kept");
@@ -263,6 +273,7 @@ fail_write:
 fail:
   status = cli_fail("mesh", &ctx, err);
 done:
+  free(script);
   karst_fileset_abort(&outs);
   karst_mesh_destroy(&mesh);
   karst_sdf_free(sdf);
@@ -291,6 +302,7 @@ const cli_command_t cli_cmd_mesh = {
     "  --carve        mesh the rock: the scenario's terrain minus the conduits\n"
     "  --scenario S   scenario file (terrain for --carve, default box)\n"
     "  --sdf F.vti    also write the sampled field as VTK image data (contour it at 0)\n"
+
     "  --noise A      wall irregularities of at most A metres (default 0: smooth walls)\n"
     "  --radius R     radius of edges without a \"radius\" attribute (default 1 m)\n"
     "  --spheres      fill sharp bends with Poisson spheres (the paper's method, slower and\n"
@@ -298,4 +310,6 @@ const cli_command_t cli_cmd_mesh = {
     "  --seed S       seed of the spheres and the noise (default 1)\n"
     "  -j THREADS     worker threads (default: all processors)\n"
     "  --quiet        no progress bar and no summary line\n\n"
+    "Beside the mesh, STEM.paraview.py (cave.paraview.py for cave.vtp) shows it and the --sdf\n"
+    "field in ParaView with karst's colours, category names and units (karst view).\n"
     "The geometry is described in docs/geometry.md.\n"};

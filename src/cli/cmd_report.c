@@ -84,6 +84,8 @@ const cli_command_t cli_cmd_report = {
     "                    [--published FILE]\n\n"
     "One HTML file (inline SVG and CSS, no scripts, no external requests): scenario summary and\n"
     "seed, the comparison table, a histogram per metric with the survey value and the range of\n"
-    "the 34 published caves, a length-weighted orientation rose, the degree distribution, plan\n"
-    "and cross-section views of the first K members (default 4) coloured by tunnel type, and\n"
-    "the software versions. See docs/ensembles.md.\n"};
+    "the 34 published caves (metrics constant over the members as values), an equal-area\n"
+    "orientation rose, a stereonet of conduit orientations with the fracture families, the\n"
+    "degree distribution, a plan, two sections and an oblique view of the first K members\n"
+    "(default 4) coloured by tunnel type, with the survey, and the software versions. Files are\n"
+    "named relative to the page. See docs/ensembles.md.\n"};

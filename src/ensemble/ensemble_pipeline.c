@@ -9,6 +9,7 @@
 #include "karst/generate.h"
 #include "karst/metrics.h"
 #include "karst/readers.h"
+#include "karst/view.h"
 #include "karst/vtk.h"
 
 static karst_error_t pipe_realise(karst_ctx_t *ctx, void *user, uint64_t member_seed,
@@ -16,6 +17,16 @@ static karst_error_t pipe_realise(karst_ctx_t *ctx, void *user, uint64_t member_
   const karst_ensemble_pipeline_t *p = user;
   (void)index; /* the member seed already encodes (base seed, index) */
   return karst_generate(ctx, p->sc, member_seed, 0, net, NULL, NULL);
+}
+
+/* The ParaView script beside @p file (view.h), showing it in @p role. */
+static karst_error_t write_script(karst_ctx_t *ctx, const char *file, karst_view_role_t role) {
+  char *script = karst_view_script_path(file);
+  if (!script) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  karst_view_item_t item = {file, role, NULL};
+  karst_error_t err = karst_view_write_script(ctx, script, script, &item, 1);
+  free(script);
+  return err;
 }
 
 static karst_error_t pipe_write(karst_ctx_t *ctx, void *user, const char *dir,
@@ -31,6 +42,8 @@ static karst_error_t pipe_write(karst_ctx_t *ctx, void *user, const char *dir,
   err = karst_vtk_write_network(ctx, vtp, net);
   if (err) goto cleanup;
   err = karst_write_karstnet(ctx, prefix, net);
+  if (err) goto cleanup;
+  err = write_script(ctx, vtp, KARST_VIEW_NETWORK);
 cleanup:
   free(vtp);
   free(prefix);
@@ -55,7 +68,8 @@ static karst_error_t pipe_measure(karst_ctx_t *ctx, void *user, const karst_netw
 static karst_error_t pipe_collection(karst_ctx_t *ctx, void *user, const char *path, int n,
                                      const char *const *files) {
   (void)user;
-  return karst_vtk_write_pvd(ctx, path, n, files);
+  karst_error_t err = karst_vtk_write_pvd(ctx, path, n, files);
+  return err ? err : write_script(ctx, path, KARST_VIEW_COLLECTION);
 }
 
 /**

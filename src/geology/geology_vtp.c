@@ -350,7 +350,7 @@ karst_error_t karst_geology_write_vtp(karst_ctx_t *ctx, const karst_geology_t *g
     strcpy(lists[3].name, "fault_names"), lists[3].n = nf, lists[3].values = (char **)faults;
     const char *names[2] = {"feature", "feature_id"};
     const int *arrays[2] = {P.feature, P.id};
-    karst_polydata_t pd = {P.np, P.xyz, P.nc, P.off, P.conn, 2, names, arrays, 4, lists};
+    karst_polydata_t pd = {P.np, P.xyz, P.nc, P.off, P.conn, 2, names, arrays, 4, lists, "geology"};
     err = karst_vtk_write_polydata(ctx, path, &pd);
     free(springs), free(strata), free(faults);
   }

@@ -219,7 +219,7 @@ void add_versions(vtkFieldData *fd) {
  * categories (value i names code i, from include/karst/palette.h) unless the file already
  * has it. An array karst does not describe gets the unit "unknown".
  */
-void describe_arrays(vtkDataSet *ds) {
+void describe_arrays(vtkDataSet *ds, const char *role) {
   auto table = vtkSmartPointer<vtkStringArray>::New();
   table->SetName("array_units");
   table->SetNumberOfComponents(3);
@@ -232,18 +232,20 @@ void describe_arrays(vtkDataSet *ds) {
     for (int i = 0; i < part->GetNumberOfArrays(); i++) {
       vtkAbstractArray *a = part->GetAbstractArray(i);
       if (!a || !a->GetName()) continue;
-      const karst_array_info_t *info = karst_arrays_find(a->GetName());
+      const karst_array_info_t *info = karst_arrays_find_role(a->GetName(), role);
       const char *unit = info ? info->unit : "unknown";
       table->InsertNextValue(a->GetName());
       table->InsertNextValue(unit);
       table->InsertNextValue(info ? info->meaning : "not described by karst (docs/arrays.md)");
       if (vtkDataArray::SafeDownCast(a))
         a->GetInformation()->Set(vtkDataArray::UNITS_LABEL(), unit);
-      const karst_palette_t *pal = info && info->names ? karst_palette_find(info->name) : nullptr;
+      const karst_palette_t *pal =
+          info && info->names ? karst_palette_find_role(info->name, role) : nullptr;
       if (!pal || fd->GetAbstractArray(info->names)) continue;
       int n = 0; /* codes 0 .. n-1 */
       for (int k = 0; k < pal->n; k++)
         if (pal->categories[k].code >= n) n = pal->categories[k].code + 1;
+      if (n == 0) continue; /* only the file knows the names (springs ...) */
       auto names = vtkSmartPointer<vtkStringArray>::New();
       names->SetName(info->names);
       names->SetNumberOfValues(n);
@@ -536,7 +538,7 @@ karst_error_t write_network(karst_ctx_t *ctx, const char *path, const karst_netw
   if (net->title) fd->AddArray(string_array("title", 1, &net->title));
   add_lookup_tables(fd);
   add_versions(fd);
-  describe_arrays(pd);
+  describe_arrays(pd, "network");
 
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
@@ -578,7 +580,7 @@ karst_error_t write_samples(karst_ctx_t *ctx, const char *path, const karst_samp
   nkey->InsertNextValue(s->n_key_points);
   fd->AddArray(nkey);
   add_versions(fd);
-  describe_arrays(pd);
+  describe_arrays(pd, "samples");
 
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
@@ -611,7 +613,7 @@ karst_error_t write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t 
     pd->GetCellData()->SetActiveScalars(name);
   }
   add_versions(pd->GetFieldData());
-  describe_arrays(pd);
+  describe_arrays(pd, "mesh");
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
@@ -654,6 +656,7 @@ karst_error_t write_polydata(karst_ctx_t *ctx, const char *path, const karst_pol
     pd->GetFieldData()->AddArray(string_array(m->strings[i].name, m->strings[i].n,
                                               (const char *const *)m->strings[i].values));
   add_versions(pd->GetFieldData());
+  describe_arrays(pd, m->role);
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
@@ -698,7 +701,7 @@ karst_error_t write_image(karst_ctx_t *ctx, const char *path, const int dims[3],
   arr->SetArray(const_cast<float *>(values), (vtkIdType)n, 1);
   img->GetPointData()->SetScalars(arr);
   add_versions(img->GetFieldData());
-  describe_arrays(img);
+  describe_arrays(img, "field");
   vtkNew<StreamedWriter<vtkXMLImageDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), img);
 }

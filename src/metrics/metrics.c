@@ -24,35 +24,36 @@ void karst_metrics_options_init(karst_metrics_options_t *opt) {
   opt->azimuth_rotation = 0.0;
 }
 
-#define F_INT(name)                                                                                \
-  { #name, offsetof(karst_metrics_t, name), 1 }
-#define F_DBL(name)                                                                                \
-  { #name, offsetof(karst_metrics_t, name), 0 }
+#define F_INT(name, unit, label)                                                                   \
+  { #name, offsetof(karst_metrics_t, name), 1, unit, label }
+#define F_DBL(name, unit, label)                                                                   \
+  { #name, offsetof(karst_metrics_t, name), 0, unit, label }
+/* Units: "m", "count", "edges" (hop counts on Gs), "1" (dimensionless); docs/metrics.md. */
 static const karst_metric_field_t fields[] = {
-    F_INT(nodes),
-    F_INT(edges),
-    F_DBL(mean_length),
-    F_DBL(cv_length),
-    F_DBL(length_entropy),
-    F_DBL(tortuosity),
-    F_DBL(orientation_entropy),
-    F_DBL(aspl),
-    F_DBL(cpd),
-    F_DBL(mean_degree),
-    F_DBL(cv_degree),
-    F_DBL(correlation_vertex_degree),
-    F_INT(reduced_nodes),
-    F_INT(reduced_edges),
-    F_INT(components),
-    F_INT(cycles),
-    F_DBL(howard_alpha),
-    F_DBL(howard_beta),
-    F_DBL(howard_gamma),
-    F_INT(extremities),
-    F_INT(junctions),
-    F_INT(branches),
-    F_DBL(total_length),
-    F_DBL(vertical_extent),
+    F_INT(nodes, "count", "nodes of the full graph"),
+    F_INT(edges, "count", "edges of the full graph"),
+    F_DBL(mean_length, "m", "mean branch length"),
+    F_DBL(cv_length, "1", "coefficient of variation of branch length"),
+    F_DBL(length_entropy, "1", "branch-length entropy (0 to 1)"),
+    F_DBL(tortuosity, "1", "mean branch tortuosity (length / chord)"),
+    F_DBL(orientation_entropy, "1", "orientation entropy (0 to 1)"),
+    F_DBL(aspl, "edges", "average shortest path length on Gs"),
+    F_DBL(cpd, "1", "central point dominance"),
+    F_DBL(mean_degree, "1", "mean node degree on Gs"),
+    F_DBL(cv_degree, "1", "coefficient of variation of degree"),
+    F_DBL(correlation_vertex_degree, "1", "degree correlation of adjacent nodes"),
+    F_INT(reduced_nodes, "count", "nodes of Gs"),
+    F_INT(reduced_edges, "count", "edges of Gs"),
+    F_INT(components, "count", "connected components"),
+    F_INT(cycles, "count", "independent cycles"),
+    F_DBL(howard_alpha, "1", "Howard's alpha"),
+    F_DBL(howard_beta, "1", "Howard's beta"),
+    F_DBL(howard_gamma, "1", "Howard's gamma"),
+    F_INT(extremities, "count", "extremities (nodes of degree 1)"),
+    F_INT(junctions, "count", "junctions (nodes of degree 3 or more)"),
+    F_INT(branches, "count", "branches"),
+    F_DBL(total_length, "m", "total conduit length"),
+    F_DBL(vertical_extent, "m", "vertical extent"),
 };
 #undef F_INT
 #undef F_DBL

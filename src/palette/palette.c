@@ -56,6 +56,18 @@ static const karst_palette_category_t vadose[] = {{0, "below the water table", O
 static const karst_palette_category_t observed[] = {{0, "generated", NEUTRAL_GREY},
                                                     {1, "observed", SURVEY_RED}};
 
+/* What a polygon of geology.vtp is (include/karst/geology.h order): water tables blue, faults
+ * vermillion, fractures green, the terrain neutral. */
+static const karst_palette_category_t geology_feature[] = {
+    {0, "terrain", NEUTRAL_GREY}, {1, "horizon", OI_ORANGE},
+    {2, "water_table", OI_BLUE},  {3, "stratum_boundary", OI_REDDISH_PURPLE},
+    {4, "fault", OI_VERMILLION},  {5, "fracture", OI_BLUISH_GREEN},
+    {6, "exclusion", OI_BLACK}};
+
+/* The spring a node or edge drains to: one category per spring of the scenario (named by the
+ * file's spring_names, coloured by karst_palette_cycle), and -1 for none. */
+static const karst_palette_category_t spring[] = {{-1, "none", NEUTRAL_GREY}};
+
 /* Surface details of a conduit mesh (Zanni et al. 2012). */
 static const karst_palette_category_t feature[] = {{0, "wall", NEUTRAL_GREY},
                                                    {1, "speleothem", OI_ORANGE}};
@@ -72,20 +84,26 @@ static const karst_palette_category_t block_type[] = {{0, "equidimensional", OI_
 
 static const karst_palette_t entries[] = {
     {"tunnel_type", "network.vtp cell data; mesh .vtp cell data (-1: terrain or box)",
-     KARST_PALETTE_CATEGORICAL, N_OF(tunnel_type), tunnel_type},
+     KARST_PALETTE_CATEGORICAL, N_OF(tunnel_type), tunnel_type, NULL},
     {"kind", "network.vtp point data (node kind)", KARST_PALETTE_CATEGORICAL, N_OF(node_kind),
-     node_kind},
+     node_kind, NULL},
     {"source", "samples.vtp point data (sample source)", KARST_PALETTE_CATEGORICAL,
-     N_OF(sample_source), sample_source},
+     N_OF(sample_source), sample_source, NULL},
     {"zone", "network.vtp cell data (hydrological zone)", KARST_PALETTE_CATEGORICAL, N_OF(zone),
-     zone},
-    {"vadose", "network.vtp cell data", KARST_PALETTE_CATEGORICAL, N_OF(vadose), vadose},
-    {"observed", "network.vtp cell data", KARST_PALETTE_CATEGORICAL, N_OF(observed), observed},
+     zone, NULL},
+    {"vadose", "network.vtp cell data", KARST_PALETTE_CATEGORICAL, N_OF(vadose), vadose, NULL},
+    {"observed", "network.vtp cell data", KARST_PALETTE_CATEGORICAL, N_OF(observed), observed,
+     NULL},
     {"feature", "mesh .vtp cell data (surface detail)", KARST_PALETTE_CATEGORICAL, N_OF(feature),
-     feature},
+     feature, "mesh"},
+    {"feature", "geology.vtp cell data (what the polygon is)", KARST_PALETTE_CATEGORICAL,
+     N_OF(geology_feature), geology_feature, "geology"},
+    {"spring", "network.vtp point and cell data (the spring drained to)", KARST_PALETTE_CATEGORICAL,
+     N_OF(spring), spring, NULL},
     {"block_type", "block mesh cell data (block shape)", KARST_PALETTE_CATEGORICAL,
-     N_OF(block_type), block_type},
-    {"generation", "network.vtp cell data (integer, ordered)", KARST_PALETTE_SEQUENTIAL, 0, NULL},
+     N_OF(block_type), block_type, NULL},
+    {"generation", "network.vtp cell data (integer, ordered)", KARST_PALETTE_SEQUENTIAL, 0, NULL,
+     NULL},
 };
 
 /* viridis (matplotlib 2.0) at t = 0, 1/8, ..., 1: #440154 #472D7B #3B528B #2C728E #21908C
@@ -128,10 +146,37 @@ const karst_palette_t *karst_palette_list(int *n) {
  * Time complexity: O(number of entries).
  */
 const karst_palette_t *karst_palette_find(const char *array) {
+  return karst_palette_find_role(array, NULL);
+}
+
+/**
+ * The entry of @p array for files of kind @p role: the one of that role, else the one without a
+ * role, else (for @p role NULL) the first one of that name; NULL when there is none.
+ * Time complexity: O(number of entries).
+ */
+const karst_palette_t *karst_palette_find_role(const char *array, const char *role) {
+  const karst_palette_t *any = NULL, *plain = NULL;
   if (!array) return NULL;
-  for (int i = 0; i < N_OF(entries); i++)
-    if (strcmp(entries[i].array, array) == 0) return &entries[i];
-  return NULL;
+  for (int i = 0; i < N_OF(entries); i++) {
+    if (strcmp(entries[i].array, array) != 0) continue;
+    if (!any) any = &entries[i];
+    if (!entries[i].role && !plain) plain = &entries[i];
+    if (role && entries[i].role && strcmp(entries[i].role, role) == 0) return &entries[i];
+  }
+  return plain ? plain : role ? NULL : any;
+}
+
+/* The colours of categories an entry does not list, in turn. */
+static const char *const cycle[] = {OI_BLUE,           OI_ORANGE,   OI_BLUISH_GREEN, OI_VERMILLION,
+                                    OI_REDDISH_PURPLE, OI_SKY_BLUE, OI_YELLOW};
+
+/**
+ * Colour of an unlisted category code: the cycle of Okabe & Ito colours but black (the colour
+ * of text), the neutral grey for a negative code.
+ * Time complexity: O(1).
+ */
+const char *karst_palette_cycle(int code) {
+  return code < 0 ? NEUTRAL_GREY : cycle[code % N_OF(cycle)];
 }
 
 /**

@@ -6,30 +6,27 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "ensemble/ensemble_internal.h"
 #include "karst/compare.h"
 #include "karst/io.h"
 #include "karst/json.h"
 #include "karst/metrics.h"
+#include "karst/palette.h"
 #include "karst/readers.h"
 #include "karst/version.h"
-#include "report/svg_internal.h"
+#include "report/report_internal.h"
 
 /** Orientation rose: bins of this width over [0, 180) degrees, as the orientation entropy of
  *  Collon et al. 2017 (18 bins of 10 degrees). */
 #define ROSE_BIN_DEGREES 10
 /** Degrees above this are pooled into the last bar of the degree distribution. */
 #define DEGREE_PLOT_MAX 8
-/** Histogram bins: ceil(sqrt(n)) clamped to [HIST_MIN_BINS, HIST_MAX_BINS] (square-root rule). */
-#define HIST_MIN_BINS 5
-#define HIST_MAX_BINS 30
-
-/* Okabe & Ito (2008) colour-blind-safe palette, one colour per tunnel type (network.h order). */
-static const char *const tunnel_colour[KARST_TUNNEL_TYPE_COUNT] = {
-    "#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#000000"};
-static const char *const no_type_colour = "#777777";
-static const char *const survey_colour = "#C00000";
+/** Stereonet: cells per side of the density grid over the net (a cell is 1/60 of its
+ *  diameter, about 2.4 degrees of plunge near the centre, finer than the 8.1-degree counting
+ *  circle). */
+#define STEREO_GRID 60
 
 void karst_report_survey_init(karst_report_survey_t *s) {
   memset(s, 0, sizeof *s);
@@ -217,267 +214,6 @@ static void fmt_num(char *out, size_t size, double v) {
     snprintf(out, size, "%.4g", v);
 }
 
-/* Histogram of one metric column, with the survey value(s) and the 34-cave range. */
-static void plot_histogram(karst_i_buf_t *b, const karst_ensemble_table_t *t, int col,
-                           const karst_compare_result_t *res, int n_res) {
-  const double W = 300, H = 200;
-  karst_i_plot_t p = {56, 12, W - 70, H - 58, 0, 0, 0, 0};
-  double lo = INFINITY, hi = -INFINITY;
-  karst_int_t n = 0;
-  for (karst_int_t i = 0; i < t->n_rows; i++) {
-    double v = t->values[i * t->n_cols + col];
-    if (isnan(v) || !isfinite(v)) continue;
-    n++;
-    lo = fmin(lo, v);
-    hi = fmax(hi, v);
-  }
-  karst_i_svg_begin(b, W, H, t->names[col]);
-  if (n == 0) {
-    karst_i_svg_text(b, W / 2, H / 2, "middle", "note", "undefined for every member");
-    karst_i_svg_end(b);
-    return;
-  }
-  int nb = (int)ceil(sqrt((double)n));
-  if (nb < HIST_MIN_BINS) nb = HIST_MIN_BINS;
-  if (nb > HIST_MAX_BINS) nb = HIST_MAX_BINS;
-  double blo = lo, bhi = hi;
-  if (bhi == blo) { /* one value: one bar centred on it */
-    double w = fmax(fabs(blo) * 0.05, 0.5);
-    blo -= w;
-    bhi += w;
-    nb = 1;
-  }
-  double xlo = blo, xhi = bhi;
-  for (int s = 0; s < n_res; s++) {
-    double v = res[s].rows[col].survey;
-    if (isfinite(v)) {
-      xlo = fmin(xlo, v);
-      xhi = fmax(xhi, v);
-    }
-  }
-  int *count = calloc((size_t)nb, sizeof *count);
-  if (!count) {
-    b->failed = 1;
-    return;
-  }
-  int cmax = 0;
-  for (karst_int_t i = 0; i < t->n_rows; i++) {
-    double v = t->values[i * t->n_cols + col];
-    if (isnan(v) || !isfinite(v)) continue;
-    int k = (int)floor((v - blo) / (bhi - blo) * nb);
-    if (k >= nb) k = nb - 1; /* the last bin is closed */
-    if (k < 0) k = 0;
-    if (++count[k] > cmax) cmax = count[k];
-  }
-  p.xmin = xlo;
-  p.xmax = xhi;
-  p.ymin = 0;
-  p.ymax = cmax;
-  karst_i_svg_axes(b, &p, 1, 5, 4, t->names[col], "members");
-  const karst_compare_row_t *row = n_res > 0 ? &res[0].rows[col] : NULL;
-  if (row && row->has_published) {
-    double a = fmax(row->published_min, p.xmin), c = fmin(row->published_max, p.xmax);
-    if (a < c)
-      karst_i_svg_rect(b, karst_i_plot_px(&p, a), p.y,
-                       karst_i_plot_px(&p, c) - karst_i_plot_px(&p, a), p.h, "#999999", NULL, 0.18);
-    char txt[96], x1[32], x2[32];
-    fmt_num(x1, sizeof x1, row->published_min);
-    fmt_num(x2, sizeof x2, row->published_max);
-    snprintf(txt, sizeof txt, "34 caves: %s – %s%s", x1, x2, a < c ? "" : " (off scale)");
-    karst_i_svg_text(b, p.x + p.w - 2, p.y + 11, "end", "note", txt);
-  }
-  double bw = (bhi - blo) / nb;
-  for (int k = 0; k < nb; k++) {
-    double x0 = karst_i_plot_px(&p, blo + k * bw), x1 = karst_i_plot_px(&p, blo + (k + 1) * bw);
-    double y0 = karst_i_plot_py(&p, count[k]);
-    karst_i_svg_rect(b, x0, y0, x1 - x0, p.y + p.h - y0, "#4477AA", "#ffffff", 1);
-  }
-  for (int s = 0; s < n_res; s++) {
-    double v = res[s].rows[col].survey;
-    if (!isfinite(v)) continue;
-    double x = karst_i_plot_px(&p, v);
-    karst_i_svg_line(b, x, p.y, x, p.y + p.h, survey_colour, 2, "5 3");
-  }
-  free(count);
-  karst_i_svg_end(b);
-}
-
-/* Length-weighted azimuth histogram of a network (horizontal length, azimuth clockwise from
- * north folded into [0, 180)), accumulated into bins. */
-static void rose_accumulate(const karst_network_t *net, double *bins, int nb) {
-  for (karst_int_t e = 0; e < net->n_edges; e++) {
-    const double *a = net->xyz + 3 * net->edges[2 * e], *c = net->xyz + 3 * net->edges[2 * e + 1];
-    double dx = c[0] - a[0], dy = c[1] - a[1], l2 = hypot(dx, dy);
-    if (!(l2 > 0)) continue;
-    double az = atan2(dx, dy) * 180.0 / M_PI; /* clockwise from +y */
-    az = fmod(az + 360.0, 180.0);
-    int k = (int)floor(az / ROSE_BIN_DEGREES);
-    if (k >= nb) k = nb - 1;
-    if (k < 0) k = 0;
-    bins[k] += l2;
-  }
-}
-
-static void plot_rose(karst_i_buf_t *b, const double *ens, const double *survey, int nb,
-                      const char *survey_label) {
-  const double W = 340, H = 340, cx = W / 2, cy = H / 2 + 6, R = 130;
-  double emax = 0, smax = 0;
-  for (int k = 0; k < nb; k++) {
-    emax = fmax(emax, ens[k]);
-    if (survey) smax = fmax(smax, survey[k]);
-  }
-  karst_i_svg_begin(b, W, H, "length-weighted orientation rose");
-  for (int r = 1; r <= 4; r++)
-    karst_i_svg_marker(b, cx, cy, R * r / 4.0, "none", "#dddddd");
-  karst_i_svg_text(b, cx, cy - R - 6, "middle", "tick", "N");
-  karst_i_svg_text(b, cx + R + 10, cy + 4, "middle", "tick", "E");
-  karst_i_svg_text(b, cx, cy + R + 14, "middle", "tick", "S");
-  karst_i_svg_text(b, cx - R - 10, cy + 4, "middle", "tick", "W");
-  if (emax <= 0) {
-    karst_i_svg_text(b, cx, cy, "middle", "note", "no horizontal conduits");
-    karst_i_svg_end(b);
-    return;
-  }
-  /* Each bin is drawn twice (az and az + 180), radius proportional to its weight. */
-  for (int half = 0; half < 2; half++)
-    for (int k = 0; k < nb; k++) {
-      double r = R * ens[k] / emax, pts[2 * 7];
-      double a0 = (half * 180.0 + k * ROSE_BIN_DEGREES) * M_PI / 180.0;
-      double a1 = a0 + ROSE_BIN_DEGREES * M_PI / 180.0;
-      pts[0] = cx;
-      pts[1] = cy;
-      for (int j = 0; j <= 5; j++) {
-        double a = a0 + (a1 - a0) * j / 5.0;
-        pts[2 + 2 * j] = cx + r * sin(a);
-        pts[3 + 2 * j] = cy - r * cos(a);
-      }
-      karst_i_svg_polyline(b, pts, 7, "#ffffff", 0.5, "#4477AA", 1);
-    }
-  if (survey && smax > 0) {
-    double pts[2 * 72];
-    int m = 0;
-    for (int half = 0; half < 2; half++)
-      for (int k = 0; k < nb; k++) {
-        double r = R * survey[k] / smax;
-        for (int j = 0; j < 2; j++) {
-          double a = (half * 180.0 + (k + j) * ROSE_BIN_DEGREES) * M_PI / 180.0;
-          pts[2 * m] = cx + r * sin(a);
-          pts[2 * m + 1] = cy - r * cos(a);
-          m++;
-        }
-      }
-    karst_i_svg_polyline(b, pts, m, survey_colour, 2, NULL, 1);
-    char txt[300];
-    snprintf(txt, sizeof txt, "outline: %s", survey_label);
-    karst_i_svg_text(b, 4, H - 4, "start", "note", txt);
-  }
-  karst_i_svg_end(b);
-}
-
-/* Fraction of nodes of each degree 1..DEGREE_PLOT_MAX (the last pools the higher degrees). */
-static void degree_accumulate(const karst_network_t *net, double *count) {
-  karst_int_t *deg = calloc((size_t)(net->n_nodes > 0 ? net->n_nodes : 1), sizeof *deg);
-  if (!deg) return;
-  for (karst_int_t e = 0; e < net->n_edges; e++) {
-    deg[net->edges[2 * e]]++;
-    deg[net->edges[2 * e + 1]]++;
-  }
-  for (karst_int_t v = 0; v < net->n_nodes; v++) {
-    karst_int_t d = deg[v];
-    if (d < 1) continue;
-    if (d > DEGREE_PLOT_MAX) d = DEGREE_PLOT_MAX;
-    count[d] += 1;
-  }
-  free(deg);
-}
-
-static void plot_degrees(karst_i_buf_t *b, const double *ens, const double *survey,
-                         const char *survey_label) {
-  const double W = 340, H = 240;
-  karst_i_plot_t p = {56, 14, W - 72, H - 62, 0.5, DEGREE_PLOT_MAX + 0.5, 0, 0};
-  double se = 0, ss = 0, ymax = 0;
-  for (int d = 1; d <= DEGREE_PLOT_MAX; d++) {
-    se += ens[d];
-    if (survey) ss += survey[d];
-  }
-  karst_i_svg_begin(b, W, H, "degree distribution");
-  if (se <= 0) {
-    karst_i_svg_text(b, W / 2, H / 2, "middle", "note", "no edges");
-    karst_i_svg_end(b);
-    return;
-  }
-  for (int d = 1; d <= DEGREE_PLOT_MAX; d++) {
-    ymax = fmax(ymax, ens[d] / se);
-    if (survey && ss > 0) ymax = fmax(ymax, survey[d] / ss);
-  }
-  p.ymax = ymax * 1.08; /* headroom so the tallest bar does not touch the frame */
-  karst_i_svg_axes(b, &p, 0, 8, 5, "node degree (last bar: 8 or more)", "fraction of nodes");
-  for (int d = 1; d <= DEGREE_PLOT_MAX; d++) {
-    double x0 = karst_i_plot_px(&p, d - 0.35), x1 = karst_i_plot_px(&p, d + 0.35);
-    double y0 = karst_i_plot_py(&p, ens[d] / se);
-    karst_i_svg_rect(b, x0, y0, x1 - x0, p.y + p.h - y0, "#4477AA", NULL, 1);
-    if (survey && ss > 0)
-      karst_i_svg_marker(b, karst_i_plot_px(&p, d), karst_i_plot_py(&p, survey[d] / ss), 4,
-                         survey_colour, "#ffffff");
-  }
-  if (survey && ss > 0) {
-    char txt[300];
-    snprintf(txt, sizeof txt, "dots: %s", survey_label);
-    karst_i_svg_text(b, p.x + p.w - 2, p.y + 12, "end", "note", txt);
-  }
-  karst_i_svg_end(b);
-}
-
-/* Plan (axis 1 = y) or section (axis 1 = z) of a network, equal scale, coloured by tunnel type. */
-static void plot_map(karst_i_buf_t *b, const karst_network_t *net, int axis, const char *title) {
-  const double W = 420, H = 300;
-  karst_i_plot_t p = {60, 12, W - 76, H - 56, 0, 0, 0, 0};
-  double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
-  for (karst_int_t v = 0; v < net->n_nodes; v++) {
-    double c[2] = {net->xyz[3 * v], net->xyz[3 * v + axis]};
-    for (int j = 0; j < 2; j++) {
-      lo[j] = fmin(lo[j], c[j]);
-      hi[j] = fmax(hi[j], c[j]);
-    }
-  }
-  karst_i_svg_begin(b, W, H, title);
-  if (net->n_edges == 0 || !isfinite(lo[0])) {
-    karst_i_svg_text(b, W / 2, H / 2, "middle", "note", "empty network");
-    karst_i_svg_end(b);
-    return;
-  }
-  /* Equal scale: widen the shorter data range to the aspect of the plot area. */
-  double dx = fmax(hi[0] - lo[0], 1e-9), dy = fmax(hi[1] - lo[1], 1e-9);
-  double s = fmin(p.w / dx, p.h / dy);
-  double mx = (lo[0] + hi[0]) / 2, my = (lo[1] + hi[1]) / 2;
-  p.xmin = mx - p.w / s / 2;
-  p.xmax = mx + p.w / s / 2;
-  p.ymin = my - p.h / s / 2;
-  p.ymax = my + p.h / s / 2;
-  karst_i_svg_axes(b, &p, 0, 6, 5, "x (m)", axis == 1 ? "y (m)" : "z (m)");
-  karst_attr_t *type = karst_network_attr_find(net, KARST_ATTR_EDGE, "tunnel_type");
-  /* One <path> per tunnel type keeps the page small. */
-  for (int t = -1; t < KARST_TUNNEL_TYPE_COUNT; t++) {
-    int any = 0;
-    for (karst_int_t e = 0; e < net->n_edges; e++) {
-      int et = type ? (int)type->data[e * type->ncomp] : -1;
-      if (et < 0 || et >= KARST_TUNNEL_TYPE_COUNT) et = -1;
-      if (et != t) continue;
-      if (!any) {
-        karst_i_buf_printf(b, "<path fill=\"none\" stroke=\"%s\" stroke-width=\"1.5\" d=\"",
-                           t < 0 ? no_type_colour : tunnel_colour[t]);
-        any = 1;
-      }
-      const double *a = net->xyz + 3 * net->edges[2 * e], *c = net->xyz + 3 * net->edges[2 * e + 1];
-      karst_i_buf_printf(b, "M%.1f %.1fL%.1f %.1f", karst_i_plot_px(&p, a[0]),
-                         karst_i_plot_py(&p, a[axis]), karst_i_plot_px(&p, c[0]),
-                         karst_i_plot_py(&p, c[axis]));
-    }
-    if (any) karst_i_buf_puts(b, "\"/>\n");
-  }
-  karst_i_svg_end(b);
-}
-
 /* ------------------------------------------------------------------------ */
 /* HTML                                                                     */
 /* ------------------------------------------------------------------------ */
@@ -487,7 +223,7 @@ static const char *const css =
     "table{border-collapse:collapse;font-size:0.85em}td,th{border:1px solid #ccc;padding:2px 6px;"
     "text-align:right}th{background:#f0f0f0}td.l,th.l{text-align:left}tr.out td{background:#fde0dc}"
     ".grid{display:flex;flex-wrap:wrap;gap:10px}figure{margin:0}figcaption{font-size:0.8em}"
-    "svg text{font-family:sans-serif}svg .tick{font-size:10px;fill:#333}"
+    "svg text{font-family:'DejaVu Sans',Verdana,sans-serif}svg .tick{font-size:10px;fill:#333}"
     "svg .axis{font-size:11px;fill:#111}svg .note{font-size:10px;fill:#555}"
     ".legend span{display:inline-block;margin-right:1em;font-size:0.85em}"
     ".sw{display:inline-block;width:1.6em;height:0.35em;margin-right:0.3em;vertical-align:middle}"
@@ -527,11 +263,109 @@ static void html_compare_table(karst_i_buf_t *b, const karst_compare_result_t *r
   karst_i_buf_puts(b, "</table>\n");
 }
 
+/* Fracture families of the scenario, from ensemble.json's "parameters": "fractures", each
+ * with numeric "dip_direction" and "dip" (others are skipped). At most @p max. */
+static int read_planes(const karst_json_t *params, karst_i_plane_t *planes, int max) {
+  const karst_json_t *fr = karst_json_get(params, "fractures");
+  int n = 0;
+  if (!fr || fr->type != KARST_JSON_ARRAY) return 0;
+  for (karst_int_t i = 0; i < fr->n && n < max; i++) {
+    const karst_json_t *dd = karst_json_get(&fr->items[i], "dip_direction");
+    const karst_json_t *d = karst_json_get(&fr->items[i], "dip");
+    if (!dd || !d || dd->type != KARST_JSON_NUMBER || d->type != KARST_JSON_NUMBER) continue;
+    planes[n].dip_direction = dd->number;
+    planes[n].dip = d->number;
+    n++;
+  }
+  return n;
+}
+
+/* The directory of @p path ("." when it has none); caller frees. */
+static char *dir_of(const char *path) {
+  const char *slash = strrchr(path, '/');
+  if (!slash) return strdup(".");
+  if (slash == path) return strdup("/");
+  char *d = malloc((size_t)(slash - path) + 1);
+  if (d) memcpy(d, path, (size_t)(slash - path)), d[slash - path] = '\0';
+  return d;
+}
+
+/* @p file as the page shows it: relative to the page's directory @p page_dir when it can be
+ * resolved, else as given (lexically normalised). Caller frees. */
+static char *shown_path(const char *page_dir, const char *file) {
+  karst_ctx_t quiet;
+  karst_ctx_init(&quiet);
+  char *rel = NULL;
+  if (karst_path_relative(&quiet, page_dir, file, &rel) == KARST_SUCCESS) return rel;
+  return karst_path_normalize(file);
+}
+
+/* The scenario file as ensemble.json records it, shown relative to the page when it can be
+ * found (absolute, or relative to the working directory, where karst ensemble most likely
+ * ran), else as recorded, normalised. Caller frees. */
+static char *scenario_path(const char *page_dir, const char *recorded) {
+  if (access(recorded, F_OK) == 0) return shown_path(page_dir, recorded);
+  return karst_path_normalize(recorded);
+}
+
+/* The legend of tunnel-type colours (and the survey's) above the members' views. */
+static void html_type_legend(karst_i_buf_t *b, int with_survey) {
+  const karst_palette_t *pal = karst_palette_find("tunnel_type");
+  karst_i_buf_puts(b, "<p class=\"legend\">");
+  for (int k = 0; k < pal->n; k++)
+    karst_i_buf_printf(b, "<span><i class=\"sw\" style=\"background:%s\"></i>%s</span>",
+                       pal->categories[k].hex, pal->categories[k].name);
+  if (with_survey)
+    karst_i_buf_printf(b, "<span><i class=\"sw\" style=\"background:%s\"></i>survey</span>",
+                       karst_palette_role(KARST_PALETTE_ROLE_SURVEY));
+  karst_i_buf_puts(b, "</p>\n");
+}
+
+/* The metrics that are not plotted: constant over the ensemble, or undefined for every
+ * member; shown as values in one table. Returns how many. */
+static int html_constant_metrics(karst_i_buf_t *b, const karst_ensemble_table_t *t,
+                                 const karst_compare_result_t *res, int n_surveys) {
+  int n = 0;
+  for (int c = 0; c < t->n_cols; c++) {
+    double v;
+    karst_int_t k;
+    if (!karst_i_column_constant(t, c, &v, &k)) continue;
+    if (n++ == 0) {
+      karst_i_buf_puts(b, "<p>Metrics with one value for every member are shown as that value, "
+                          "not as a histogram:</p>\n<table><tr><th class=\"l\">metric</th>"
+                          "<th class=\"l\">quantity (unit)</th><th>members' value</th>"
+                          "<th>members</th>");
+      if (n_surveys > 0) karst_i_buf_puts(b, "<th>survey</th>");
+      karst_i_buf_puts(b, "<th>34 caves min</th><th>34 caves max</th></tr>\n");
+    }
+    char label[160], num[64];
+    karst_i_metric_axis_label(label, sizeof label, t->names[c]);
+    karst_i_buf_puts(b, "<tr><td class=\"l\">");
+    karst_i_buf_escape(b, t->names[c]);
+    karst_i_buf_puts(b, "</td><td class=\"l\">");
+    karst_i_buf_escape(b, label);
+    if (k == 0)
+      karst_i_buf_puts(b, "</td><td>undefined for every member</td>");
+    else {
+      fmt_num(num, sizeof num, v);
+      karst_i_buf_printf(b, "</td><td>%s</td>", num);
+    }
+    karst_i_buf_printf(b, "<td>%" PRId64 "</td>", k);
+    const karst_compare_row_t *row = &res[0].rows[c];
+    if (n_surveys > 0) html_cell_num(b, row->survey);
+    html_cell_num(b, row->has_published ? row->published_min : NAN);
+    html_cell_num(b, row->has_published ? row->published_max : NAN);
+    karst_i_buf_puts(b, "</tr>\n");
+  }
+  if (n) karst_i_buf_puts(b, "</table>\n");
+  return n;
+}
+
 /**
  * Write the report (see report.h) of the ensemble in @p ensemble_dir.
- * Reads DIR/ensemble.json, DIR/metrics.csv and the network.vtp of the first
- * members; writes @p path atomically. A member that cannot be read is named
- * in the page instead of its plot (the page is still written).
+ * Reads DIR/ensemble.json, DIR/metrics.csv and the network.vtp of the first members; writes
+ * @p path atomically. A member that cannot be read is named in the page instead of its plot
+ * (the page is still written). Files are named relative to the page's directory.
  * Time complexity: O(members × metrics log members + edges of the members read).
  */
 karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, const char *path,
@@ -541,19 +375,26 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   karst_ensemble_table_t table;
   karst_published_t pub;
   karst_compare_result_t *res = NULL;
-  karst_i_buf_t b;
+  karst_i_buf_t b, maps, problems;
   karst_json_t *summary = NULL;
   int n_res = 0, have_pub = 0;
-  char *jpath = NULL, *mpath = NULL, *versions = NULL;
-  karst_network_t net;
+  char *jpath = NULL, *mpath = NULL, *versions = NULL, *page_dir = NULL;
+  char **labels = NULL;
+  karst_network_t net, *drawn = NULL;
+  karst_int_t n_drawn = 0;
+  karst_i_stereo_t stereo = {0, NULL, 0};
   double rose[180 / ROSE_BIN_DEGREES] = {0}, srose[180 / ROSE_BIN_DEGREES] = {0};
   double deg[DEGREE_PLOT_MAX + 1] = {0}, sdeg[DEGREE_PLOT_MAX + 1] = {0};
   const int nrose = 180 / ROSE_BIN_DEGREES;
   char pubpath[1024];
+  char(*mnames)[32] = NULL;
+  uint64_t *mseeds = NULL;
 
   karst_ensemble_table_init(&table);
   karst_published_init(&pub);
   karst_i_buf_init(&b);
+  karst_i_buf_init(&maps);
+  karst_i_buf_init(&problems);
   karst_network_init(&net);
   if (!opt) {
     karst_report_options_init(&defaults);
@@ -562,7 +403,9 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   jpath = karst_i_path_join(ensemble_dir, "ensemble.json");
   mpath = karst_i_path_join(ensemble_dir, "metrics.csv");
   versions = karst_versions_text();
-  if (!jpath || !mpath || !versions) {
+  page_dir = dir_of(path);
+  if (!jpath || !mpath || !versions || !page_dir ||
+      karst_i_stereo_init(&stereo, STEREO_GRID) != 0) {
     err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
     goto cleanup;
   }
@@ -594,15 +437,20 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
 
   n_res = opt->n_surveys > 0 ? opt->n_surveys : 1;
   res = calloc((size_t)n_res, sizeof *res);
-  if (!res) {
+  labels = calloc((size_t)n_res, sizeof *labels);
+  if (!res || !labels) {
     err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
     goto cleanup;
   }
   for (int s = 0; s < n_res; s++) {
     const karst_report_survey_t *sv = opt->n_surveys > 0 ? &opt->surveys[s] : NULL;
-    err = karst_compare_compute(ctx, &table, sv ? sv->label : NULL, sv ? sv->names : NULL,
-                                sv ? sv->values : NULL, sv ? sv->n_values : 0,
-                                have_pub ? &pub : NULL, &res[s]);
+    if (sv && sv->label && !(labels[s] = shown_path(page_dir, sv->label))) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+      goto cleanup;
+    }
+    err =
+        karst_compare_compute(ctx, &table, labels[s], sv ? sv->names : NULL, sv ? sv->values : NULL,
+                              sv ? sv->n_values : 0, have_pub ? &pub : NULL, &res[s]);
     if (err) goto cleanup;
   }
 
@@ -615,16 +463,18 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   const char *name = json_scalar_text(karst_json_get(params, "name"));
   karst_i_buf_puts(&b, "<h2>Scenario</h2>\n<table>");
   const char *keys[] = {"scenario", "scenario_hash", "seed", "realisations", "karst_version"};
-  const char *labels[] = {"scenario file", "scenario hash (FNV-1a 64)", "base seed", "realisations",
-                          "karst version"};
+  const char *key_labels[] = {"scenario file", "scenario hash (FNV-1a 64)", "base seed",
+                              "realisations", "karst version"};
   karst_i_buf_puts(&b, "<tr><th class=\"l\">name</th><td class=\"l\">");
   karst_i_buf_escape(&b, name ? name : "–");
   karst_i_buf_puts(&b, "</td></tr>");
   for (int i = 0; i < 5; i++) {
     const char *v = json_scalar_text(karst_json_get(summary, keys[i]));
-    karst_i_buf_printf(&b, "<tr><th class=\"l\">%s</th><td class=\"l\">", labels[i]);
-    karst_i_buf_escape(&b, v ? v : "–");
+    char *norm = i == 0 && v ? scenario_path(page_dir, v) : NULL;
+    karst_i_buf_printf(&b, "<tr><th class=\"l\">%s</th><td class=\"l\">", key_labels[i]);
+    karst_i_buf_escape(&b, norm ? norm : v ? v : "–");
     karst_i_buf_puts(&b, "</td></tr>");
+    free(norm);
   }
   karst_i_buf_printf(&b,
                      "<tr><th class=\"l\">members in metrics.csv</th><td class=\"l\">%" PRId64
@@ -654,24 +504,47 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
     html_compare_table(&b, &res[s]);
   }
 
-  /* --- histograms --- */
-  karst_i_buf_puts(&b, "<h2>Metrics of the members</h2>\n<p>Bars: members per bin. Dashed red "
-                       "line: survey value. Grey band: range of the 34 published caves.</p>\n"
-                       "<div class=\"grid\">\n");
+  /* --- histograms, after the metrics shown as values --- */
+  const int n_sv = opt->n_surveys > 0 ? n_res : 0;
+  karst_i_buf_puts(&b, "<h2>Metrics of the members</h2>\n");
+  html_constant_metrics(&b, &table, res, n_sv);
+  karst_i_buf_puts(&b, "<p>Bars: members per bin. Dashed red lines: survey values (an axis "
+                       "broken by // gives a survey far from the members its own stretch). Grey "
+                       "band: range of the 34 published caves.");
+  for (int s = 0; n_sv > 1 && s < n_sv; s++) {
+    karst_i_buf_printf(&b,
+                       " <svg width=\"30\" height=\"8\" role=\"img\"><title>survey %d</title>"
+                       "<line x1=\"1\" y1=\"4\" x2=\"29\" y2=\"4\" stroke=\"%s\" "
+                       "stroke-width=\"2\" stroke-dasharray=\"%s\"/></svg> survey %d: ",
+                       s + 1, karst_palette_role(KARST_PALETTE_ROLE_SURVEY), karst_i_survey_dash(s),
+                       s + 1);
+    karst_i_buf_escape(&b, labels[s] ? labels[s] : "");
+    karst_i_buf_puts(&b, s + 1 < n_sv ? ";" : ".");
+  }
+  karst_i_buf_puts(&b, "</p>\n<div class=\"grid\">\n");
   for (int c = 0; c < table.n_cols; c++) {
+    double v;
+    karst_int_t k;
+    if (karst_i_column_constant(&table, c, &v, &k)) continue;
     karst_i_buf_puts(&b, "<figure>");
-    plot_histogram(&b, &table, c, res, opt->n_surveys > 0 ? n_res : 0);
+    karst_i_plot_histogram(&b, &table, c, res, n_sv);
     karst_i_buf_puts(&b, "</figure>\n");
   }
   karst_i_buf_puts(&b, "</div>\n");
 
-  /* --- member networks: rose, degree distribution, plan and section views --- */
-  karst_int_t pooled = 0, nread = 0;
-  karst_i_buf_t maps, problems;
-  karst_i_buf_init(&maps);
-  karst_i_buf_init(&problems);
+  /* --- member networks: pooled for the rose, degrees and stereonet; the first drawn --- */
+  karst_int_t pooled = 0;
   karst_int_t upto = table.n_rows;
   if (upto > opt->members_pooled) upto = opt->members_pooled;
+  int want = opt->members_drawn > 0 ? opt->members_drawn : 0;
+  drawn = calloc((size_t)(want > 0 ? want : 1), sizeof *drawn);
+  mnames = calloc((size_t)(want > 0 ? want : 1), sizeof *mnames);
+  mseeds = calloc((size_t)(want > 0 ? want : 1), sizeof *mseeds);
+  if (!drawn || !mnames || !mseeds) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (karst_int_t r = 0; r < upto; r++) {
     char mname[32], rel[96];
     karst_i_member_name(mname, table.index[r]);
@@ -688,53 +561,84 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
     karst_error_t rerr = opt->read_network
                              ? opt->read_network(&mctx, opt->read_user, vtp, &net)
                              : karst_read_network(&mctx, vtp, KARST_FORMAT_AUTO, &net);
+    free(vtp);
     if (rerr) {
       karst_i_buf_puts(&problems, "<li>");
       karst_i_buf_escape(&problems, mctx.errmsg[0] ? mctx.errmsg : karst_strerror(rerr));
       karst_i_buf_puts(&problems, "</li>\n");
-      free(vtp);
       continue;
     }
-    free(vtp);
     pooled++;
-    rose_accumulate(&net, rose, nrose);
-    degree_accumulate(&net, deg);
-    if (nread < opt->members_drawn) {
-      char title[96];
-      karst_i_buf_printf(&maps, "<h3>member %s (seed %" PRIu64 ")</h3><div class=\"grid\">", mname,
-                         table.seed[r]);
-      snprintf(title, sizeof title, "member %s, plan view (x-y)", mname);
-      karst_i_buf_puts(&maps, "<figure>");
-      plot_map(&maps, &net, 1, title);
-      karst_i_buf_puts(&maps, "<figcaption>plan (x–y)</figcaption></figure><figure>");
-      snprintf(title, sizeof title, "member %s, cross-section (x-z)", mname);
-      plot_map(&maps, &net, 2, title);
-      karst_i_buf_puts(&maps, "<figcaption>cross-section (x–z)</figcaption></figure></div>\n");
-      nread++;
+    karst_i_rose_accumulate(&net, rose, nrose);
+    karst_i_degree_accumulate(&net, deg, DEGREE_PLOT_MAX);
+    karst_i_stereo_accumulate(&stereo, &net);
+    if (n_drawn < want) {
+      karst_i_bounds_add(&net, lo, hi);
+      snprintf(mnames[n_drawn], 32, "%s", mname);
+      mseeds[n_drawn] = table.seed[r];
+      drawn[n_drawn++] = net; /* kept: the next member starts from a fresh network */
+      karst_network_init(&net);
     }
   }
   const karst_report_survey_t *s0 = opt->n_surveys > 0 ? &opt->surveys[0] : NULL;
+  const char *s0_label = s0 ? labels[0] : "";
   if (s0) {
-    rose_accumulate(&s0->net, srose, nrose);
-    degree_accumulate(&s0->net, sdeg);
+    karst_i_rose_accumulate(&s0->net, srose, nrose);
+    karst_i_degree_accumulate(&s0->net, sdeg, DEGREE_PLOT_MAX);
   }
+  karst_i_plane_t planes[16];
+  int n_planes = read_planes(params, planes, 16);
   karst_i_buf_printf(&b,
                      "<h2>Orientation and degree</h2>\n<p>Pooled over the first %" PRId64
                      " members. Rose: conduit azimuths (clockwise from grid north, 10° bins, "
-                     "drawn symmetrically), weighted by horizontal length.</p>\n"
+                     "drawn symmetrically), weighted by horizontal length. Stereonet: each "
+                     "conduit as a line (trend and plunge of its downward direction), weighted "
+                     "by length; the scenario's fracture families as great circles.</p>\n"
                      "<div class=\"grid\"><figure>",
                      pooled);
-  plot_rose(&b, rose, s0 ? srose : NULL, nrose, s0 ? s0->label : "");
+  karst_i_plot_rose(&b, rose, s0 ? srose : NULL, nrose, pooled, s0_label);
   karst_i_buf_puts(&b, "<figcaption>length-weighted orientation rose</figcaption></figure>"
                        "<figure>");
-  plot_degrees(&b, deg, s0 ? sdeg : NULL, s0 ? s0->label : "");
+  karst_i_plot_stereonet(&b, &stereo, s0 ? &s0->net : NULL, s0_label, planes, n_planes, pooled);
+  karst_i_buf_puts(&b, "<figcaption>stereonet of conduit orientations</figcaption></figure>"
+                       "<figure>");
+  karst_i_plot_degrees(&b, deg, s0 ? sdeg : NULL, DEGREE_PLOT_MAX, s0_label);
   karst_i_buf_puts(&b, "<figcaption>degree distribution (full graph)</figcaption></figure>"
-                       "</div>\n<h2>Members: plan and cross-section</h2>\n<p class=\"legend\">");
-  for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++)
-    karst_i_buf_printf(&b, "<span><i class=\"sw\" style=\"background:%s\"></i>%s</span>",
-                       tunnel_colour[t], karst_tunnel_type_name(t));
-  karst_i_buf_printf(&b, "<span><i class=\"sw\" style=\"background:%s\"></i>no type</span></p>\n",
-                     no_type_colour);
+                       "</div>\n");
+
+  /* --- the members' views, one frame for all --- */
+  karst_i_frame_t frame;
+  karst_i_frame_make(&frame, lo, hi, s0 && s0->net.n_edges > 0 ? &s0->net : NULL);
+  karst_i_buf_puts(&b, "<h2>Members: plan, sections and oblique view</h2>\n");
+  karst_i_buf_printf(&b,
+                     "<p>Every view of every member has the same scale (%.3g px per metre; "
+                     "the sections' vertical exaggeration is written on them). ",
+                     frame.scale);
+  if (s0 && s0->net.n_edges > 0)
+    karst_i_buf_puts(&b, frame.survey_inside
+                             ? "The survey is drawn in red in each member's frame (their "
+                               "coordinates overlap).</p>\n"
+                             : "The survey's coordinates do not overlap the members': it has "
+                               "its own row of views at the same scale.</p>\n");
+  else
+    karst_i_buf_puts(&b, "</p>\n");
+  html_type_legend(&b, s0 && s0->net.n_edges > 0 && frame.survey_inside);
+  const karst_network_t *sv_net = s0 && s0->net.n_edges > 0 ? &s0->net : NULL;
+  for (karst_int_t i = 0; i < n_drawn; i++) {
+    char title[96];
+    snprintf(title, sizeof title, "member %s", mnames[i]);
+    karst_i_buf_printf(&maps, "<h3>member %s (seed %" PRIu64 ")</h3><div class=\"grid\">",
+                       mnames[i], mseeds[i]);
+    karst_i_plot_views(&maps, &frame, &drawn[i], frame.survey_inside ? sv_net : NULL, title);
+    karst_i_buf_puts(&maps, "</div>\n");
+  }
+  if (sv_net && !frame.survey_inside) {
+    karst_i_buf_puts(&maps, "<h3>survey ");
+    karst_i_buf_escape(&maps, s0_label);
+    karst_i_buf_puts(&maps, " (its own frame, same scale)</h3><div class=\"grid\">");
+    karst_i_plot_views(&maps, &frame, sv_net, sv_net, "survey");
+    karst_i_buf_puts(&maps, "</div>\n");
+  }
   if (maps.s) karst_i_buf_puts(&b, maps.s);
   if (problems.s) {
     karst_i_buf_puts(&b, "<p>Members that could not be read:</p><ul>\n");
@@ -742,17 +646,17 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
     karst_i_buf_puts(&b, "</ul>\n");
   }
   if (maps.failed || problems.failed) b.failed = 1;
-  karst_i_buf_destroy(&maps);
-  karst_i_buf_destroy(&problems);
 
   /* --- versions --- */
   karst_i_buf_puts(&b, "<h2>Software</h2>\n<pre>");
   karst_i_buf_escape(&b, versions);
   karst_i_buf_puts(&b, "</pre>\n");
   if (have_pub) {
+    char *shown = shown_path(page_dir, pubpath);
     karst_i_buf_printf(&b, "<p>Published ranges: %d caves read from ", pub.n_caves);
-    karst_i_buf_escape(&b, pubpath);
-    karst_i_buf_puts(&b, ".</p>\n");
+    karst_i_buf_escape(&b, shown ? shown : pubpath);
+    karst_i_buf_puts(&b, " (relative to this page).</p>\n");
+    free(shown);
   }
   karst_i_buf_puts(&b, "</body></html>\n");
   if (b.failed) {
@@ -771,13 +675,27 @@ cleanup:
     for (int s = 0; s < n_res; s++)
       karst_compare_result_destroy(&res[s]);
   free(res);
+  if (labels)
+    for (int s = 0; s < n_res; s++)
+      free(labels[s]);
+  free(labels);
+  if (drawn)
+    for (karst_int_t i = 0; i < n_drawn; i++)
+      karst_network_destroy(&drawn[i]);
+  free(drawn);
+  free(mnames);
+  free(mseeds);
+  karst_i_stereo_destroy(&stereo);
   karst_network_destroy(&net);
   karst_i_buf_destroy(&b);
+  karst_i_buf_destroy(&maps);
+  karst_i_buf_destroy(&problems);
   karst_published_destroy(&pub);
   karst_ensemble_table_destroy(&table);
   karst_json_free(summary);
   free(versions);
   free(mpath);
   free(jpath);
+  free(page_dir);
   return err;
 }

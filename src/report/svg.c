@@ -11,6 +11,8 @@
  *  at least KARST_I_TICKS_EMPTY_MIN_WIDTH in data units. */
 #define KARST_I_TICKS_EMPTY_WIDTH 0.1
 #define KARST_I_TICKS_EMPTY_MIN_WIDTH 1.0
+/** Text boxes are estimated this much wider than the font metrics give (kerning, hinting). */
+#define KARST_I_TEXT_WIDTH_MARGIN 1.04
 
 void karst_i_buf_init(karst_i_buf_t *b) {
   memset(b, 0, sizeof *b);
@@ -233,6 +235,91 @@ void karst_i_svg_marker(karst_i_buf_t *b, double x, double y, double r, const ch
                      y, r, fill ? fill : "none", stroke ? stroke : "none");
 }
 
+/**
+ * Width in pixels of @p s set in the report's font (DejaVu Sans, the widest of the common
+ * sans-serif faces, and the one the report's style sheet asks for first) of @p font_px pixels:
+ * per-character advance widths in em from DejaVu Sans 2.37 (digits 0.636, narrow letters and
+ * punctuation 0.28-0.32, f j r t and brackets 0.35-0.41, m w M W % 0.82-0.99, capitals
+ * 0.68-0.78, non-ASCII such as "…" up to 1), each class at its widest, times
+ * KARST_I_TEXT_WIDTH_MARGIN, so a layout that avoids these boxes avoids the rendered ones.
+ * O(length).
+ */
+double karst_i_text_width(const char *s, double font_px) {
+  double em = 0;
+  for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+    unsigned char c = *p;
+    if ((c & 0xC0) == 0x80) continue; /* continuation byte */
+    if (c >= 0x80) /* "…" and "–" are as wide as an em in DejaVu Sans, "°" half */
+      em += 1.0;
+    else if (strchr("il.,:;'|!", c))
+      em += 0.32;
+    else if (strchr("fjrt()[] -/", c))
+      em += 0.41;
+    else if (strchr("mwMW%", c))
+      em += 0.99;
+    else if (c >= 'A' && c <= 'Z')
+      em += 0.78;
+    else
+      em += 0.64;
+  }
+  return em * font_px * KARST_I_TEXT_WIDTH_MARGIN;
+}
+
+/** @p text cut (with "…") to at most @p width pixels of the note font. O(length²). */
+void karst_i_fit_text(char *out, size_t size, const char *text, double width) {
+  snprintf(out, size, "%s", text);
+  if (karst_i_text_width(out, KARST_I_NOTE_FONT) <= width) return;
+  size_t n = strlen(out);
+  for (; n > 0; n--) {
+    if (((unsigned char)text[n] & 0xC0) == 0x80) continue; /* cut between UTF-8 characters */
+    if (n + 4 > size) continue;
+    memcpy(out, text, n);
+    memcpy(out + n, "…", 4); /* three bytes and the terminator */
+    if (karst_i_text_width(out, KARST_I_NOTE_FONT) <= width) return;
+  }
+  snprintf(out, size, "…");
+}
+
+void karst_i_svg_rect_class(karst_i_buf_t *b, double x, double y, double w, double h,
+                            const char *fill, const char *cls) {
+  karst_i_buf_printf(b,
+                     "<rect class=\"%s\" x=\"%.2f\" y=\"%.2f\" width=\"%.2f\" height=\"%.2f\" "
+                     "fill=\"%s\"/>\n",
+                     cls, x, y, w < 0 ? 0 : w, h < 0 ? 0 : h, fill);
+}
+
+void karst_i_svg_line_class(karst_i_buf_t *b, double x1, double y1, double x2, double y2,
+                            const char *stroke, double width, const char *dash, const char *cls) {
+  karst_i_buf_printf(b,
+                     "<line class=\"%s\" x1=\"%.2f\" y1=\"%.2f\" x2=\"%.2f\" y2=\"%.2f\" "
+                     "stroke=\"%s\" stroke-width=\"%g\"",
+                     cls, x1, y1, x2, y2, stroke, width);
+  if (dash) karst_i_buf_printf(b, " stroke-dasharray=\"%s\"", dash);
+  karst_i_buf_puts(b, "/>\n");
+}
+
+/**
+ * Tick marks and labels along the bottom of @p p between pixels @p px0 and @p px1 for the
+ * values of @p t; a label is left out when its box would come closer than
+ * KARST_I_LABEL_GAP pixels to the previous one kept (*@p right, the right end of the last
+ * label, updated; start it at -INFINITY). O(ticks).
+ */
+void karst_i_svg_xticks(karst_i_buf_t *b, const karst_i_plot_t *p, const karst_i_ticks_t *t,
+                        double px0, double px1, double *right) {
+  char lab[64];
+  for (int i = 0; i < t->count; i++) {
+    double v = t->first + i * t->step;
+    double px = karst_i_plot_px(p, v);
+    if (px < px0 - 0.5 || px > px1 + 0.5) continue;
+    karst_i_svg_line(b, px, p->y + p->h, px, p->y + p->h + 4, "#444", 1, NULL);
+    karst_i_tick_label(lab, sizeof lab, v, t->decimals);
+    double w = karst_i_text_width(lab, KARST_I_TICK_FONT);
+    if (px - w / 2 < *right + KARST_I_LABEL_GAP) continue;
+    karst_i_svg_text(b, px, p->y + p->h + 15, "middle", "tick", lab);
+    *right = px + w / 2;
+  }
+}
+
 int karst_i_svg_axes(karst_i_buf_t *b, karst_i_plot_t *p, int expand, int xticks, int yticks,
                      const char *xlabel, const char *ylabel) {
   karst_i_ticks_t tx, ty;
@@ -250,27 +337,42 @@ int karst_i_svg_axes(karst_i_buf_t *b, karst_i_plot_t *p, int expand, int xticks
     widen(&p->ymin, &p->ymax);
   }
   karst_i_svg_rect(b, p->x, p->y, p->w, p->h, "none", "#444", 1);
-  char lab[64];
-  for (int i = 0; i < tx.count; i++) {
-    double v = tx.first + i * tx.step;
-    double px = karst_i_plot_px(p, v);
-    karst_i_svg_line(b, px, p->y + p->h, px, p->y + p->h + 4, "#444", 1, NULL);
-    karst_i_tick_label(lab, sizeof lab, v, tx.decimals);
-    karst_i_svg_text(b, px, p->y + p->h + 15, "middle", "tick", lab);
-  }
-  for (int i = 0; i < ty.count; i++) {
-    double v = ty.first + i * ty.step;
-    double py = karst_i_plot_py(p, v);
-    karst_i_svg_line(b, p->x - 4, py, p->x, py, "#444", 1, NULL);
-    karst_i_tick_label(lab, sizeof lab, v, ty.decimals);
-    karst_i_svg_text(b, p->x - 6, py + 4, "end", "tick", lab);
-  }
+  double right = -INFINITY;
+  karst_i_svg_xticks(b, p, &tx, p->x, p->x + p->w, &right);
+  double widest = karst_i_svg_yticks(b, p, &ty);
   if (xlabel) karst_i_svg_text(b, p->x + p->w / 2, p->y + p->h + 30, "middle", "axis", xlabel);
-  if (ylabel) {
-    karst_i_buf_printf(b, "<g transform=\"translate(%.2f %.2f) rotate(-90)\">", p->x - 42,
-                       p->y + p->h / 2);
-    karst_i_svg_text(b, 0, 0, "middle", "axis", ylabel);
-    karst_i_buf_puts(b, "</g>\n");
-  }
+  if (ylabel) karst_i_svg_ylabel(b, p, widest, ylabel);
   return 0;
+}
+
+/**
+ * Tick marks and labels of @p t along the left side of @p p; a label is left out when it
+ * would come closer than KARST_I_LABEL_GAP to the previous one kept (above or below).
+ * @return the width of the widest label drawn (for karst_i_svg_ylabel). O(ticks).
+ */
+double karst_i_svg_yticks(karst_i_buf_t *b, const karst_i_plot_t *p, const karst_i_ticks_t *t) {
+  char lab[64];
+  double widest = 0, last = INFINITY;
+  for (int i = 0; i < t->count; i++) {
+    double v = t->first + i * t->step;
+    double py = karst_i_plot_py(p, v);
+    if (py < p->y - 0.5 || py > p->y + p->h + 0.5) continue;
+    karst_i_svg_line(b, p->x - 4, py, p->x, py, "#444", 1, NULL);
+    if (py > last - KARST_I_TICK_FONT - KARST_I_LABEL_GAP) continue;
+    karst_i_tick_label(lab, sizeof lab, v, t->decimals);
+    karst_i_svg_text(b, p->x - 6, py + 4, "end", "tick", lab);
+    widest = fmax(widest, karst_i_text_width(lab, KARST_I_TICK_FONT));
+    last = py;
+  }
+  return widest;
+}
+
+/** The title of the y axis, rotated, left of tick labels at most @p widest pixels wide. */
+void karst_i_svg_ylabel(karst_i_buf_t *b, const karst_i_plot_t *p, double widest,
+                        const char *label) {
+  /* The rotated text's glyphs reach about one font height left of its baseline. */
+  double x = fmax(p->x - 6 - widest - KARST_I_LABEL_GAP - 3, KARST_I_AXIS_FONT);
+  karst_i_buf_printf(b, "<g transform=\"translate(%.2f %.2f) rotate(-90)\">", x, p->y + p->h / 2);
+  karst_i_svg_text(b, 0, 0, "middle", "axis", label);
+  karst_i_buf_puts(b, "</g>\n");
 }

@@ -74,6 +74,33 @@ void karst_i_svg_polyline(karst_i_buf_t *b, const double *xy, int n, const char 
 void karst_i_svg_marker(karst_i_buf_t *b, double x, double y, double r, const char *fill,
                         const char *stroke);
 
+/** Font sizes (px) of the CSS classes tick, note and axis (report.c's style sheet). */
+#define KARST_I_TICK_FONT 10.0
+#define KARST_I_NOTE_FONT 10.0
+#define KARST_I_AXIS_FONT 11.0
+/** Least distance in pixels between two text boxes, and between a text box and data. */
+#define KARST_I_LABEL_GAP 3.0
+
+/** Estimated width in pixels of @p s in the sans-serif font of @p font_px pixels. */
+double karst_i_text_width(const char *s, double font_px);
+/** @p text, cut with "…" to at most @p width pixels of the note font. */
+void karst_i_fit_text(char *out, size_t size, const char *text, double width);
+/** A filled rectangle of CSS class @p cls (data marks: "bar", "band"). */
+void karst_i_svg_rect_class(karst_i_buf_t *b, double x, double y, double w, double h,
+                            const char *fill, const char *cls);
+/** A line of CSS class @p cls (data marks: "survey", "structure"). */
+void karst_i_svg_line_class(karst_i_buf_t *b, double x1, double y1, double x2, double y2,
+                            const char *stroke, double width, const char *dash, const char *cls);
+/** X tick marks and labels of @p t within pixels [px0, px1], labels never closer than
+ *  KARST_I_LABEL_GAP (*@p right: right end of the last label, -INFINITY to start). */
+void karst_i_svg_xticks(karst_i_buf_t *b, const karst_i_plot_t *p, const karst_i_ticks_t *t,
+                        double px0, double px1, double *right);
+/** Y tick marks and labels; returns the widest label's width. */
+double karst_i_svg_yticks(karst_i_buf_t *b, const karst_i_plot_t *p, const karst_i_ticks_t *t);
+/** The rotated y-axis title, left of labels @p widest pixels wide. */
+void karst_i_svg_ylabel(karst_i_buf_t *b, const karst_i_plot_t *p, double widest,
+                        const char *label);
+
 /**
  * Axes with ticks and labels. When @p expand is set, the plot ranges are
  * widened to loose nice ticks first; otherwise ticks are placed inside the

@@ -67,7 +67,8 @@ EOF
 out=$("$KARST" generate "$TMP/small.yaml" -o "$TMP/a" --seed 5 --samples --threads 1 --quiet 2>&1)
 status=$?
 [ $status -eq 0 ] || fail "generate failed: $out"
-for f in network.vtp network_nodes.dat network_links.dat samples.vtp geology.vtp run.json; do
+for f in network.vtp network_nodes.dat network_links.dat samples.vtp geology.vtp network.paraview.py \
+  run.json; do
   [ -s "$TMP/a/$f" ] || fail "$f missing or empty"
 done
 ls -A "$TMP/a" | grep -q '^\.' && fail "temporary files left behind: $(ls -A "$TMP/a")"
@@ -138,7 +139,7 @@ EOF
 
 # Same seed: byte-identical outputs, also with another thread count.
 "$KARST" generate "$TMP/small.yaml" -o "$TMP/b" --seed 5 --samples --threads 2 --quiet || fail "second run failed"
-for f in network.vtp network_nodes.dat network_links.dat samples.vtp geology.vtp; do
+for f in network.vtp network_nodes.dat network_links.dat samples.vtp geology.vtp network.paraview.py; do
   cmp -s "$TMP/a/$f" "$TMP/b/$f" || fail "$f differs between two runs with seed 5"
 done
 
@@ -174,10 +175,11 @@ cp -r "$TMP/b" "$TMP/g"
 rm "$TMP/g/run.json" && mkdir -p "$TMP/g/run.json/x"
 "$KARST" generate "$TMP/small.yaml" -o "$TMP/g" --seed 6 --samples --quiet 2>/dev/null
 [ $? -eq 1 ] || fail "a rerun that cannot write run.json should exit 1"
-for f in network.vtp network_nodes.dat network_links.dat samples.vtp geology.vtp; do
+for f in network.vtp network_nodes.dat network_links.dat samples.vtp geology.vtp \
+  network.paraview.py; do
   cmp -s "$TMP/b/$f" "$TMP/g/$f" || fail "$f of the previous set changed by a failed run"
 done
-[ "$(ls -A "$TMP/g" | wc -l)" -eq 6 ] || fail "a failed rerun left temporaries: $(ls -A "$TMP/g")"
+[ "$(ls -A "$TMP/g" | wc -l)" -eq 7 ] || fail "a failed rerun left temporaries: $(ls -A "$TMP/g")"
 
 # A file system that refuses the writes (a full disk; here the file-size limit of ulimit -f, with
 # SIGXFSZ ignored so that write(2) fails with EFBIG instead): exit 1, a message naming the output

@@ -22,7 +22,7 @@
 /* The row docs/arrays.md must have for entry @p a. */
 static void expected_row(const karst_array_info_t *a, char *out, size_t size) {
   int n = snprintf(out, size, "| `%s` | %s | %s | %s | ", a->name, a->where, a->unit, a->meaning);
-  const karst_palette_t *p = karst_palette_find(a->name);
+  const karst_palette_t *p = karst_palette_find_role(a->name, a->role);
   if (a->colouring == KARST_PALETTE_CATEGORICAL && p) {
     n += snprintf(out + n, size - (size_t)n, "categories (`%s`):", a->names);
     for (int k = 0; k < p->n; k++)
@@ -38,35 +38,25 @@ static void expected_row(const karst_array_info_t *a, char *out, size_t size) {
   snprintf(out + n, size - (size_t)n, " |");
 }
 
-static char *read_all(const char *path) {
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return NULL;
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  fseek(fp, 0, SEEK_SET);
-  char *s = malloc((size_t)n + 1);
-  size_t got = fread(s, 1, (size_t)n, fp);
-  s[got] = '\0';
-  fclose(fp);
-  return s;
-}
-
 static void test_entries(void **state) {
   (void)state;
   int n = 0;
   const karst_array_info_t *a = karst_arrays_list(&n);
   assert_true(n >= 18);
   for (int i = 0; i < n; i++) {
-    assert_ptr_equal(karst_arrays_find(a[i].name), &a[i]);
+    assert_ptr_equal(karst_arrays_find_role(a[i].name, a[i].role), &a[i]);
     assert_true(a[i].where && *a[i].where && a[i].unit && *a[i].unit && a[i].title && *a[i].title &&
                 a[i].meaning && *a[i].meaning);
-    for (int j = 0; j < i; j++)
-      assert_string_not_equal(a[i].name, a[j].name);
+    for (int j = 0; j < i; j++) /* one entry per name and kind of file */
+      assert_false(
+          strcmp(a[i].name, a[j].name) == 0 &&
+          (a[i].role && a[j].role ? strcmp(a[i].role, a[j].role) == 0 : a[i].role == a[j].role));
     if (strcmp(a[i].unit, KARST_ARRAYS_UNIT_TEXT) == 0) continue;
     if (a[i].colouring == KARST_PALETTE_CATEGORICAL) {
       /* categories from the palette, named in the file by a "*_names" array */
-      const karst_palette_t *p = karst_palette_find(a[i].name);
+      const karst_palette_t *p = karst_palette_find_role(a[i].name, a[i].role);
       if (!p) fail_msg("categorical array %s has no palette entry", a[i].name);
+      if (a[i].role) assert_string_equal(p->role, a[i].role);
       assert_int_equal(p->kind, KARST_PALETTE_CATEGORICAL);
       assert_non_null(a[i].names);
       assert_string_equal(a[i].unit, KARST_ARRAYS_UNIT_CATEGORY);
@@ -85,13 +75,13 @@ static void test_entries(void **state) {
   int np = 0;
   const karst_palette_t *p = karst_palette_list(&np);
   for (int k = 0; k < np; k++)
-    assert_non_null(karst_arrays_find(p[k].array));
+    assert_non_null(karst_arrays_find_role(p[k].array, p[k].role));
 }
 
 /* docs/arrays.md: one row per entry, identical to what the dictionary says, and no other. */
 static void test_docs_agree(void **state) {
   (void)state;
-  char *md = read_all(KARST_SOURCE_DIR "/docs/arrays.md");
+  char *md = test_util_read_file(KARST_SOURCE_DIR "/docs/arrays.md");
   assert_non_null(md);
   int n = 0, bad = 0;
   const karst_array_info_t *a = karst_arrays_list(&n);

@@ -71,13 +71,17 @@ static void test_every_entry(void **state) {
   const karst_palette_t *p = karst_palette_list(&n);
   assert_true(n >= 9);
   for (int i = 0; i < n; i++) {
-    assert_ptr_equal(karst_palette_find(p[i].array), &p[i]);
+    assert_ptr_equal(karst_palette_find_role(p[i].array, p[i].role), &p[i]);
+    for (int j = 0; j < i; j++) /* one entry per name and kind of file */
+      assert_false(
+          strcmp(p[i].array, p[j].array) == 0 &&
+          (p[i].role && p[j].role ? strcmp(p[i].role, p[j].role) == 0 : p[i].role == p[j].role));
     assert_non_null(p[i].where);
     if (p[i].kind != KARST_PALETTE_CATEGORICAL) {
       assert_int_equal(p[i].n, 0);
       continue;
     }
-    assert_true(p[i].n >= 2);
+    assert_true(p[i].n >= 1);
     /* Codes in order: an optional -1 ("none"), then 0, 1, 2, ... */
     int first = p[i].categories[0].code;
     assert_true(first == 0 || first == -1);
@@ -133,6 +137,38 @@ static void test_names_match_the_enums(void **state) {
   assert_int_equal(b->n, 6);
   assert_string_equal(karst_palette_category(b, 5)->name, "columnar");
   assert_int_equal(karst_palette_find("generation")->kind, KARST_PALETTE_SEQUENTIAL);
+  /* "feature" means a mesh's surface detail in a mesh, what a polygon is in geology.vtp. */
+  const karst_palette_t *fm = karst_palette_find_role("feature", "mesh");
+  const karst_palette_t *fg = karst_palette_find_role("feature", "geology");
+  assert_non_null(fm);
+  assert_non_null(fg);
+  assert_ptr_not_equal(fm, fg);
+  assert_string_equal(karst_palette_category(fm, 1)->name, "speleothem");
+  assert_int_equal(fg->n, KARST_GEOLOGY_FEATURE_COUNT);
+  for (int c = 0; c < KARST_GEOLOGY_FEATURE_COUNT; c++)
+    assert_string_equal(karst_palette_category(fg, c)->name, karst_geology_feature_name(c));
+  for (int c = 0; c < KARST_ZONE_COUNT; c++)
+    assert_string_equal(karst_palette_category(z, c)->name, karst_zone_name(c));
+  assert_null(karst_palette_find_role("feature", "network")); /* no plain "feature" entry */
+  assert_ptr_equal(karst_palette_find_role("tunnel_type", "mesh"), t); /* the plain entry */
+}
+
+/* Categories an entry does not list (springs): the cycle, by code; grey below 0. */
+static void test_cycle(void **state) {
+  (void)state;
+  double rgb[3];
+  for (int c = 0; c < 7; c++) {
+    assert_int_equal(karst_palette_hex_rgb(karst_palette_cycle(c), rgb), 0);
+    assert_string_equal(karst_palette_cycle(c), karst_palette_cycle(c + 7));
+    assert_string_not_equal(karst_palette_cycle(c), "#000000"); /* black is the text's colour */
+    for (int d = 0; d < c; d++)
+      assert_true(delta_e(karst_palette_cycle(c), karst_palette_cycle(d)) >= MIN_DELTA_E);
+  }
+  assert_string_equal(karst_palette_cycle(-1), karst_palette_role(KARST_PALETTE_ROLE_NONE));
+  const karst_palette_t *s = karst_palette_find("spring");
+  assert_non_null(s);
+  assert_int_equal(s->n, 1);
+  assert_int_equal(s->categories[0].code, -1);
 }
 
 /* Ramps: endpoints exact, midpoints linear between control points (by hand). */
@@ -184,7 +220,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_lab_by_hand),           cmocka_unit_test(test_every_entry),
       cmocka_unit_test(test_names_match_the_enums), cmocka_unit_test(test_ramps),
-      cmocka_unit_test(test_hex_and_roles),
+      cmocka_unit_test(test_hex_and_roles),         cmocka_unit_test(test_cycle),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

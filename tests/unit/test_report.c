@@ -2,7 +2,8 @@
  * The HTML report on an ensemble built with a fake generator: every plot is
  * present, each <svg> is well-formed XML (Python's parser), there is no script
  * and no external reference, and headless Chromium renders it without a
- * console error (when chromium is installed).
+ * console error, every bar visible and no two texts overlapping (the layout
+ * check, which is shown to fail on pages broken on purpose).
  */
 #include <inttypes.h>
 #include <math.h>
@@ -170,24 +171,39 @@ static int teardown(void **state) {
   return rc;
 }
 
-static char *read_all(const char *path) {
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return NULL;
-  fseek(fp, 0, SEEK_END);
-  long n = ftell(fp);
-  fseek(fp, 0, SEEK_SET);
-  char *s = malloc((size_t)n + 1);
-  size_t got = fread(s, 1, (size_t)n, fp);
-  s[got] = '\0';
-  fclose(fp);
-  return s;
-}
-
 static int count(const char *s, const char *what) {
   int n = 0;
   for (const char *p = strstr(s, what); p; p = strstr(p + 1, what))
     n++;
   return n;
+}
+
+/* Plots the report of @p dir must hold (counted independently of the report's code): a
+ * histogram per metric column of metrics.csv whose defined values are not all equal, the rose,
+ * the stereonet and the degree distribution, four views (plan, two sections, oblique) per
+ * member drawn, and four more for the survey when the page says it has its own frame. */
+static int expected_plots(const char *dir, const char *html, int members) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_ensemble_table_t t;
+  karst_ensemble_table_init(&t);
+  char path[1200];
+  snprintf(path, sizeof path, "%s/metrics.csv", dir);
+  assert_int_equal(karst_ensemble_table_read(&ctx, path, &t), KARST_SUCCESS);
+  int vary = 0;
+  for (int c = 0; c < t.n_cols; c++) {
+    double first = NAN;
+    int differs = 0;
+    for (karst_int_t r = 0; r < t.n_rows; r++) {
+      double v = t.values[r * t.n_cols + c];
+      if (isnan(v)) continue;
+      if (isnan(first)) first = v;
+      differs |= v != first;
+    }
+    vary += differs;
+  }
+  karst_ensemble_table_destroy(&t);
+  return vary + 3 + 4 * members + (strstr(html, "its own row of views") ? 4 : 0);
 }
 
 static void make_survey(karst_report_survey_t *s) {
@@ -224,11 +240,14 @@ static void test_report_content(void **state) {
   char out[1200];
   snprintf(out, sizeof out, "%s/report.html", ens_dir);
   assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
-  char *html = read_all(out);
+  char *html = test_util_read_file(out);
   assert_non_null(html);
-  /* 4 histograms + rose + degrees + 3 members × (plan, section) = 12 plots. */
-  assert_int_equal(count(html, "<svg "), 12);
-  assert_int_equal(count(html, "</svg>"), 12);
+  /* 3 histograms ("undefined" is a row of the table of values) + rose, stereonet and degrees
+   * + 3 members × 4 views (+ 4 for the survey in its own frame). */
+  const int plots = expected_plots(ens_dir, html, 3);
+  assert_int_equal(count(html, "<svg "), plots);
+  assert_true(plots == 18 || plots == 22);
+  assert_int_equal(count(html, "</svg>"), plots);
   assert_int_equal(count(html, "<script"), 0);
   assert_int_equal(count(html, "src="), 0);
   assert_int_equal(count(html, "href="), 0);
@@ -267,9 +286,16 @@ static void test_report_content(void **state) {
   assert_non_null(strstr(html, "34 caves: 2.321 – 55.72"));
   /* Survey value line in the aspl and nodes histograms (total_length undefined). */
   assert_int_equal(count(html, "stroke-dasharray=\"5 3\""), 2);
-  assert_non_null(strstr(html, "undefined for every member"));
-  /* Maps coloured by tunnel type: at least one path in a palette colour. */
-  assert_non_null(strstr(html, "<path fill=\"none\" stroke=\"#"));
+  assert_non_null(strstr(html, "<td>undefined for every member</td>"));
+  /* Maps coloured by tunnel type: at least one path in a palette colour (tube's). */
+  assert_non_null(strstr(html, "<path class=\"network\" fill=\"none\" stroke=\"#0072B2\""));
+  /* The stereonet with the two fracture families of the parameters as great circles. */
+  assert_int_equal(count(html, "<polyline class=\"structure\""), 2);
+  assert_non_null(strstr(html, "fracture family 1: 120° / 80° (dip direction / dip)"));
+  assert_non_null(strstr(html, "fracture family 2: 030° / 60° (dip direction / dip)"));
+  /* Every axis of a metric names its quantity and unit. */
+  assert_non_null(strstr(html, "nodes of the full graph (count)"));
+  assert_non_null(strstr(html, "average shortest path length on Gs (edges)"));
   assert_non_null(strstr(html, "member 0000 (seed "));
   assert_non_null(strstr(html, "VTK 9.1"));
   assert_non_null(strstr(html, "igraph 0.10"));
@@ -280,8 +306,8 @@ static void test_report_content(void **state) {
   snprintf(cmd, sizeof cmd,
            "/usr/bin/python3 -c \"import re,sys,xml.etree.ElementTree as E; "
            "h=open('%s',encoding='utf-8').read(); b=re.findall(r'<svg .*?</svg>', h, re.S); "
-           "[E.fromstring(x) for x in b]; sys.exit(0 if len(b)==12 else 1)\"",
-           out);
+           "[E.fromstring(x) for x in b]; sys.exit(0 if len(b)==%d else 1)\"",
+           out, plots);
   assert_int_equal(system(cmd), 0);
   free(html);
   karst_report_survey_destroy(&sv);
@@ -317,7 +343,7 @@ static void test_report_parameter_rows(void **state) {
   char out[1200];
   snprintf(out, sizeof out, "%s/rows.html", ens_dir);
   assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
-  char *html = read_all(out);
+  char *html = test_util_read_file(out);
   assert_non_null(html);
   /* key_points, fractures and lenses; not mixed. */
   assert_int_equal(count(html, "<table class=\"json rows\">"), 3);
@@ -401,7 +427,7 @@ static void test_report_degraded(void **state) {
   snprintf(out, sizeof out, "%s/report_default_reader.html", ens_dir);
   /* The default reader (karst_read_network) cannot read the fake's text "network.vtp". */
   assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
-  char *html = read_all(out);
+  char *html = test_util_read_file(out);
   assert_non_null(strstr(html, "Members that could not be read"));
   assert_non_null(strstr(html, "ensemble statistics (no survey given)"));
   assert_non_null(strstr(html, "no horizontal conduits"));
@@ -451,11 +477,11 @@ static void test_report_real_files(void **state) {
   char out[1200];
   snprintf(out, sizeof out, "%s/report.html", dir);
   assert_int_equal(karst_report_write(&ctx, dir, out, &opt), KARST_SUCCESS);
-  char *html = read_all(out);
+  char *html = test_util_read_file(out);
   assert_non_null(html);
   assert_null(strstr(html, "could not be read"));
-  /* histograms of every metric + rose + degrees + 4 members x 2 views */
-  assert_int_equal(count(html, "<svg "), h.n_metrics + 2 + 8);
+  /* histograms of the metrics that vary + rose, stereonet, degrees + 4 members x 4 views */
+  assert_int_equal(count(html, "<svg "), expected_plots(dir, html, 4));
   /* Monachou's aspl (docs: 7.5810126582278485) appears as the survey value, 4 digits. */
   assert_non_null(strstr(html, "<td>7.581</td>"));
   free(html);
@@ -487,10 +513,35 @@ static void test_report_chromium(void **state) {
   snprintf(out, sizeof out, "%s/chromium.html", ens_dir);
   assert_int_equal(karst_report_write(&ctx, ens_dir, out, &opt), KARST_SUCCESS);
   karst_report_survey_destroy(&sv);
+  char *html = test_util_read_file(out);
+  assert_non_null(html);
+  const int plots = expected_plots(ens_dir, html, 4);
+  free(html);
   char cmd[4096];
-  snprintf(cmd, sizeof cmd, "bash '%s/tests/cli/test_report_chromium.sh' --check '%s' 14",
-           KARST_SOURCE_DIR, out);
+  snprintf(cmd, sizeof cmd, "bash '%s/tests/cli/test_report_chromium.sh' --check '%s' %d",
+           KARST_SOURCE_DIR, out, plots);
   assert_int_equal(system(cmd), 0);
+  /* The layout check measures: a page with a bar made 0.3 px wide, a note moved onto the one
+   * above it, a note moved into the bars, an axis without its unit, a text pushed past the
+   * plot's edge each fail it. */
+  const char *mutations[] = {
+      "re.sub(r'(<rect class=\\\"bar\\\" x=\\\"[0-9.]+\\\" y=\\\"[0-9.]+\\\" "
+      "width=\\\")[0-9.]+', r'\\g<1>0.3', s, count=1)",
+      "s.replace('y=\\\"41.00\\\" text-anchor', 'y=\\\"30.00\\\" text-anchor', 1)",
+      "s.replace('y=\\\"41.00\\\" text-anchor', 'y=\\\"175.00\\\" text-anchor', 1)",
+      "s.replace('nodes of the full graph (count)', 'nodes of the full graph', 1)",
+      "s.replace('<text x=\\\"4.00\\\" y=\\\"13.00\\\"', '<text x=\\\"300.00\\\" "
+      "y=\\\"13.00\\\"', 1)",
+  };
+  for (size_t m = 0; m < sizeof mutations / sizeof mutations[0]; m++) {
+    snprintf(cmd, sizeof cmd,
+             "/usr/bin/python3 -c \"import re, sys; s=open(sys.argv[1],encoding='utf-8').read(); "
+             "t=%s; assert t != s; open(sys.argv[2],'w',encoding='utf-8').write(t)\" '%s' "
+             "'%s.bad.html' && ! bash '%s/tests/cli/test_report_chromium.sh' --check "
+             "'%s.bad.html' %d >/dev/null",
+             mutations[m], out, out, KARST_SOURCE_DIR, out, plots);
+    if (system(cmd) != 0) fail_msg("the layout check passed a page with mutation %zu", m);
+  }
 }
 
 int main(void) {
