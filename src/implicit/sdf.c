@@ -57,6 +57,10 @@ void karst_sdf_free(karst_sdf_t *t) {
   free(t->kids);
   free(t->bvh);
   free(t->sections);
+  for (karst_int_t i = 0; i < t->n_images; i++)
+    free(t->images[i].v);
+  free(t->images);
+  free(t->warps);
   free(t);
 }
 
@@ -68,6 +72,9 @@ void karst_i_sdf_clear(karst_sdf_t *t) {
   t->n_terrains = 0;
   t->n_nodes = t->n_kids = t->n_bvh = 0;
   t->n_sections = 0;
+  for (karst_int_t i = 0; i < t->n_images; i++)
+    free(t->images[i].v);
+  t->n_images = t->n_warps = 0;
   t->root = -1;
 }
 
@@ -82,6 +89,20 @@ static karst_error_t new_node(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t
   (*nd)->kind = kind;
   (*nd)->label = KARST_SDF_NO_LABEL;
   return KARST_SUCCESS;
+}
+
+karst_error_t karst_i_sdf_new_node(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t kind,
+                                   karst_i_node_t **nd, karst_int_t *id) {
+  return new_node(ctx, t, kind, nd, id);
+}
+
+int karst_i_grow(void **p, karst_int_t *cap, karst_int_t need, size_t size) {
+  return grow(p, cap, need, size);
+}
+
+static void pad_box(double box[6]);
+void karst_i_pad_box(double box[6]) {
+  pad_box(box);
 }
 
 static void pad_box(double box[6]) {
@@ -923,6 +944,9 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     }
     break;
   }
+  case KARST_SDF_WARP:
+    v = karst_i_warp_eval(t, nd, p, ub, &lab, touched);
+    break;
   default:
     v = INFINITY;
     break;
@@ -966,10 +990,12 @@ void karst_sdf_stats(const karst_sdf_t *t, karst_sdf_stats_t *st) {
   for (karst_int_t i = 0; i < t->n_nodes; i++)
     st->by_kind[t->nodes[i].kind]++;
   st->n_bvh_nodes = t->n_bvh;
-  st->memory_bytes = sizeof *t + (size_t)t->n_nodes * sizeof *t->nodes +
-                     (size_t)t->n_kids * sizeof *t->kids + (size_t)t->n_bvh * sizeof *t->bvh +
-                     (size_t)t->n_sections * sizeof *t->sections +
-                     (size_t)t->n_terrains * sizeof *t->terrains;
+  st->memory_bytes =
+      sizeof *t + (size_t)t->n_nodes * sizeof *t->nodes + (size_t)t->n_kids * sizeof *t->kids +
+      (size_t)t->n_bvh * sizeof *t->bvh + (size_t)t->n_sections * sizeof *t->sections +
+      (size_t)t->n_terrains * sizeof *t->terrains + (size_t)t->n_warps * sizeof *t->warps;
+  for (karst_int_t i = 0; i < t->n_images; i++)
+    st->memory_bytes += (size_t)t->images[i].w * (size_t)t->images[i].h * sizeof(float);
   for (int i = 0; i < t->n_terrains; i++)
     if (t->terrains[i].z)
       st->memory_bytes +=
