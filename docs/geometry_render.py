@@ -14,7 +14,7 @@ pts = vtk.vtkPoints(); pts.SetDataTypeToDouble(); pts.SetNumberOfPoints(nv)
 for i in range(nv): pts.SetPoint(i, xyz[3*i], xyz[3*i+1], xyz[3*i+2])
 cells = vtk.vtkCellArray(); lab = vtk.vtkIntArray(); lab.SetName('tunnel_type')
 off = end + 24 * nv
-for (c, a, b, d, t) in struct.iter_unpack('<Biiii', data[off:off + 17 * nf]):
+for (c, a, b, d, t, ft) in struct.iter_unpack('<Biiiii', data[off:off + 21 * nf]):
     cells.InsertNextCell(3); cells.InsertCellPoint(a); cells.InsertCellPoint(b); cells.InsertCellPoint(d)
     lab.InsertNextValue(t)
 pd = vtk.vtkPolyData(); pd.SetPoints(pts); pd.SetPolys(cells); pd.GetCellData().SetScalars(lab)

@@ -45,6 +45,11 @@
 /* Rotation between successive noise octaves (the golden angle, radians), so
  * that the lattices of the octaves are not aligned. */
 #define OCTAVE_TURN 2.399963229728653
+/* |v_k| of the stencil (√3), and the margins of the upper bound passed to
+ * the child's evaluation at the stencil's points against rounding. */
+#define FD_REACH 1.7320508075688772
+#define FD_SLACK_REL 1e-9
+#define FD_SLACK_ABS 1e-9
 /* Widest groove accepted, in fracture spacings (bounds the work per point). */
 #define MAX_GROOVE_SPACINGS 4.0
 
@@ -69,12 +74,16 @@ void karst_warp_params_init(karst_warp_params_t *p) {
   p->band = INFINITY;
 }
 
-void karst_i_fd_gradient(const karst_sdf_t *t, karst_int_t child, const double p[3], double eps,
-                         double G[3], karst_int_t *touched) {
+void karst_i_fd_gradient(const karst_sdf_t *t, karst_int_t child, const double p[3], double f0,
+                         double eps, double G[3], karst_int_t *touched) {
+  /* the samples lie √3 ε from p, where the field is f0: they are below
+   * f0 + √3 ε (1-Lipschitz), so that bound (with a margin for rounding)
+   * keeps their values exact while the hierarchy skips far primitives */
+  double ub = f0 + FD_REACH * eps * (1 + FD_SLACK_REL) + FD_SLACK_ABS;
   G[0] = G[1] = G[2] = 0;
   for (int k = 0; k < 4; k++) {
     double q[3] = {p[0] + eps * TET[k][0], p[1] + eps * TET[k][1], p[2] + eps * TET[k][2]};
-    double f = karst_i_sdf_eval(t, child, q, INFINITY, NULL, touched);
+    double f = karst_i_sdf_eval(t, child, q, ub, NULL, touched);
     for (int c = 0; c < 3; c++)
       G[c] += TET[k][c] * f;
   }
@@ -86,17 +95,17 @@ void karst_i_fd_gradient(const karst_sdf_t *t, karst_int_t child, const double p
 /* Reliefs: values in [-1, 1] and their Lipschitz constants.               */
 /* ---------------------------------------------------------------------- */
 
-static uint64_t mix64(uint64_t z) {
+uint64_t karst_i_mix64(uint64_t z) {
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
   return z ^ (z >> 31);
 }
 
-/* A pure function of (seed, a, b, c), uniform in [0, 1). */
-static double hash_unit(uint64_t seed, uint64_t a, int64_t b, int64_t c) {
+double karst_i_hash_unit(uint64_t seed, uint64_t a, int64_t b, int64_t c) {
   uint64_t h =
-      mix64(seed ^ mix64(a * 0x9E3779B97F4A7C15ULL ^ mix64((uint64_t)b * 0xC2B2AE3D27D4EB4FULL ^
-                                                           (uint64_t)c * 0x165667B19E3779F9ULL)));
+      karst_i_mix64(seed ^ karst_i_mix64(a * 0x9E3779B97F4A7C15ULL ^
+                                         karst_i_mix64((uint64_t)b * 0xC2B2AE3D27D4EB4FULL ^
+                                                       (uint64_t)c * 0x165667B19E3779F9ULL)));
   return (double)(h >> 11) * 0x1p-53;
 }
 
@@ -107,10 +116,10 @@ static double value_noise(uint64_t seed, int octave, double x, double y) {
   double fx = floor(x), fy = floor(y), tx = x - fx, ty = y - fy;
   int64_t i = (int64_t)fx, j = (int64_t)fy;
   double sx = tx * tx * (3 - 2 * tx), sy = ty * ty * (3 - 2 * ty);
-  double v00 = 2 * hash_unit(seed, (uint64_t)octave, i, j) - 1;
-  double v10 = 2 * hash_unit(seed, (uint64_t)octave, i + 1, j) - 1;
-  double v01 = 2 * hash_unit(seed, (uint64_t)octave, i, j + 1) - 1;
-  double v11 = 2 * hash_unit(seed, (uint64_t)octave, i + 1, j + 1) - 1;
+  double v00 = 2 * karst_i_hash_unit(seed, (uint64_t)octave, i, j) - 1;
+  double v10 = 2 * karst_i_hash_unit(seed, (uint64_t)octave, i + 1, j) - 1;
+  double v01 = 2 * karst_i_hash_unit(seed, (uint64_t)octave, i, j + 1) - 1;
+  double v11 = 2 * karst_i_hash_unit(seed, (uint64_t)octave, i + 1, j + 1) - 1;
   return (1 - sy) * ((1 - sx) * v00 + sx * v10) + sy * ((1 - sx) * v01 + sx * v11);
 }
 
@@ -198,7 +207,7 @@ static double fractures3(const karst_i_warp_t *w, const double p[3]) {
     double tk = (n[0] * p[0] + n[1] * p[1] + n[2] * p[2]) / w->spacing, m = 0;
     int64_t i0 = (int64_t)floor(tk - h) - 1, i1 = (int64_t)floor(tk + h);
     for (int64_t i = i0; i <= i1; i++) {
-      double x = (tk - (double)i - hash_unit(w->seed, (uint64_t)k + 1, i, 0)) / h;
+      double x = (tk - (double)i - karst_i_hash_unit(w->seed, (uint64_t)k + 1, i, 0)) / h;
       if (fabs(x) < 1) m = fmax(m, (1 - x * x) * (1 - x * x));
     }
     sum += w->weight[k] * m;
@@ -256,7 +265,7 @@ double karst_i_warp_eval(const karst_sdf_t *t, const karst_i_node_t *nd, const d
       v = squash(w, c0);
     } else {
       double G[3];
-      karst_i_fd_gradient(t, w->child, p, w->eps, G, touched);
+      karst_i_fd_gradient(t, w->child, p, c0, w->eps, G, touched);
       double gn = sqrt(G[0] * G[0] + G[1] * G[1] + G[2] * G[2]);
       double s = 1.0 / (gn > w->gfloor ? gn : w->gfloor);
       double g[3] = {G[0] * s, G[1] * s, G[2] * s};
