@@ -89,4 +89,23 @@ static inline void assert_lipschitz(const karst_sdf_t *t, karst_int_t node, doub
   }
 }
 
+/* Polygonize the root of @p t in @p box at @p voxel on 1 and on 2 threads into @p m1 and @p m2
+ * (initialised) and assert that the meshes are the same, array for array. */
+static inline void assert_same_on_1_and_2_threads(const karst_sdf_t *t, const double box[6],
+                                                  double voxel, karst_mesh_t *m1,
+                                                  karst_mesh_t *m2) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  ctx.nthreads = 1;
+  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, voxel, m1, NULL), KARST_SUCCESS);
+  ctx.nthreads = 2;
+  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, voxel, m2, NULL), KARST_SUCCESS);
+  assert_int_equal(m1->n_vertices, m2->n_vertices);
+  assert_int_equal(m1->n_triangles, m2->n_triangles);
+  assert_memory_equal(m1->xyz, m2->xyz, (size_t)m1->n_vertices * 3 * sizeof(double));
+  assert_memory_equal(m1->tri, m2->tri, (size_t)m1->n_triangles * 3 * sizeof(karst_int_t));
+  assert_memory_equal(m1->tri_label, m2->tri_label, (size_t)m1->n_triangles * sizeof(int));
+  assert_memory_equal(m1->tri_feature, m2->tri_feature, (size_t)m1->n_triangles * sizeof(int));
+}
+
 #endif

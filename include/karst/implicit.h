@@ -118,6 +118,7 @@ typedef enum {
   KARST_SDF_WARP,
   KARST_SDF_DETAILS,
   KARST_SDF_ROUND_CONE,
+  KARST_SDF_RESCALE,
   KARST_SDF_KIND_COUNT
 } karst_sdf_kind_t;
 
@@ -387,7 +388,7 @@ typedef struct karst_details_params {
   double fade;       /**< s0: the frame fades and anisotropic details fade out where
                           |n x Wd| < s0 (Zanni §5, the singularity), default 0.5 */
   int impulses;      /**< Gabor impulses per noise cell (of side twice the largest kernel
-                          radius), 1..16, default 4 */
+                          radius), 1..16, default 8 */
 } karst_details_params_t;
 
 /** Defaults of karst_sdf_details (every type with amplitude 0). */
@@ -472,10 +473,11 @@ typedef struct karst_speleothem {
  * tips. A candidate is dropped when the ceiling and floor are too close,
  * when a speleothem's body is not certified inside the void (its balls
  * along the axis, by the field's bound), when its root is not in rock
- * (vertically up to twice its radius beyond @p embed, and at 8 points
+ * (vertically up to twice its radius beyond its centre, and at 8 points
  * around it), or when it comes closer than twice its root radius to one
- * placed before. The root is sunk @p embed metres into the rock (the wall
- * details' largest amplitude, so that no detail opens a gap). The list
+ * placed before. The root ball's centre is sunk @p embed metres (the wall
+ * details' largest amplitude, so that no detail opens a gap) plus its
+ * radius into the rock (so that it holds on ceilings sloping up to 45°). The list
  * (allocated, caller frees; NULL when empty) is in edge order.
  * Time: O(candidates x ray steps x field cost).
  */

@@ -770,18 +770,35 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
       if (ball >= 0 && push(&prims, ball)) goto nomem;
       continue;
     }
-    karst_int_t grp = ball;
+    /* A continuation pair is one conduit: the hard union of its halves,
+     * which abut along their joint plane (a smooth union would bulge by k/4
+     * all round it). The conduits are smoothly united with each other; the
+     * ball, inside them but for the gaps between their flat caps, joins by a
+     * hard union (a smooth union with a solid nested in the others swells
+     * by k/4 where their walls are close). */
+    karst_int_t grp = -1;
+    int parts = 0;
     for (karst_int_t i = 0; i < deg[v]; i++) {
-      karst_int_t e = inc[start[v] + i] / 2;
+      karst_int_t end = inc[start[v] + i], e = end / 2, p = partner[end], comp = prim[e];
       grouped[e] = 1;
+      if (p >= 0) {
+        if (p / 2 < e) continue; /* the pair was made at its other member */
+        karst_int_t two[2] = {prim[e], prim[p / 2]};
+        if ((err = karst_sdf_union(ctx, sdf, 2, two, &comp))) goto cleanup;
+      }
       if (grp < 0) {
-        grp = prim[e];
-      } else if ((err = karst_sdf_blend(ctx, sdf, grp, prim[e], k, &grp))) {
+        grp = comp;
+      } else if ((err = karst_sdf_blend(ctx, sdf, grp, comp, k, &grp))) {
         goto cleanup;
       }
+      parts++;
+    }
+    if (ball >= 0) {
+      karst_int_t two[2] = {ball, grp};
+      if ((err = karst_sdf_union(ctx, sdf, 2, two, &grp))) goto cleanup;
     }
     if (push(&prims, grp)) goto nomem;
-    st.n_blends++;
+    if (parts > 1) st.n_blends++;
   }
   for (karst_int_t e = 0; e < E; e++)
     if (eg[e].ok && !grouped[e] && push(&prims, prim[e])) goto nomem;
@@ -803,7 +820,7 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
         goto cleanup;
       root = nz;
     }
-    karst_int_t conduits = root; /* the field the speleothems are placed in */
+    karst_int_t conduits = root, details_node = -1; /* conduits: where speleothems are placed */
     if (geo->fracture_relief > 0 && par->n_fractures > 0) {
       karst_relief_t rel;
       karst_relief_init(&rel, KARST_RELIEF_FRACTURES);
@@ -873,9 +890,13 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
       }
       karst_rng_t rd;
       karst_rng_derive(&rd, par->seed, par->realisation, STREAM_DETAILS);
+      /* unscaled here: the speleothems are subtracted from the detailed walls
+       * in the same units (labels compare true values), and one rescaling
+       * node above both makes the field 1-Lipschitz */
       karst_int_t d;
-      if ((err = karst_sdf_details(ctx, sdf, root, &dp, segs, ns, &rd, &d))) goto cleanup;
+      if ((err = karst_i_details_create(ctx, sdf, root, &dp, segs, ns, &rd, 1, &d))) goto cleanup;
       st.details_lipschitz = karst_sdf_details_lipschitz(sdf, d);
+      details_node = d;
       root = d;
     }
     if (par->speleothems) {
@@ -899,6 +920,13 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
           goto cleanup;
         root = dn;
       }
+    }
+    if (details_node >= 0) {
+      karst_int_t rn;
+      if ((err = karst_i_rescale(ctx, sdf, root, st.details_lipschitz,
+                                 karst_i_details_band(sdf, details_node), &rn)))
+        goto cleanup;
+      root = rn;
     }
   }
   if (terrain) {

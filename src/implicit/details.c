@@ -72,7 +72,7 @@ void karst_details_params_init(karst_details_params_t *p) {
   p->epsilon = 0.25;
   p->grad_floor = 0.5;
   p->fade = 0.5;
-  p->impulses = 4;
+  p->impulses = 8;
 }
 
 void karst_i_details_free(karst_i_details_t *d) {
@@ -80,15 +80,6 @@ void karst_i_details_free(karst_i_details_t *d) {
   free(d->gstart);
   free(d->gitem);
   memset(d, 0, sizeof *d);
-}
-
-static double dot3(const double *a, const double *b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-static void cross3(const double *a, const double *b, double *c) {
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
 }
 
 /* ---------------------------------------------------------------------- */
@@ -115,10 +106,10 @@ static void gather(const karst_i_details_t *d, const double x[3], blend_t *b) {
     for (karst_int_t i = d->gstart[cell]; i < d->gstart[cell + 1]; i++) {
       const karst_i_dseg_t *s = &d->seg[d->gitem[i]];
       double v[3] = {x[0] - s->a[0], x[1] - s->a[1], x[2] - s->a[2]};
-      double l = dot3(v, s->u);
+      double l = karst_i_dot3(v, s->u);
       l = l < 0 ? 0 : (l > s->len ? s->len : l);
       double e[3] = {v[0] - l * s->u[0], v[1] - l * s->u[1], v[2] - l * s->u[2]};
-      double q = dot3(e, e) / (s->support * s->support);
+      double q = karst_i_dot3(e, e) / (s->support * s->support);
       if (q >= 1) continue;
       double f = (1 - q) * (1 - q);
       S += f;
@@ -140,12 +131,12 @@ static void gather(const karst_i_details_t *d, const double x[3], blend_t *b) {
 static void frame(const karst_i_details_t *d, const double n[3], const double wd[3], double t[3],
                   double bb[3], double *phi) {
   double c[3];
-  cross3(n, wd, c);
-  double cl = sqrt(dot3(c, c));
+  karst_i_cross3(n, wd, c);
+  double cl = sqrt(karst_i_dot3(c, c));
   double s = 1.0 / (cl > d->fade ? cl : d->fade);
   for (int k = 0; k < 3; k++)
     bb[k] = c[k] * s;
-  cross3(bb, n, t);
+  karst_i_cross3(bb, n, t);
   *phi = cl >= d->fade ? 1 : cl / d->fade;
 }
 
@@ -181,18 +172,18 @@ static double gabor(const karst_i_details_t *d, const double x[3], const double 
       uint64_t h = key + (uint64_t)j * 0xD6E8FEB86659FD93ULL;
       double xi[3] = {(ci + unit_of(&h)) * cs, (cj + unit_of(&h)) * cs, (ck + unit_of(&h)) * cs};
       double v[3] = {x[0] - xi[0], x[1] - xi[1], x[2] - xi[2]};
-      double r2 = dot3(v, v);
+      double r2 = karst_i_dot3(v, v);
       if (r2 >= rk2) {
         continue;
       }
       double w = 2 * unit_of(&h) - 1;
       double z = 2 * unit_of(&h) - 1, ph = 2 * M_PI * unit_of(&h), s = sqrt(1 - z * z);
       double di[3] = {s * cos(ph), s * sin(ph), z};
-      double dn = dot3(di, n), om[3];
+      double dn = karst_i_dot3(di, n), om[3];
       for (int k = 0; k < 3; k++)
         om[k] = (1 - kap) * (di[k] - dn * n[k]) + kap * wa[k];
       double W = (1 - r2 / rk2) * (1 - r2 / rk2);
-      num += w * W * cos(w2pi * dot3(om, v));
+      num += w * W * cos(w2pi * karst_i_dot3(om, v));
       den += W;
     }
   }
@@ -205,12 +196,14 @@ static double gabor(const karst_i_details_t *d, const double x[3], const double 
 /* ---------------------------------------------------------------------- */
 
 static double squash(const karst_i_details_t *d, double x) {
+  if (d->raw) return x; /* a KARST_SDF_RESCALE node above applies it */
   if (fabs(x) <= d->rc) return x / d->lip;
   double off = d->rc * (1 - 1 / d->lip);
   return x > 0 ? x - off : x + off;
 }
 
 static double unsquash(const karst_i_details_t *d, double y) {
+  if (d->raw) return y;
   if (fabs(y) * d->lip <= d->rc) return y * d->lip;
   double off = d->rc * (1 - 1 / d->lip);
   return y > 0 ? y + off : y - off;
@@ -227,7 +220,7 @@ static void local_frame(const karst_sdf_t *t, const karst_i_details_t *d, const 
                         double f, local_t *L, karst_int_t *touched) {
   double G[3];
   karst_i_fd_gradient(t, d->child, p, f, d->eps, G, touched);
-  double gn = sqrt(dot3(G, G)), s = 1.0 / (gn > d->gfloor ? gn : d->gfloor);
+  double gn = sqrt(karst_i_dot3(G, G)), s = 1.0 / (gn > d->gfloor ? gn : d->gfloor);
   for (int k = 0; k < 3; k++)
     L->n[k] = G[k] * s;
   double x0[3] = {p[0] - f * L->n[0], p[1] - f * L->n[1], p[2] - f * L->n[2]};
@@ -254,7 +247,8 @@ double karst_i_details_eval(const karst_sdf_t *t, const karst_i_node_t *nd, cons
   double cub = isfinite(ub) ? unsquash(d, ub) + d->hmax : INFINITY;
   double f = karst_i_sdf_eval(t, d->child, p, cub, &lab, touched), v;
   if (f >= cub) {
-    v = squash(d, f - d->hmax); /* >= ub: valid under the contract */
+    /* >= ub: valid under the contract (the max keeps it so through rounding) */
+    v = fmax(squash(d, f - d->hmax), ub);
   } else if (fabs(f) >= d->shell) {
     v = squash(d, f);
   } else {
@@ -401,6 +395,13 @@ karst_error_t karst_sdf_details(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t ch
                                 const karst_details_params_t *par,
                                 const karst_skeleton_segment_t *seg, karst_int_t n_seg,
                                 karst_rng_t *rng, karst_int_t *node) {
+  return karst_i_details_create(ctx, t, child, par, seg, n_seg, rng, 0, node);
+}
+
+karst_error_t karst_i_details_create(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t child,
+                                     const karst_details_params_t *par,
+                                     const karst_skeleton_segment_t *seg, karst_int_t n_seg,
+                                     karst_rng_t *rng, int raw, karst_int_t *node) {
   karst_details_params_t defaults;
   if (!par) {
     karst_details_params_init(&defaults);
@@ -442,6 +443,7 @@ karst_error_t karst_sdf_details(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t ch
   karst_i_details_t d;
   memset(&d, 0, sizeof d);
   d.child = child;
+  d.raw = raw;
   d.eps = par->epsilon;
   d.gfloor = par->grad_floor;
   d.fade = par->fade;
@@ -494,7 +496,7 @@ karst_error_t karst_sdf_details(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t ch
     memcpy(s->a, seg[i].a, sizeof s->a);
     for (int a = 0; a < 3; a++)
       s->u[a] = seg[i].b[a] - seg[i].a[a];
-    s->len = sqrt(dot3(s->u, s->u));
+    s->len = sqrt(karst_i_dot3(s->u, s->u));
     for (int a = 0; a < 3; a++)
       s->u[a] = s->len > 0 ? s->u[a] / s->len : 0; /* a point segment has no direction */
     s->support = seg[i].support;
@@ -566,4 +568,44 @@ double karst_sdf_details_noise(const karst_sdf_t *t, karst_int_t node, const dou
   }
   const double *th = L.bl.theta;
   return gabor(d, L.ps, L.n, L.wa, th[P_KAP], th[P_F], th[P_RK]);
+}
+
+/* ---------------------------------------------------------------------- */
+/* The band rescaling as a node of its own.                                */
+/* ---------------------------------------------------------------------- */
+
+double karst_i_rescale_eval(const karst_sdf_t *t, const karst_i_node_t *nd, const double p[3],
+                            double ub, int *label, karst_int_t *touched) {
+  double L = nd->u.rescale.lip, rc = nd->u.rescale.rc, off = rc * (1 - 1 / L);
+  double cub = ub;
+  if (isfinite(ub)) cub = fabs(ub) * L <= rc ? ub * L : (ub > 0 ? ub + off : ub - off);
+  double x = karst_i_sdf_eval(t, nd->u.rescale.child, p, cub, label, touched);
+  if (fabs(x) <= rc) return x / L;
+  return x > 0 ? x - off : x + off;
+}
+
+karst_error_t karst_i_rescale(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t child, double lip,
+                              double rc, karst_int_t *node) {
+  if (child < 0 || child >= t->n_nodes || !(lip >= 1) || !(rc >= 0))
+    return karst_set_error(ctx, KARST_EINVAL, "rescale: node %lld, factor %g, band %g",
+                           (long long)child, lip, rc);
+  karst_i_node_t *nd = NULL;
+  karst_error_t err = karst_i_sdf_new_node(ctx, t, KARST_SDF_RESCALE, &nd, node);
+  if (err) return err;
+  const karst_i_node_t *c = &t->nodes[child];
+  nd->u.rescale.child = child;
+  nd->u.rescale.lip = lip;
+  nd->u.rescale.rc = rc;
+  nd->label = c->label;
+  /* the rescaling maps the child's zero set onto itself and never moves a
+   * value across 0: the box (the solid's) is the child's */
+  nd->finite = c->finite;
+  memcpy(nd->box, c->box, sizeof nd->box);
+  return KARST_SUCCESS;
+}
+
+/** The band (rc) of a details node: the rescaling is linear within it. */
+double karst_i_details_band(const karst_sdf_t *t, karst_int_t node) {
+  const karst_i_details_t *d = details_of(t, node);
+  return d ? d->rc : 0;
 }

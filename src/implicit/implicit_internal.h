@@ -136,6 +136,7 @@ typedef struct karst_i_details {
   karst_int_t gn[3];
   karst_int_t *gstart, *gitem; /* cell c holds gitem[gstart[c] .. gstart[c + 1]) */
   int overlap;                 /* most segments listed in one cell */
+  int raw;                     /* 1: f_S - h unscaled (a KARST_SDF_RESCALE node above scales it) */
 } karst_i_details_t;
 
 typedef struct karst_i_node {
@@ -172,6 +173,10 @@ typedef struct karst_i_node {
     struct {
       karst_int_t index; /* into the tree's warps (or details) */
     } warp;
+    struct {
+      karst_int_t child;
+      double lip, rc; /* slope 1/lip on |f| <= rc, 1 beyond (details.c) */
+    } rescale;
     struct {
       double a[3], u[3], len; /* axis a -> b */
       double ra, rb, sn, cs;  /* radii; sin and cos of the side's slope */
@@ -282,8 +287,34 @@ double karst_i_round_cone_eval(const karst_i_node_t *nd, const double p[3]);
 /* Field of a details node (details.c); same contract as karst_i_sdf_eval. */
 double karst_i_details_eval(const karst_sdf_t *t, const karst_i_node_t *nd, const double p[3],
                             double ub, int *label, karst_int_t *touched);
+/* karst_sdf_details, with @p raw = 1 a node that returns f_S - h unscaled:
+ * L-Lipschitz (karst_sdf_details_lipschitz), locally 1-Lipschitz beyond
+ * karst_i_details_band of the surface. Min and max with 1-Lipschitz fields
+ * keep both properties, so that a KARST_SDF_RESCALE node of (L, band) above
+ * them makes the result 1-Lipschitz (details.c). */
+karst_error_t karst_i_details_create(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t child,
+                                     const karst_details_params_t *par,
+                                     const karst_skeleton_segment_t *seg, karst_int_t n_seg,
+                                     karst_rng_t *rng, int raw, karst_int_t *node);
+double karst_i_details_band(const karst_sdf_t *t, karst_int_t node);
+/* The piecewise-linear rescaling (slope 1/lip within rc of 0, 1 beyond) of a
+ * child, and its field (details.c). */
+karst_error_t karst_i_rescale(karst_ctx_t *ctx, karst_sdf_t *t, karst_int_t child, double lip,
+                              double rc, karst_int_t *node);
+double karst_i_rescale_eval(const karst_sdf_t *t, const karst_i_node_t *nd, const double p[3],
+                            double ub, int *label, karst_int_t *touched);
 /* Release what a details node holds. */
 void karst_i_details_free(karst_i_details_t *d);
+
+/* 3-vector dot and cross products of the files of src/implicit/. */
+static inline double karst_i_dot3(const double *a, const double *b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline void karst_i_cross3(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
 
 /* SplitMix64's finaliser, and a pure function of (seed, a, b, c) uniform in
  * [0, 1): the deterministic draws of procedural noise (warp.c). */

@@ -998,7 +998,7 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     if (a >= ua) {
       b = karst_i_sdf_eval(t, nd->u.bin.b, p, ua, &lb, touched);
       if (b >= ua) {
-        v = mn(a, b) - 0.25 * k, lab = a <= b ? la : lb; /* >= ub */
+        v = mx(mn(a, b) - 0.25 * k, ub), lab = a <= b ? la : lb; /* >= ub */
         break;
       }
       a = karst_i_sdf_eval(t, nd->u.bin.a, p, b + k, &la, touched);
@@ -1017,7 +1017,7 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     double cub = isfinite(ub) ? ub * scale + nz->amplitude : INFINITY;
     double f = karst_i_sdf_eval(t, nz->child, p, cub, &lab, touched);
     if (f >= cub) {
-      v = (f - nz->amplitude) / scale; /* >= ub, a valid answer under the contract */
+      v = mx((f - nz->amplitude) / scale, ub); /* >= ub, a valid answer under the contract */
     } else {
       v = (f + nz->amplitude * karst_i_noise_eval(nz, p)) / scale;
     }
@@ -1031,6 +1031,9 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     break;
   case KARST_SDF_ROUND_CONE:
     v = karst_i_round_cone_eval(nd, p);
+    break;
+  case KARST_SDF_RESCALE:
+    v = karst_i_rescale_eval(t, nd, p, ub, &lab, touched);
     break;
   default:
     v = INFINITY;

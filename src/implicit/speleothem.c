@@ -28,15 +28,11 @@
  * root radius as a fraction of the length, tip as a fraction of the root. */
 #define STALAGMITE_LENGTH_LO 0.3
 #define STALAGMITE_LENGTH_HI 0.8
-#define STALAGMITE_ROOT_LO 0.2
-#define STALAGMITE_ROOT_HI 0.35
-#define STALAGMITE_TIP 0.6
+#define STALAGMITE_ROOT_LO 0.12
+#define STALAGMITE_ROOT_HI 0.22
+#define STALAGMITE_TIP 0.5
 /* Smallest radius of a speleothem's ball (m). */
 #define MIN_RADIUS 0.01
-
-static double dot3(const double *a, const double *b) {
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 /**
  * Round cone primitive (see implicit.h). In the plane of the axis, with y
@@ -48,7 +44,7 @@ static double dot3(const double *a, const double *b) {
 karst_error_t karst_sdf_round_cone(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3], double ra,
                                    const double b[3], double rb, int label, karst_int_t *node) {
   double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  double len = sqrt(dot3(u, u));
+  double len = sqrt(karst_i_dot3(u, u));
   if (!isfinite(len) || !isfinite(a[0] + a[1] + a[2]) || !(ra > 0) || !(rb > 0) ||
       !isfinite(ra + rb) || !(fabs(ra - rb) < len))
     return karst_set_error(ctx, KARST_EINVAL,
@@ -79,7 +75,7 @@ karst_error_t karst_sdf_round_cone(karst_ctx_t *ctx, karst_sdf_t *t, const doubl
 double karst_i_round_cone_eval(const karst_i_node_t *nd, const double p[3]) {
   const double *a = nd->u.cone.a, *u = nd->u.cone.u;
   double v[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
-  double y = dot3(v, u), x2 = dot3(v, v) - y * y, x = x2 > 0 ? sqrt(x2) : 0;
+  double y = karst_i_dot3(v, u), x2 = karst_i_dot3(v, v) - y * y, x = x2 > 0 ? sqrt(x2) : 0;
   double sn = nd->u.cone.sn, cs = nd->u.cone.cs, L = nd->u.cone.len;
   double s = -sn * x + cs * y;
   if (s < 0) return sqrt(x * x + y * y) - nd->u.cone.ra;
@@ -137,11 +133,12 @@ static int rock_for(const karst_sdf_t *t, karst_int_t node, const double p[3], d
 
 /* The body of a speleothem from root (ra) to tip (rb) is certified inside
  * the void: every ball of the axis that stays clear of the wall's level zw
- * (its top below zw for a stalactite, dz = -1), grown by the spacing of the
- * checks so that the balls between two checks are covered, has a field
- * below minus its radius (1-Lipschitz: the ball is void); the root is in
- * rock up to need beyond zw and at 8 points around it. The balls that reach
- * the wall's level form the root zone, merged with the wall. */
+ * by more than ra (its top below zw - ra for a stalactite, dz = -1), grown by
+ * the spacing of the checks so that the balls between two checks are
+ * covered, has a field below minus its radius (1-Lipschitz: the ball is
+ * void); the root is in rock up to need beyond zw and at 8 points around it.
+ * The balls within ra of the wall's level form the root zone, merged with
+ * the wall (ra of slack for a wall sloping by up to 45° over the root). */
 static int certified(const karst_sdf_t *t, karst_int_t node, const double root[3], double ra,
                      const double tip[3], double rb, double zw, int dz, double need) {
   double len =
@@ -154,7 +151,8 @@ static int certified(const karst_sdf_t *t, karst_int_t node, const double root[3
     for (int k = 0; k < 3; k++)
       c[k] = root[k] + s * (tip[k] - root[k]);
     double need_in = r + step + dr;
-    if (-dz * (c[2] - zw) + need_in > 0) continue; /* within reach of the wall: the root zone */
+    /* within reach of the wall, with one root radius for its slope: the root zone */
+    if (-dz * (c[2] - zw) + need_in + ra > 0) continue;
     if (!(field(t, node, c) <= -need_in)) return 0;
   }
   if (!rock_for(t, node, root, zw, -dz, need)) return 0;
@@ -276,7 +274,7 @@ karst_error_t karst_speleothems_place(karst_ctx_t *ctx, const karst_sdf_t *sdf,
     karst_int_t ia = net->edges[2 * e], ib = net->edges[2 * e + 1];
     if (!(r > 0) || ia < 0 || ib < 0 || ia >= net->n_nodes || ib >= net->n_nodes) continue;
     const double *pa = net->xyz + 3 * ia, *pb = net->xyz + 3 * ib;
-    double u[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}, len = sqrt(dot3(u, u));
+    double u[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]}, len = sqrt(karst_i_dot3(u, u));
     if (!(len > 0) || !isfinite(len)) continue;
     for (int c = 0; c < 3; c++)
       u[c] /= len;
@@ -326,12 +324,12 @@ karst_error_t karst_speleothems_place(karst_ctx_t *ctx, const karst_sdf_t *sdf,
       s.floor = zf;
       s.root[0] = s.tip[0] = p0[0];
       s.root[1] = s.tip[1] = p0[1];
-      s.root[2] = zc + embed;
+      s.root[2] = zc + embed + ra; /* one radius deeper: roots hold on ceilings sloping up to 45° */
       s.tip[2] = zc - len_t + rb;
       s.root_radius = ra;
       s.tip_radius = rb;
       if (!(s.root[2] - s.tip[2] > ra - rb)) continue;
-      if (!certified(sdf, conduits, s.root, ra, s.tip, rb, zc, -1, embed + 2 * ra)) continue;
+      if (!certified(sdf, conduits, s.root, ra, s.tip, rb, zc, -1, embed + 3 * ra)) continue;
       karst_speleothem_t m;
       int have_m = 0;
       if (paired) {
@@ -342,12 +340,12 @@ karst_error_t karst_speleothems_place(karst_ctx_t *ctx, const karst_sdf_t *sdf,
         double mb = fmax(MIN_RADIUS, STALAGMITE_TIP * ma);
         m = s;
         m.kind = KARST_STALAGMITE;
-        m.root[2] = zf - embed;
+        m.root[2] = zf - embed - ma;
         m.tip[2] = zf + len_m - mb;
         m.root_radius = ma;
         m.tip_radius = mb;
         have_m = len_m > 2 * ma && m.tip[2] - m.root[2] > ma - mb &&
-                 certified(sdf, conduits, m.root, ma, m.tip, mb, zf, 1, embed + 2 * ma);
+                 certified(sdf, conduits, m.root, ma, m.tip, mb, zf, 1, embed + 3 * ma);
       }
       if (push(&placed, &s) || (have_m && push(&placed, &m))) {
         free(placed.v);

@@ -254,7 +254,8 @@ double karst_i_warp_eval(const karst_sdf_t *t, const karst_i_node_t *nd, const d
   if (w->dmax == 0) {
     v = squash(w, c0);
   } else if (c0 >= cub) {
-    v = squash(w, c0 - w->dmax); /* >= ub: valid under the contract */
+    /* >= ub: valid under the contract (the max keeps it so through rounding) */
+    v = fmax(squash(w, c0 - w->dmax), ub);
   } else {
     double win = 1;
     if (isfinite(w->band)) {

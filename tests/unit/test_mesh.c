@@ -17,6 +17,7 @@
 
 #include "karst.h"
 #include "mesh/mesh_internal.h"
+#include "sdf_check.h"
 #include "test_util.h"
 
 /* Shortest triangle side of a mesh, in metres. */
@@ -217,15 +218,7 @@ static void test_deterministic(void **state) {
   karst_mesh_t m1, m2;
   karst_mesh_init(&m1);
   karst_mesh_init(&m2);
-  ctx.nthreads = 1;
-  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.3, &m1, NULL), KARST_SUCCESS);
-  ctx.nthreads = 2;
-  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.3, &m2, NULL), KARST_SUCCESS);
-  assert_int_equal(m1.n_vertices, m2.n_vertices);
-  assert_int_equal(m1.n_triangles, m2.n_triangles);
-  assert_memory_equal(m1.xyz, m2.xyz, (size_t)m1.n_vertices * 3 * sizeof(double));
-  assert_memory_equal(m1.tri, m2.tri, (size_t)m1.n_triangles * 3 * sizeof(karst_int_t));
-  assert_memory_equal(m1.tri_label, m2.tri_label, (size_t)m1.n_triangles * sizeof(int));
+  assert_same_on_1_and_2_threads(t, box, 0.3, &m1, &m2);
   assert_good_mesh(&m1);
   karst_mesh_destroy(&m1);
   karst_mesh_destroy(&m2);

@@ -305,12 +305,7 @@ static void test_warp_mesh(void **state) {
   karst_mesh_t m1, m2;
   karst_mesh_init(&m1);
   karst_mesh_init(&m2);
-  ctx.nthreads = 1;
-  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.1, &m1, NULL), KARST_SUCCESS);
-  ctx.nthreads = 2;
-  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.1, &m2, NULL), KARST_SUCCESS);
-  assert_int_equal(m1.n_triangles, m2.n_triangles);
-  assert_memory_equal(m1.xyz, m2.xyz, (size_t)m1.n_vertices * 3 * sizeof(double));
+  assert_same_on_1_and_2_threads(t, box, 0.1, &m1, &m2);
   karst_mesh_check_t chk;
   assert_int_equal(karst_mesh_check(&ctx, &m1, &chk), KARST_SUCCESS);
   assert_int_equal(chk.boundary_edges + chk.nonmanifold_edges + chk.degenerate, 0);
