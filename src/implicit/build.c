@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "implicit/implicit_internal.h"
+#include "karst/geology.h"
 
 /* Poisson disk sampling tries this many candidates around each active sample
  * before retiring it (Bridson 2007, k = 30). */
