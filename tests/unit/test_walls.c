@@ -108,8 +108,8 @@ static void test_t_junction(void **state) {
   karst_mesh_t mb, mh;
   karst_mesh_init(&mb);
   karst_mesh_init(&mh);
-  assert_int_equal(karst_mesh_polygonize(&ctx, blend, box, 0.1, &mb, NULL), KARST_SUCCESS);
-  assert_int_equal(karst_mesh_polygonize(&ctx, hard, box, 0.1, &mh, NULL), KARST_SUCCESS);
+  assert_int_equal(karst_mesh_polygonize(&ctx, blend, box, 0.15, &mb, NULL), KARST_SUCCESS);
+  assert_int_equal(karst_mesh_polygonize(&ctx, hard, box, 0.15, &mh, NULL), KARST_SUCCESS);
   assert_closed(&mb);
   assert_closed(&mh);
   double vb = karst_mesh_volume(&mb), vh = karst_mesh_volume(&mh);
@@ -138,7 +138,7 @@ static double area_at_x(const karst_sdf_t *t, double x, double ext, double h) {
 /* A tube (r = 1 m) turning into a canyon (r = 1.5 m) at a straight node, and
  * a keyhole continuing into a passage across a junction (a third edge
  * branching off): along each path the section area, counted in planes across
- * the axis (grid of 2 cm: ±0.3 m² of counting error), varies monotonically
+ * the axis (grid of 3 cm: ±0.3 m² allowed for the counting error), varies monotonically
  * from one end's area to the other's, through the node or junction. */
 static void test_sections_along_paths(void **state) {
   (void)state;
@@ -176,7 +176,7 @@ static void test_sections_along_paths(void **state) {
     for (int i = 0; i <= 16; i++) {
       double x = -9.5 + 19.0 * i / 16;
       if (c && fabs(x) < 0.8) continue; /* the branch itself */
-      double A = area_at_x(t, x, 3.5, 0.02);
+      double A = area_at_x(t, x, 3.5, 0.03);
       if (i == 0) first = A;
       last = A;
       if (i > 0 && prev > 0) assert_true(rising ? A >= prev - 0.3 : A <= prev + 0.3);
@@ -332,7 +332,7 @@ static void test_speleothems(void **state) {
   double box[6] = {-19, -6, -4, 19, 6, 4};
   karst_mesh_t m;
   karst_mesh_init(&m);
-  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.08, &m, NULL), KARST_SUCCESS);
+  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.12, &m, NULL), KARST_SUCCESS);
   assert_closed(&m);
   long feat = 0;
   for (karst_int_t i = 0; i < m.n_triangles; i++) {
