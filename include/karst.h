@@ -21,6 +21,7 @@
 #include "karst/generate.h"
 #include "karst/geology.h"
 #include "karst/graph.h"
+#include "karst/image.h"
 #include "karst/implicit.h"
 #include "karst/io.h"
 #include "karst/json.h"

@@ -8,7 +8,8 @@
  * The mesh type karst_mesh_t is declared in karst/vtk.h. Triangles are
  * counter-clockwise seen from outside the solid (the side where the field is
  * positive); each carries the tunnel type of the primitive that decided the
- * field at its inside corner (-1 for terrain and the clipping box).
+ * field at its inside corner (-1 for terrain and the clipping box) and its
+ * feature (KARST_SDF_FEATURE_WALL, KARST_SDF_FEATURE_SPELEOTHEM; -1 there).
  */
 #ifndef KARST_MESH_H
 #define KARST_MESH_H
@@ -23,7 +24,7 @@ extern "C" {
 
 /** Empty mesh (caller-owned storage). */
 void karst_mesh_init(karst_mesh_t *m);
-/** Release the arrays a mesh holds (xyz, tri, tri_label) and leave it empty. */
+/** Release the arrays a mesh holds (xyz, tri, tri_label, tri_feature) and leave it empty. */
 void karst_mesh_destroy(karst_mesh_t *m);
 
 typedef struct karst_polygonize_stats {
@@ -96,7 +97,8 @@ karst_error_t karst_mesh_write_sdf(karst_ctx_t *ctx, const char *path, const kar
 
 /** Write by extension: .vtp (karst_vtk_write_mesh), .ply, .stl (case-insensitive). */
 karst_error_t karst_mesh_write(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m);
-/** Binary little-endian PLY: double x, y, z; int vertex indices; int tunnel_type per face. */
+/** Binary little-endian PLY: double x, y, z; int vertex indices; int tunnel_type and int feature
+ *  per face (each when present). */
 karst_error_t karst_mesh_write_ply(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m);
 /**
  * Binary STL. The format stores float32 only (24-bit mantissa: 6 cm steps at

@@ -333,6 +333,47 @@ typedef struct karst_classification {
   karst_radius_range_t radius[KARST_TUNNEL_TYPE_COUNT]; /**< indexed by karst_tunnel_type_t */
 } karst_classification_t;
 
+/**
+ * Wall details of one tunnel type (geometry.details.<type>, docs/geometry.md):
+ * the anisotropic surface Gabor noise of Zanni et al. 2012 (§2-4).
+ */
+typedef struct karst_wall_details {
+  double amplitude;      /**< largest displacement of the wall (m), >= 0; 0: smooth walls */
+  double wavelength;     /**< wavelength 1/F of the Gabor kernels (m), > 0 */
+  double bandwidth;      /**< a (1/m), > 0: the kernels' window radius is 1/a */
+  double orientation;    /**< ω (degrees, [-90, 90]): from the skeleton direction t towards b */
+  double anisotropy;     /**< [0, 1]: 1 every kernel along ω, 0 random directions (isotropic) */
+  double tilt;           /**< α (degrees, [0, 60]): projection direction tilted off the normal */
+  double tilt_direction; /**< θ (degrees): direction of the tilt in the frame, from t towards b */
+} karst_wall_details_t;
+
+/** Speleothems of one tunnel type (geometry.speleothems.<type>, docs/geometry.md). */
+typedef struct karst_speleothem_rule {
+  double density;     /**< stalactites per m² of conduit floor, >= 0; 0: none */
+  double clearance;   /**< free height kept under a stalactite and over a stalagmite (m), >= 0 */
+  double pair_height; /**< where floor to ceiling is lower than this (m), a stalagmite is paired */
+  double min_length;  /**< shortest stalactite (m), > 0 */
+  double max_length;  /**< longest stalactite (m), >= min_length */
+} karst_speleothem_rule_t;
+
+/** Conduit geometry of `karst mesh` (the scenario's geometry section, docs/geometry.md). */
+typedef struct karst_geometry {
+  double blend;              /**< smooth-union width at junctions (m); < 0 (default): blend_factor
+                                  times the smallest radius there; 0: hard union */
+  double blend_factor;       /**< > 0, default 1 */
+  double continuation_angle; /**< degrees: at a junction two edges turning by at most this continue
+                                  each other (their sections interpolate across it), default 45 */
+  karst_wall_details_t details[KARST_TUNNEL_TYPE_COUNT];
+  karst_speleothem_rule_t speleothems[KARST_TUNNEL_TYPE_COUNT];
+  double speleothem_relief; /**< amplitude of the dripstone relief of speleothems (m), >= 0 */
+  double fracture_relief;   /**< depth of wall grooves along the fracture families (m); 0: none */
+  double fracture_spacing;  /**< mean distance between grooves of a family (m), > 0 */
+  double fracture_width;    /**< half-width of a groove (m), > 0 */
+} karst_geometry_t;
+
+/** Fill @p g with the documented defaults (docs/geometry.md). */
+void karst_geometry_init(karst_geometry_t *g);
+
 typedef struct karst_scenario {
   char *path; /**< file the scenario was read from (NULL if built in code) */
   char *name;
@@ -376,6 +417,7 @@ typedef struct karst_scenario {
   karst_srcpos_t pos_water_table;   /**< the water_table map */
   karst_srcpos_t pos_key_points;    /**< the key_points list */
   karst_srcpos_t pos_sampling;      /**< the sampling map */
+  karst_geometry_t geometry;        /**< `karst mesh`: blending, wall details, speleothems */
 } karst_scenario_t;
 
 /** Fill @p sc with every documented default (docs/scenario.md): no key points, flat terrain at 100

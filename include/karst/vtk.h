@@ -58,6 +58,7 @@ typedef struct karst_mesh {
   karst_int_t *tri;           /**< 3 * n_triangles, counter-clockwise seen from outside */
   int *tri_label;             /**< per-triangle label (e.g. tunnel type) or NULL */
   const char *tri_label_name; /**< name of that cell array (e.g. "tunnel_type"); NULL: "label" */
+  int *tri_feature;           /**< per-triangle "feature" (0 wall, 1 speleothem, -1 none) or NULL */
 } karst_mesh_t;
 
 /** Write a triangle mesh as .vtp polygons. */

@@ -102,8 +102,8 @@ static karst_error_t check_sdf_size(karst_ctx_t *ctx, const char *path, const do
 
 static int run(int argc, char **argv) {
   const char *in = NULL, *out = NULL, *scen_path = NULL, *sdf_path = NULL;
-  double voxel = 0.5, box[6];
-  int have_box = 0, carve = 0, quiet = 0, threads = 0;
+  double voxel = 0.5, box[6], blend = NAN;
+  int have_box = 0, carve = 0, quiet = 0, threads = 0, have_seed = 0;
   karst_implicit_params_t par;
   karst_implicit_params_init(&par);
   for (int i = 1; i < argc; i++) {
@@ -130,6 +130,23 @@ static int run(int argc, char **argv) {
       i++;
     } else if (strcmp(a, "--spheres") == 0) {
       par.bend_spheres = 1;
+    } else if (strcmp(a, "--blend") == 0) {
+      if (!more || cli_parse_double(argv[i + 1], &blend) || !(blend >= 0))
+        return cli_usage_error("mesh",
+                               "--blend needs a width >= 0 in metres (0: hard union), got '%s'",
+                               more ? argv[i + 1] : "");
+      i++;
+    } else if (strcmp(a, "--no-details") == 0) {
+      par.details = 0;
+    } else if (strcmp(a, "--no-speleothems") == 0) {
+      par.speleothems = 0;
+    } else if (strcmp(a, "--realisation") == 0) {
+      if (!more || cli_parse_u64(argv[i + 1], &par.realisation))
+        return cli_usage_error("mesh",
+                               "--realisation must be an integer from 0 to 18446744073709551615, "
+                               "got '%s'",
+                               more ? argv[i + 1] : "");
+      i++;
     } else if (strcmp(a, "--carve") == 0) {
       carve = 1;
     } else if (strcmp(a, "--scenario") == 0) {
@@ -154,6 +171,7 @@ static int run(int argc, char **argv) {
         return cli_usage_error("mesh",
                                "--seed must be an integer from 0 to 18446744073709551615, got '%s'",
                                more ? argv[i + 1] : "");
+      have_seed = 1;
       i++;
     } else if (strcmp(a, "-j") == 0 || strcmp(a, "--threads") == 0) {
       if (!more || cli_parse_int(argv[i + 1], &threads) || threads < 1)
@@ -208,6 +226,14 @@ static int run(int argc, char **argv) {
   double t0 = now_s();
   if ((err = karst_read_network(&ctx, in, KARST_FORMAT_AUTO, &net))) goto fail;
   if (scen_path && (err = karst_scenario_load(&ctx, scen_path, &sc))) goto fail;
+  /* the scenario's geometry section (defaults without one), its seed and
+   * fracture families; --blend overrides geometry.blend */
+  if (scen_path && !have_seed) par.seed = sc.seed;
+  if (!isnan(blend)) sc.geometry.blend = blend;
+  par.geometry = &sc.geometry;
+  par.fractures = sc.fractures;
+  par.n_fractures = sc.n_fractures;
+  par.voxel = voxel;
   if ((err = karst_sdf_create(&ctx, &sdf))) goto fail;
   karst_implicit_stats_t bst;
   if ((err = karst_implicit_build(&ctx, &net, &par, carve ? &sc.terrain : NULL, sdf, &bst)))
@@ -259,13 +285,16 @@ static int run(int argc, char **argv) {
     karst_sdf_stats(sdf, &ss);
     printf(
         "%s: %lld triangles, %lld vertices, voxel %g m, box %.10g,%.10g,%.10g,%.10g,%.10g,%.10g; "
-        "tree of %lld nodes (%lld sweeps, %lld revolved, %lld spheres, %lld ellipsoids, "
+        "tree of %lld nodes (%lld sweeps of which %lld morphing, %lld revolved, %lld spheres, "
+        "%lld ellipsoids, %lld blended junctions, %lld stalactites, %lld stalagmites, %s; "
         "%.1f MB) built in %.2f s, polygonized in %.2f s on %d threads%s\n",
         out, (long long)mesh.n_triangles, (long long)mesh.n_vertices, voxel, box[0], box[1], box[2],
         box[3], box[4], box[5], (long long)ss.n_nodes, (long long)ss.by_kind[KARST_SDF_SWEEP],
-        (long long)ss.by_kind[KARST_SDF_REVOLVE], (long long)ss.by_kind[KARST_SDF_SPHERE],
-        (long long)ss.by_kind[KARST_SDF_ELLIPSOID], ss.memory_bytes / 1e6, t1 - t0, t2 - t1,
-        ctx.nthreads, carve ? ", terrain carved" : "");
+        (long long)bst.n_morphs, (long long)ss.by_kind[KARST_SDF_REVOLVE],
+        (long long)ss.by_kind[KARST_SDF_SPHERE], (long long)ss.by_kind[KARST_SDF_ELLIPSOID],
+        (long long)bst.n_blends, (long long)bst.n_stalactites, (long long)bst.n_stalagmites,
+        bst.details_lipschitz > 0 ? "wall details" : "smooth walls", ss.memory_bytes / 1e6, t1 - t0,
+        t2 - t1, ctx.nthreads, carve ? ", terrain carved" : "");
   }
   goto done;
 fail_write:
@@ -285,13 +314,16 @@ done:
 const cli_command_t cli_cmd_mesh = {
     "mesh", run, "polygonize the conduits of a network into a closed triangle mesh",
     "usage: karst mesh NETWORK.vtp -o cave.vtp [--voxel 0.5] [--box x0,y0,z0,x1,y1,z1]\n"
-    "                  [--carve --scenario S.yaml] [--sdf cave.vti] [--noise A] [--radius R]\n"
-    "                  [--spheres] [--seed S] [-j THREADS] [--quiet]\n\n"
+    "                  [--scenario S.yaml [--carve]] [--blend R] [--no-details]\n"
+    "                  [--no-speleothems] [--sdf cave.vti] [--noise A] [--radius R]\n"
+    "                  [--spheres] [--seed S] [--realisation N] [-j THREADS] [--quiet]\n\n"
     "Builds the implicit geometry of the network's conduits (Paris et al. 2021, §6: one sweep\n"
-    "of the tunnel type's cross-section per edge, scaled by its \"radius\", the sections revolved\n"
-    "about the axis of sharp bends, ellipsoids for chambers) and polygonizes it into a closed, "
-    "manifold, consistently\n"
-    "oriented triangle mesh labelled by tunnel type (-1: terrain or box). NETWORK may also be\n"
+    "of the tunnel type's cross-section per edge, scaled by its \"radius\" and interpolated along\n"
+    "it between the sections at its ends, the sections revolved about the axis of sharp bends,\n"
+    "ellipsoids for chambers, junctions blended; wall details of Zanni et al. 2012 and\n"
+    "speleothems by the scenario's geometry section) and polygonizes it into a closed, manifold,\n"
+    "consistently oriented triangle mesh labelled by tunnel type (-1: terrain or box) and feature\n"
+    "(0 wall, 1 speleothem). NETWORK may also be\n"
     "any survey format karst reads (Karstnet, .pl, .sql, .3d, .svx): edges without a radius\n"
     "get --radius, edges without a tunnel type are tubes.\n\n"
     "  -o FILE        output mesh; .vtp (ParaView), .ply (binary) or .stl (binary) by extension;\n"
@@ -300,14 +332,22 @@ const cli_command_t cli_cmd_mesh = {
     "  --box ...      region to mesh; the mesh is closed where the solid leaves it (default:\n"
     "                 the scenario's domain with --scenario, else the conduits plus 2 voxels)\n"
     "  --carve        mesh the rock: the scenario's terrain minus the conduits\n"
-    "  --scenario S   scenario file (terrain for --carve, default box)\n"
+    "  --scenario S   scenario file: its geometry section (blending, wall details and speleothems\n"
+    "                 per tunnel type, fracture grooves along its fracture families), its seed,\n"
+    "                 terrain for --carve, default box\n"
+    "  --blend R      smooth-union width at junctions in metres, 0 for a hard union (default:\n"
+    "                 geometry.blend, else the smallest radius at each junction)\n"
+    "  --no-details   smooth walls (no wall details)\n"
+    "  --no-speleothems  no stalactites or stalagmites\n"
     "  --sdf F.vti    also write the sampled field as VTK image data (contour it at 0)\n"
-
-    "  --noise A      wall irregularities of at most A metres (default 0: smooth walls)\n"
+    "  --noise A      also a solid sparse-Gabor wall noise of at most A metres (default 0)\n"
     "  --radius R     radius of edges without a \"radius\" attribute (default 1 m)\n"
     "  --spheres      fill sharp bends with Poisson spheres (the paper's method, slower and\n"
     "                 bumpier) instead of revolved sections\n"
-    "  --seed S       seed of the spheres and the noise (default 1)\n"
+    "  --seed S       seed of the spheres, noise, details and speleothems (default: the\n"
+    "                 scenario's random.seed with --scenario, else 1)\n"
+    "  --realisation N  realisation index: details and speleothems are drawn from the stream of\n"
+    "                 (seed, N), as karst generate draws realisation N (default 0)\n"
     "  -j THREADS     worker threads (default: all processors)\n"
     "  --quiet        no progress bar and no summary line\n\n"
     "Beside the mesh, STEM.paraview.py (cave.paraview.py for cave.vtp) shows it and the --sdf\n"

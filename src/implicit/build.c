@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "implicit/implicit_internal.h"
+#include "karst/geology.h"
 
 /* Poisson disk sampling tries this many candidates around each active sample
  * before retiring it (Bridson 2007, k = 30). */
@@ -30,6 +31,13 @@ void karst_implicit_params_init(karst_implicit_params_t *par) {
   par->noise_amplitude = 0.0;
   par->noise_wavelength = 2.0;
   par->seed = 1;
+  par->realisation = 0;
+  par->geometry = NULL;
+  par->details = 1;
+  par->speleothems = 1;
+  par->voxel = 0;
+  par->fractures = NULL;
+  par->n_fractures = 0;
 }
 
 static double dot3(const double *a, const double *b) {
@@ -74,6 +82,34 @@ static karst_error_t check_params(karst_ctx_t *ctx, const karst_implicit_params_
     return karst_set_error(ctx, KARST_EINVAL,
                            "geometry parameters: noise_amplitude = %g, must be >= 0",
                            p->noise_amplitude);
+  if (!(p->voxel >= 0) || !isfinite(p->voxel))
+    return karst_set_error(ctx, KARST_EINVAL, "geometry parameters: voxel = %g, must be >= 0",
+                           p->voxel);
+  if (p->n_fractures < 0 || (p->n_fractures > 0 && !p->fractures))
+    return karst_set_error(ctx, KARST_EINVAL, "geometry parameters: %d fractures but none given",
+                           p->n_fractures);
+  return KARST_SUCCESS;
+}
+
+static karst_error_t check_geometry(karst_ctx_t *ctx, const karst_geometry_t *g) {
+  if (!(g->blend < 0 || isfinite(g->blend)) || isnan(g->blend))
+    return karst_set_error(ctx, KARST_EINVAL, "geometry.blend = %g m is not finite", g->blend);
+  if (!(g->blend_factor > 0) || !isfinite(g->blend_factor))
+    return karst_set_error(ctx, KARST_EINVAL, "geometry.blend_factor = %g, must be > 0",
+                           g->blend_factor);
+  if (!(g->continuation_angle >= 0 && g->continuation_angle <= 90))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "geometry.continuation_angle = %g, must be in [0, 90] degrees",
+                           g->continuation_angle);
+  if (!(g->speleothem_relief >= 0) || !isfinite(g->speleothem_relief))
+    return karst_set_error(ctx, KARST_EINVAL, "geometry.speleothem_relief = %g, must be >= 0 m",
+                           g->speleothem_relief);
+  if (!(g->fracture_relief >= 0) || !isfinite(g->fracture_relief) || !(g->fracture_spacing > 0) ||
+      !(g->fracture_width > 0))
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "geometry: fracture_relief %g must be >= 0 m, fracture_spacing %g and "
+                           "fracture_width %g > 0 m",
+                           g->fracture_relief, g->fracture_spacing, g->fracture_width);
   return KARST_SUCCESS;
 }
 
@@ -352,6 +388,53 @@ cleanup:
   return err;
 }
 
+/* Streams of the stages drawn from (seed, realisation), karst_rng_derive. */
+#define STREAM_DETAILS 0x64657461ULL           /* "deta" */
+#define STREAM_FRACTURE_RELIEF 0x66726163ULL   /* "frac" */
+#define STREAM_SPELEOTHEM_RELIEF 0x64726970ULL /* "drip" */
+/* The details' skeleton: a segment's weight reaches this many times its
+ * section's extent (r max|cp|) from its axis, plus the detail shell. */
+#define DETAIL_SUPPORT 2.0
+/* Speleothem roots are sunk this much deeper than the wall details reach (m). */
+#define EMBED_MARGIN 0.02
+
+/* The mixture of the sections of types with weights @p w (n = 7 types). */
+static void make_mix(const karst_section_t *unit, const double *w, karst_section_mix_t *m) {
+  memset(m, 0, sizeof *m);
+  for (int k = 0; k < KARST_TUNNEL_TYPE_COUNT; k++)
+    if (w[k] > 0 && m->n < KARST_SECTION_MIX_MAX) {
+      m->section[m->n] = unit[k];
+      m->weight[m->n] = w[k];
+      m->n++;
+    }
+}
+
+/* The one type of a pure mixture, -1 when mixed. */
+static int pure_type(const double *w) {
+  int t = -1;
+  for (int k = 0; k < KARST_TUNNEL_TYPE_COUNT; k++)
+    if (w[k] > 0) {
+      if (t >= 0) return -1;
+      t = k;
+    }
+  return t;
+}
+
+/* Inscribed radius (m) at the end @p end (0: a, 1: b) of the primitive made
+ * for an edge: r times the section's inscribed radius for a plain sweep, the
+ * end's scale times the mixture's distance from the axis for a morph. */
+static double end_inscribed(const karst_sdf_t *t, karst_int_t id, int end) {
+  const karst_i_node_t *nd = &t->nodes[id];
+  const double o[2] = {0, 0};
+  if (nd->kind != KARST_SDF_SWEEP) return 0;
+  const karst_i_sweep_t *sw = &nd->u.sweep;
+  if (!sw->morph)
+    return fmax(0.0, -sw->radius * karst_section_distance(&t->sections[sw->section], o));
+  const karst_i_morph_t *m = &t->morphs[sw->morph - 1];
+  return fmax(0.0, -m->rho[end ? KARST_I_MORPH_TAB : 0] *
+                       karst_i_morph_mix_w(t, m, end ? m->wb : m->wa, o));
+}
+
 /**
  * Construction tree of a network's conduits (Paris et al. 2021, §6.2); see
  * implicit.h. Edges need no attribute: "tunnel_type" defaults to tube and
@@ -363,7 +446,7 @@ cleanup:
  * @param stats    counts of what was built (may be NULL)
  * @return KARST_SUCCESS; KARST_EINVAL for bad parameters, radii, tunnel types
  *         or a network without usable edge (and no terrain); KARST_ENOMEM.
- * Time complexity: O(E log E + bends × Poisson samples).
+ * Time complexity: O(E log E + bends × Poisson samples + speleothem rays).
  */
 karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
                                    const karst_implicit_params_t *par,
@@ -371,8 +454,14 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
                                    karst_implicit_stats_t *stats) {
   karst_error_t err = KARST_SUCCESS;
   karst_implicit_params_t defaults;
+  karst_geometry_t gdef;
   edge_geom_t *eg = NULL;
-  karst_int_t *deg = NULL, *start = NULL, *inc = NULL;
+  karst_int_t *deg = NULL, *start = NULL, *inc = NULL, *partner = NULL, *prim = NULL;
+  double(*endw)[KARST_TUNNEL_TYPE_COUNT] = NULL, *enda = NULL;
+  int *grouped = NULL, *flip = NULL;
+  karst_skeleton_segment_t *segs = NULL;
+  karst_speleothem_t *spel = NULL;
+  karst_int_t n_spel = 0;
   idlist_t prims = {0};
   karst_implicit_stats_t st;
   memset(&st, 0, sizeof st);
@@ -382,15 +471,26 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
   }
   if (!net || !sdf) return karst_set_error(ctx, KARST_EINVAL, "geometry: no network or tree given");
   if ((err = check_params(ctx, par))) return err;
+  const karst_geometry_t *geo = par->geometry;
+  if (!geo) {
+    karst_geometry_init(&gdef);
+    geo = &gdef;
+  }
+  if ((err = check_geometry(ctx, geo))) return err;
   if (sdf->n_nodes != 0)
     return karst_set_error(ctx, KARST_EINVAL, "geometry: the tree must be empty (has %lld nodes)",
                            (long long)sdf->n_nodes);
   karst_section_t unit[KARST_TUNNEL_TYPE_COUNT];
-  double inscribed[KARST_TUNNEL_TYPE_COUNT];
+  double inscribed[KARST_TUNNEL_TYPE_COUNT], green[KARST_TUNNEL_TYPE_COUNT],
+      reach[KARST_TUNNEL_TYPE_COUNT];
   for (int k = 0; k < KARST_TUNNEL_TYPE_COUNT; k++) {
     if ((err = karst_section_for_type(ctx, k, &unit[k]))) return err;
     double o[2] = {0, 0};
     inscribed[k] = fmax(0.0, -karst_section_distance(&unit[k], o));
+    green[k] = karst_section_area(&unit[k]);
+    reach[k] = 0;
+    for (int i = 0; i < 2 * unit[k].n; i++)
+      reach[k] = fmax(reach[k], hypot(unit[k].cp[i][0], unit[k].cp[i][1]));
   }
   const karst_attr_t *rad = karst_network_attr_find(net, KARST_ATTR_EDGE, "radius");
   const karst_attr_t *typ = karst_network_attr_find(net, KARST_ATTR_EDGE, "tunnel_type");
@@ -398,11 +498,17 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
   karst_rng_t rng;
   karst_rng_derive(&rng, par->seed, 0x696d706c69636974ULL /* "implicit" */, 0);
 
-  eg = calloc((size_t)(E > 0 ? E : 1), sizeof *eg);
-  deg = calloc((size_t)(V > 0 ? V : 1) + 1, sizeof *deg);
-  start = calloc((size_t)(V > 0 ? V : 1) + 1, sizeof *start);
-  inc = malloc((size_t)(2 * E > 0 ? 2 * E : 1) * sizeof *inc);
-  if (!eg || !deg || !start || !inc) {
+  size_t e1 = (size_t)(E > 0 ? E : 1), v1 = (size_t)(V > 0 ? V : 1);
+  eg = calloc(e1, sizeof *eg);
+  deg = calloc(v1 + 1, sizeof *deg);
+  start = calloc(v1 + 1, sizeof *start);
+  inc = malloc(2 * e1 * sizeof *inc);
+  partner = malloc(2 * e1 * sizeof *partner);
+  endw = calloc(2 * e1, sizeof *endw);
+  enda = calloc(2 * e1, sizeof *enda);
+  prim = malloc(e1 * sizeof *prim);
+  grouped = calloc(e1, sizeof *grouped);
+  if (!eg || !deg || !start || !inc || !partner || !endw || !enda || !prim || !grouped) {
     err =
         karst_set_error(ctx, KARST_ENOMEM, "geometry: out of memory for %lld edges", (long long)E);
     goto cleanup;
@@ -410,6 +516,8 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
   /* Edge geometry and classification. */
   for (karst_int_t e = 0; e < E; e++) {
     karst_int_t a = net->edges[2 * e], b = net->edges[2 * e + 1];
+    prim[e] = -1;
+    partner[2 * e] = partner[2 * e + 1] = -1;
     if (a < 0 || b < 0 || a >= V || b >= V) {
       err = karst_set_error(ctx, KARST_EINVAL,
                             "geometry: edge %lld joins nodes %lld and %lld, "
@@ -450,7 +558,7 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
   }
   for (karst_int_t v = 0; v < V; v++)
     start[v + 1] = start[v] + deg[v];
-  memset(deg, 0, (size_t)(V > 0 ? V : 1) * sizeof *deg);
+  memset(deg, 0, v1 * sizeof *deg);
   for (karst_int_t e = 0; e < E; e++) {
     if (!eg[e].ok) continue;
     for (int k = 0; k < 2; k++) {
@@ -458,26 +566,57 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
       inc[start[v] + deg[v]++] = 2 * e + k; /* edge e at its end k */
     }
   }
-  /* Joints. */
+  /* Continuations: at a node of two edges they continue each other; at a
+   * junction, two edges that are each other's straightest continuation and
+   * turn by at most continuation_angle. Chambers keep their ellipsoid. */
+  double cont_cos = cos(geo->continuation_angle * M_PI / 180);
+  for (karst_int_t v = 0; v < V; v++) {
+    karst_int_t n = deg[v];
+    if (n < 2) continue;
+    karst_int_t best[64];
+    if (n > 64) continue; /* no pairing at such a knot (the blend covers it) */
+    for (karst_int_t i = 0; i < n; i++) {
+      karst_int_t ei = inc[start[v] + i];
+      const edge_geom_t *gi = &eg[ei / 2];
+      best[i] = -1;
+      if (gi->type == KARST_TUNNEL_CHAMBER) continue;
+      double bc = -2;
+      for (karst_int_t j = 0; j < n; j++) {
+        karst_int_t ej = inc[start[v] + j];
+        const edge_geom_t *gj = &eg[ej / 2];
+        if (j == i || gj->type == KARST_TUNNEL_CHAMBER) continue;
+        /* arriving along i (towards v), leaving along j (away from v) */
+        double si = ei % 2 ? 1 : -1, sj = ej % 2 ? -1 : 1;
+        double c = si * sj * dot3(gi->u, gj->u);
+        if (c > bc) bc = c, best[i] = j;
+      }
+      if (n > 2 && bc < cont_cos) best[i] = -1;
+    }
+    for (karst_int_t i = 0; i < n; i++)
+      if (best[i] >= 0 && best[best[i]] == i) {
+        partner[inc[start[v] + i]] = inc[start[v] + best[i]];
+        if (n > 2 && i < best[i]) st.n_continuations++;
+      }
+  }
+  /* End sections: the edge's own, or the mean with its continuation's. */
+  for (karst_int_t e = 0; e < E; e++) {
+    const edge_geom_t *g = &eg[e];
+    if (!g->ok) continue;
+    for (int k = 0; k < 2; k++) {
+      karst_int_t end = 2 * e + k, p = partner[end];
+      double own = g->r * g->r * green[g->type];
+      endw[end][g->type] += p >= 0 ? 0.5 : 1.0;
+      enda[end] = own;
+      if (p >= 0) {
+        const edge_geom_t *q = &eg[p / 2];
+        endw[end][q->type] += 0.5;
+        enda[end] = 0.5 * (own + q->r * q->r * green[q->type]);
+      }
+    }
+  }
+  /* Joints of two edges: mitres, revolved sections, Poisson spheres. */
   for (karst_int_t v = 0; v < V; v++) {
     const double *pv = net->xyz + 3 * v;
-    if (deg[v] >= 3) {
-      double rb = 0;
-      int lab = KARST_TUNNEL_TUBE;
-      for (karst_int_t i = 0; i < deg[v]; i++) {
-        const edge_geom_t *g = &eg[inc[start[v] + i] / 2];
-        if (g->type == KARST_TUNNEL_CHAMBER) continue; /* its ellipsoid covers the node */
-        double r = g->r * inscribed[g->type];
-        if (r > rb) rb = r, lab = g->type;
-      }
-      if (rb > 0) {
-        karst_int_t id;
-        if ((err = karst_sdf_sphere(ctx, sdf, pv, rb, lab, &id))) goto cleanup;
-        if (push(&prims, id)) goto nomem;
-        st.n_joint_balls++;
-      }
-      continue;
-    }
     if (deg[v] != 2) continue;
     karst_int_t i1 = inc[start[v]], i2 = inc[start[v] + 1];
     edge_geom_t *g1 = &eg[i1 / 2], *g2 = &eg[i2 / 2];
@@ -502,8 +641,9 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
         g2->end[i2 % 2].n[c] = -m[c];
       st.n_mitred_ends += 2;
     } else if (!par->bend_spheres) {
-      /* revolve each section about the bend axis over its half of the gap
-       * wedge {l1 >= 0, l2 <= 0} between the flat caps, split at the bisector */
+      /* revolve the node's section (both ends have it) about the bend axis,
+       * each edge's frame over its half of the gap wedge {l1 >= 0, l2 <= 0}
+       * between the flat caps, split at the bisector */
       double b[3], m[3] = {d1[0] + t2[0], d1[1] + t2[1], d1[2] + t2[2]};
       cross3(d1, t2, b);
       if (normalize3(b) || normalize3(m)) {
@@ -517,12 +657,29 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
       }
       double n1[2][3] = {{-d1[0], -d1[1], -d1[2]}, {m[0], m[1], m[2]}};
       double n2[2][3] = {{-m[0], -m[1], -m[2]}, {t2[0], t2[1], t2[2]}};
+      const double *w = endw[i1];
+      int pt = pure_type(w);
       karst_int_t id1, id2;
-      if ((err = karst_sdf_revolve(ctx, sdf, pv, b, g1->side, g1->up, &unit[g1->type], g1->r,
-                                   (const double(*)[3])n1, g1->type, &id1)) ||
-          (err = karst_sdf_revolve(ctx, sdf, pv, b, g2->side, g2->up, &unit[g2->type], g2->r,
-                                   (const double(*)[3])n2, g2->type, &id2)))
-        goto cleanup;
+      if (pt >= 0) {
+        double r = sqrt(enda[i1] / green[pt]);
+        if ((err = karst_i_revolve_offset(ctx, sdf, pv, b, g1->side, g1->up, &unit[pt], r,
+                                          (const double(*)[3])n1, KARST_I_JOINT_OVERLAP, g1->type,
+                                          &id1)) ||
+            (err = karst_i_revolve_offset(ctx, sdf, pv, b, g2->side, g2->up, &unit[pt], r,
+                                          (const double(*)[3])n2, KARST_I_JOINT_OVERLAP, g2->type,
+                                          &id2)))
+          goto cleanup;
+      } else {
+        karst_section_mix_t mix;
+        make_mix(unit, w, &mix);
+        if ((err = karst_i_revolve_mix_offset(ctx, sdf, pv, b, g1->side, g1->up, &mix, enda[i1],
+                                              (const double(*)[3])n1, KARST_I_JOINT_OVERLAP,
+                                              g1->type, &id1)) ||
+            (err = karst_i_revolve_mix_offset(ctx, sdf, pv, b, g2->side, g2->up, &mix, enda[i1],
+                                              (const double(*)[3])n2, KARST_I_JOINT_OVERLAP,
+                                              g2->type, &id2)))
+          goto cleanup;
+      }
       if (push(&prims, id1) || push(&prims, id2)) goto nomem;
       st.n_revolves += 2;
       st.n_bends++;
@@ -542,7 +699,7 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
       }
     }
   }
-  /* Edges. */
+  /* Edges: plain sweeps, or sweeps morphing between their end sections. */
   for (karst_int_t e = 0; e < E; e++) {
     const edge_geom_t *g = &eg[e];
     if (!g->ok) continue;
@@ -560,14 +717,101 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
         goto cleanup;
       st.n_ellipsoids++;
     } else {
-      if ((err =
-               karst_sdf_sweep(ctx, sdf, pa, pb, &unit[g->type], g->r, NULL, g->end, g->type, &id)))
-        goto cleanup;
+      /* at a joint the sweep reaches KARST_I_JOINT_OVERLAP past its node */
+      double qa[3], qb[3];
+      karst_int_t na = net->edges[2 * e], nb = net->edges[2 * e + 1];
+      for (int c = 0; c < 3; c++) {
+        qa[c] = pa[c] - (deg[na] >= 2 ? KARST_I_JOINT_OVERLAP : 0) * g->u[c];
+        qb[c] = pb[c] + (deg[nb] >= 2 ? KARST_I_JOINT_OVERLAP : 0) * g->u[c];
+      }
+      pa = qa, pb = qb;
+      const double *wa = endw[2 * e], *wb = endw[2 * e + 1];
+      int same =
+          enda[2 * e] == enda[2 * e + 1] && pure_type(wa) == g->type && pure_type(wb) == g->type;
+      if (same) {
+        double r = sqrt(enda[2 * e] / green[g->type]);
+        if ((err =
+                 karst_sdf_sweep(ctx, sdf, pa, pb, &unit[g->type], r, NULL, g->end, g->type, &id)))
+          goto cleanup;
+      } else {
+        karst_section_mix_t ma, mb;
+        make_mix(unit, wa, &ma);
+        make_mix(unit, wb, &mb);
+        if ((err = karst_sdf_sweep_morph(ctx, sdf, pa, pb, &ma, enda[2 * e], &mb, enda[2 * e + 1],
+                                         NULL, g->end, g->type, &id)))
+          goto cleanup;
+        st.n_morphs++;
+      }
       st.n_sweeps++;
     }
-    if (push(&prims, id)) goto nomem;
+    prim[e] = id;
   }
+  /* Junctions: a ball of the largest inscribed radius of the sections
+   * meeting there (chambers excluded), smoothly united with the conduits. */
+  for (karst_int_t v = 0; v < V; v++) {
+    if (deg[v] < 3) continue;
+    const double *pv = net->xyz + 3 * v;
+    double rb = 0, rmin = INFINITY;
+    int lab = KARST_TUNNEL_TUBE;
+    for (karst_int_t i = 0; i < deg[v]; i++) {
+      karst_int_t end = inc[start[v] + i];
+      const edge_geom_t *g = &eg[end / 2];
+      rmin = fmin(rmin, g->r);
+      if (g->type == KARST_TUNNEL_CHAMBER) continue; /* its ellipsoid covers the node */
+      double r = end_inscribed(sdf, prim[end / 2], (int)(end % 2));
+      if (r > rb) rb = r, lab = g->type;
+    }
+    karst_int_t ball = -1;
+    if (rb > 0) {
+      if ((err = karst_sdf_sphere(ctx, sdf, pv, rb, lab, &ball))) goto cleanup;
+      st.n_joint_balls++;
+    }
+    double k = geo->blend >= 0 ? geo->blend : geo->blend_factor * rmin;
+    if (!(k > 0)) {
+      if (ball >= 0 && push(&prims, ball)) goto nomem;
+      continue;
+    }
+    /* A continuation pair is one conduit: the hard union of its halves,
+     * which abut along their joint plane (a smooth union would bulge by k/4
+     * all round it). The conduits are smoothly united with each other; the
+     * ball, inside them but for the gaps between their flat caps, joins by a
+     * hard union (a smooth union with a solid nested in the others swells
+     * by k/4 where their walls are close). */
+    karst_int_t grp = -1;
+    int parts = 0;
+    for (karst_int_t i = 0; i < deg[v]; i++) {
+      karst_int_t end = inc[start[v] + i], e = end / 2, p = partner[end], comp = prim[e];
+      grouped[e] = 1;
+      if (p >= 0) {
+        if (p / 2 < e) continue; /* the pair was made at its other member */
+        karst_int_t two[2] = {prim[e], prim[p / 2]};
+        if ((err = karst_sdf_union(ctx, sdf, 2, two, &comp))) goto cleanup;
+      }
+      if (grp < 0) {
+        grp = comp;
+      } else if ((err = karst_sdf_blend(ctx, sdf, grp, comp, k, &grp))) {
+        goto cleanup;
+      }
+      parts++;
+    }
+    if (ball >= 0) {
+      karst_int_t two[2] = {ball, grp};
+      if ((err = karst_sdf_union(ctx, sdf, 2, two, &grp))) goto cleanup;
+    }
+    if (push(&prims, grp)) goto nomem;
+    if (parts > 1) st.n_blends++;
+  }
+  for (karst_int_t e = 0; e < E; e++)
+    if (eg[e].ok && !grouped[e] && push(&prims, prim[e])) goto nomem;
   karst_int_t root = -1;
+  int want_details = 0, present[KARST_TUNNEL_TYPE_COUNT] = {0};
+  double amax = 0;
+  for (karst_int_t e = 0; e < E; e++)
+    if (eg[e].ok) present[eg[e].type] = 1;
+  /* only the types of this network's edges count (their amplitudes, ranges) */
+  for (int k = 0; k < KARST_TUNNEL_TYPE_COUNT; k++)
+    if (present[k]) amax = fmax(amax, geo->details[k].amplitude);
+  want_details = par->details && amax > 0;
   if (prims.n > 0) {
     if ((err = karst_sdf_union(ctx, sdf, prims.n, prims.v, &root))) goto cleanup;
     if (par->noise_amplitude > 0) {
@@ -576,6 +820,114 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
                                  &nz)))
         goto cleanup;
       root = nz;
+    }
+    karst_int_t conduits = root, details_node = -1; /* conduits: where speleothems are placed */
+    if (geo->fracture_relief > 0 && par->n_fractures > 0) {
+      karst_relief_t rel;
+      karst_relief_init(&rel, KARST_RELIEF_FRACTURES);
+      rel.amplitude = geo->fracture_relief;
+      rel.spacing = geo->fracture_spacing;
+      rel.width = fmin(geo->fracture_width, 4 * geo->fracture_spacing);
+      rel.n_planes =
+          par->n_fractures < KARST_RELIEF_MAX_PLANES ? par->n_fractures : KARST_RELIEF_MAX_PLANES;
+      for (int k = 0; k < rel.n_planes; k++) {
+        karst_plane_normal(par->fractures[k].dip_direction, par->fractures[k].dip, rel.normals[k]);
+        rel.weights[k] = par->fractures[k].weight;
+      }
+      karst_warp_params_t wp;
+      karst_warp_params_init(&wp);
+      wp.band = 4 * geo->fracture_relief;
+      karst_rng_t rf;
+      karst_rng_derive(&rf, par->seed, par->realisation, STREAM_FRACTURE_RELIEF);
+      karst_int_t w;
+      if ((err = karst_sdf_warp(ctx, sdf, root, &rel, &wp, &rf, &w))) goto cleanup;
+      root = w;
+    }
+    if (want_details) {
+      /* the skeleton, oriented along chains of two-edge nodes (the noise is
+       * symmetric: only the cancellation of opposite directions matters) */
+      karst_details_params_t dp;
+      karst_details_params_init(&dp);
+      memcpy(dp.type, geo->details, sizeof dp.type);
+      for (int k = 0; k < KARST_TUNNEL_TYPE_COUNT; k++)
+        if (!present[k]) dp.type[k].amplitude = 0;
+      double shell = KARST_DETAILS_SHELL_FACTOR * amax, r = 1 - 1 / KARST_DETAILS_SHELL_FACTOR;
+      double hmax = amax / (r * r * r * r * r * r);
+      if (par->voxel > 0) dp.band = sqrt(3.0) * par->voxel + 2 * hmax;
+      segs = calloc(e1, sizeof *segs);
+      flip = calloc(e1, sizeof *flip);
+      if (!segs || !flip) goto nomem;
+      int *seen = grouped; /* reused: 2 = oriented */
+      karst_int_t ns = 0;
+      for (karst_int_t e0 = 0; e0 < E; e0++) {
+        if (!eg[e0].ok || seen[e0] == 2) continue;
+        seen[e0] = 2;
+        /* walk forwards from e0's head and backwards from its tail through
+         * nodes of two edges: an edge met at its stored start (forwards) or
+         * end (backwards) keeps its direction, else it is flipped */
+        for (int dir = 0; dir < 2; dir++) {
+          karst_int_t e = e0, v = net->edges[2 * e0 + (dir ? 0 : 1)];
+          while (deg[v] == 2) {
+            karst_int_t o = inc[start[v]] / 2 == e ? inc[start[v] + 1] : inc[start[v]];
+            karst_int_t eo = o / 2, k = o % 2;
+            if (seen[eo] == 2) break;
+            flip[eo] = dir == 0 ? k == 1 : k == 0;
+            seen[eo] = 2;
+            e = eo;
+            v = net->edges[2 * eo + (1 - k)];
+          }
+        }
+      }
+      for (karst_int_t e = 0; e < E; e++) {
+        const edge_geom_t *g = &eg[e];
+        if (!g->ok) continue;
+        const double *pa = net->xyz + 3 * net->edges[2 * e],
+                     *pb = net->xyz + 3 * net->edges[2 * e + 1];
+        karst_skeleton_segment_t *s = &segs[ns++];
+        memcpy(s->a, flip[e] ? pb : pa, sizeof s->a);
+        memcpy(s->b, flip[e] ? pa : pb, sizeof s->b);
+        s->support = DETAIL_SUPPORT * g->r * reach[g->type] + shell;
+        s->type = g->type;
+      }
+      karst_rng_t rd;
+      karst_rng_derive(&rd, par->seed, par->realisation, STREAM_DETAILS);
+      /* unscaled here: the speleothems are subtracted from the detailed walls
+       * in the same units (labels compare true values), and one rescaling
+       * node above both makes the field 1-Lipschitz */
+      karst_int_t d;
+      if ((err = karst_i_details_create(ctx, sdf, root, &dp, segs, ns, &rd, 1, &d))) goto cleanup;
+      st.details_lipschitz = karst_sdf_details_lipschitz(sdf, d);
+      details_node = d;
+      root = d;
+    }
+    if (par->speleothems) {
+      double relief = geo->speleothem_relief;
+      double embed = (want_details ? amax : 0) + sqrt(3.0) * relief + EMBED_MARGIN;
+      if ((err = karst_speleothems_place(ctx, sdf, conduits, net, geo, par->default_radius, embed,
+                                         par->seed, par->realisation, &spel, &n_spel)))
+        goto cleanup;
+      for (karst_int_t i = 0; i < n_spel; i++) {
+        if (spel[i].kind == KARST_STALACTITE)
+          st.n_stalactites++;
+        else
+          st.n_stalagmites++;
+      }
+      if (n_spel > 0) {
+        karst_rng_t rs;
+        karst_rng_derive(&rs, par->seed, par->realisation, STREAM_SPELEOTHEM_RELIEF);
+        karst_int_t s, dn;
+        if ((err = karst_sdf_speleothems(ctx, sdf, spel, n_spel, relief, &rs, &s)) ||
+            (err = karst_sdf_difference(ctx, sdf, root, s, &dn)))
+          goto cleanup;
+        root = dn;
+      }
+    }
+    if (details_node >= 0) {
+      karst_int_t rn;
+      if ((err = karst_i_rescale(ctx, sdf, root, st.details_lipschitz,
+                                 karst_i_details_band(sdf, details_node), &rn)))
+        goto cleanup;
+      root = rn;
     }
   }
   if (terrain) {
@@ -598,12 +950,15 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
   }
   err = karst_sdf_set_root(ctx, sdf, root);
   karst_log(ctx, KARST_LOG_INFO,
-            "geometry: %lld sweeps (%lld mitred ends), %lld ellipsoids, %lld junction balls, "
-            "%lld sharp bends (%lld revolved sections, %lld spheres), %lld zero-length edges "
-            "skipped",
-            (long long)st.n_sweeps, (long long)st.n_mitred_ends, (long long)st.n_ellipsoids,
-            (long long)st.n_joint_balls, (long long)st.n_bends, (long long)st.n_revolves,
-            (long long)st.n_spheres, (long long)st.n_skipped_edges);
+            "geometry: %lld sweeps (%lld morphing, %lld mitred ends), %lld ellipsoids, %lld "
+            "junction balls, %lld blended junctions (%lld continuations), %lld sharp bends (%lld "
+            "revolved sections, %lld spheres), %lld stalactites, %lld stalagmites, %lld "
+            "zero-length edges skipped",
+            (long long)st.n_sweeps, (long long)st.n_morphs, (long long)st.n_mitred_ends,
+            (long long)st.n_ellipsoids, (long long)st.n_joint_balls, (long long)st.n_blends,
+            (long long)st.n_continuations, (long long)st.n_bends, (long long)st.n_revolves,
+            (long long)st.n_spheres, (long long)st.n_stalactites, (long long)st.n_stalagmites,
+            (long long)st.n_skipped_edges);
   goto cleanup;
 nomem:
   err = karst_set_error(ctx, KARST_ENOMEM, "geometry: out of memory");
@@ -614,6 +969,14 @@ cleanup:
   free(deg);
   free(start);
   free(inc);
+  free(partner);
+  free(endw);
+  free(enda);
+  free(prim);
+  free(grouped);
+  free(flip);
+  free(segs);
+  free(spel);
   free(prims.v);
   return err;
 }

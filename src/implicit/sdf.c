@@ -58,6 +58,15 @@ void karst_sdf_free(karst_sdf_t *t) {
   free(t->kids);
   free(t->bvh);
   free(t->sections);
+  for (karst_int_t i = 0; i < t->n_images; i++)
+    free(t->images[i].v);
+  free(t->images);
+  free(t->warps);
+  free(t->morphs);
+  free(t->mix_areas);
+  for (karst_int_t i = 0; i < t->n_details; i++)
+    karst_i_details_free(&t->details[i]);
+  free(t->details);
   free(t);
 }
 
@@ -69,6 +78,13 @@ void karst_i_sdf_clear(karst_sdf_t *t) {
   t->n_terrains = 0;
   t->n_nodes = t->n_kids = t->n_bvh = 0;
   t->n_sections = 0;
+  for (karst_int_t i = 0; i < t->n_images; i++)
+    free(t->images[i].v);
+  t->n_images = t->n_warps = 0;
+  t->n_morphs = t->n_mix_areas = 0;
+  for (karst_int_t i = 0; i < t->n_details; i++)
+    karst_i_details_free(&t->details[i]);
+  t->n_details = 0;
   t->root = -1;
 }
 
@@ -83,6 +99,20 @@ static karst_error_t new_node(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t
   (*nd)->kind = kind;
   (*nd)->label = KARST_SDF_NO_LABEL;
   return KARST_SUCCESS;
+}
+
+karst_error_t karst_i_sdf_new_node(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t kind,
+                                   karst_i_node_t **nd, karst_int_t *id) {
+  return new_node(ctx, t, kind, nd, id);
+}
+
+int karst_i_grow(void **p, karst_int_t *cap, karst_int_t need, size_t size) {
+  return grow(p, cap, need, size);
+}
+
+static void pad_box(double box[6]);
+void karst_i_pad_box(double box[6]) {
+  pad_box(box);
 }
 
 static void pad_box(double box[6]) {
@@ -256,14 +286,25 @@ karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3
                               const double b[3], const karst_section_t *section, double radius,
                               const double up[3], const karst_sweep_end_t ends[2], int label,
                               karst_int_t *node) {
-  /* A mitre plane must cross the axis at an angle: |n . u| at least this. */
-  const double min_mitre_cos = 0.1;
-  if (!finite3(a) || !finite3(b))
-    return karst_set_error(ctx, KARST_EINVAL, "sweep: end points are not finite");
   if (!(radius > 0) || !isfinite(radius))
     return karst_set_error(ctx, KARST_EINVAL, "sweep: radius %g must be > 0 and finite", radius);
   karst_error_t err = karst_section_check(ctx, section);
   if (err) return err;
+  int sec = 0;
+  if ((err = karst_i_sdf_add_section(ctx, t, section, &sec))) return err;
+  return karst_i_sweep_create(ctx, t, a, b, (const double(*)[2])section->cp, 2 * section->n, radius,
+                              sec, 0, up, ends, label, node);
+}
+
+karst_error_t karst_i_sweep_create(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3],
+                                   const double b[3], const double (*cp)[2], int ncp, double radius,
+                                   int section, int morph, const double up[3],
+                                   const karst_sweep_end_t ends[2], int label, karst_int_t *node) {
+  /* A mitre plane must cross the axis at an angle: |n . u| at least this. */
+  const double min_mitre_cos = 0.1;
+  if (!finite3(a) || !finite3(b))
+    return karst_set_error(ctx, KARST_EINVAL, "sweep: end points are not finite");
+  karst_error_t err = KARST_SUCCESS;
   karst_i_sweep_t sw;
   memset(&sw, 0, sizeof sw);
   memcpy(sw.a, a, sizeof sw.a);
@@ -277,6 +318,8 @@ karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3
   if (karst_i_sweep_frame(sw.u, up, sw.side, sw.up))
     return karst_set_error(ctx, KARST_EINVAL, "sweep: up vector is not usable");
   sw.radius = radius;
+  sw.section = section;
+  sw.morph = morph;
   for (int e = 0; e < 2; e++) {
     if (!ends || !ends[e].mitre) continue;
     double n[3] = {ends[e].n[0], ends[e].n[1], ends[e].n[2]};
@@ -292,11 +335,9 @@ karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3
     memcpy(sw.n[e], n, sizeof n);
   }
   double rmax = 0;
-  for (int i = 0; i < 2 * section->n; i++)
-    rmax = mx(rmax, hypot(section->cp[i][0], section->cp[i][1]));
+  for (int i = 0; i < ncp; i++)
+    rmax = mx(rmax, hypot(cp[i][0], cp[i][1]));
   sw.rho = rmax * radius;
-  err = karst_i_sdf_add_section(ctx, t, section, &sw.section);
-  if (err) return err;
   karst_i_node_t *nd = NULL;
   err = new_node(ctx, t, KARST_SDF_SWEEP, &nd, node);
   if (err) return err;
@@ -307,10 +348,10 @@ karst_error_t karst_sdf_sweep(karst_ctx_t *ctx, karst_sdf_t *t, const double a[3
    * control points, cut by the end planes; take the hull's cut points. */
   for (int i = 0; i < 3; i++)
     nd->box[i] = INFINITY, nd->box[i + 3] = -INFINITY;
-  for (int i = 0; i < 2 * section->n; i++) {
+  for (int i = 0; i < ncp; i++) {
     double o[3];
     for (int c = 0; c < 3; c++)
-      o[c] = radius * (section->cp[i][0] * sw.side[c] + section->cp[i][1] * sw.up[c]);
+      o[c] = radius * (cp[i][0] * sw.side[c] + cp[i][1] * sw.up[c]);
     for (int e = 0; e < 2; e++) {
       double tt = e == 0 ? 0 : sw.len;
       if (sw.mitre[e]) tt -= dot3(sw.n[e], o) / dot3(sw.n[e], sw.u);
@@ -335,14 +376,34 @@ karst_error_t karst_sdf_revolve(karst_ctx_t *ctx, karst_sdf_t *t, const double o
                                 const double axis[3], const double side[3], const double up[3],
                                 const karst_section_t *section, double radius, const double n[2][3],
                                 int label, karst_int_t *node) {
-  /* Tolerance on the unit length and orthogonality of the given vectors. */
-  const double tol = 1e-6;
-  if (!finite3(o) || !finite3(axis) || !finite3(side) || !finite3(up))
-    return karst_set_error(ctx, KARST_EINVAL, "revolve: origin or frame is not finite");
+  return karst_i_revolve_offset(ctx, t, o, axis, side, up, section, radius, n, 0, label, node);
+}
+
+karst_error_t karst_i_revolve_offset(karst_ctx_t *ctx, karst_sdf_t *t, const double o[3],
+                                     const double axis[3], const double side[3], const double up[3],
+                                     const karst_section_t *section, double radius,
+                                     const double n[2][3], double offset, int label,
+                                     karst_int_t *node) {
   if (!(radius > 0) || !isfinite(radius))
     return karst_set_error(ctx, KARST_EINVAL, "revolve: radius %g must be > 0 and finite", radius);
   karst_error_t err = karst_section_check(ctx, section);
   if (err) return err;
+  int sec = 0;
+  if ((err = karst_i_sdf_add_section(ctx, t, section, &sec))) return err;
+  return karst_i_revolve_create(ctx, t, o, axis, side, up, (const double(*)[2])section->cp,
+                                2 * section->n, radius, sec, 0, n, offset, label, node);
+}
+
+karst_error_t karst_i_revolve_create(karst_ctx_t *ctx, karst_sdf_t *t, const double o[3],
+                                     const double axis[3], const double side[3], const double up[3],
+                                     const double (*cp)[2], int ncp, double radius, int section,
+                                     int morph, const double n[2][3], double offset, int label,
+                                     karst_int_t *node) {
+  /* Tolerance on the unit length and orthogonality of the given vectors. */
+  const double tol = 1e-6;
+  if (!finite3(o) || !finite3(axis) || !finite3(side) || !finite3(up))
+    return karst_set_error(ctx, KARST_EINVAL, "revolve: origin or frame is not finite");
+  karst_error_t err = KARST_SUCCESS;
   const double *vs[5] = {axis, side, up, n[0], n[1]};
   for (int i = 0; i < 5; i++)
     if (!(fabs(dot3(vs[i], vs[i]) - 1) <= tol))
@@ -364,11 +425,13 @@ karst_error_t karst_sdf_revolve(karst_ctx_t *ctx, karst_sdf_t *t, const double o
   rv.sx[0] = dot3(x, side), rv.sx[1] = dot3(x, up);
   rv.sz[0] = dot3(axis, side), rv.sz[1] = dot3(axis, up);
   rv.radius = radius;
+  rv.section = section;
+  rv.morph = morph;
+  rv.offset = offset;
   double rmax = 0;
-  for (int i = 0; i < 2 * section->n; i++)
-    rmax = mx(rmax, hypot(section->cp[i][0], section->cp[i][1]));
+  for (int i = 0; i < ncp; i++)
+    rmax = mx(rmax, hypot(cp[i][0], cp[i][1]));
   rv.rho = rmax * radius;
-  if ((err = karst_i_sdf_add_section(ctx, t, section, &rv.section))) return err;
   karst_i_node_t *nd = NULL;
   if ((err = new_node(ctx, t, KARST_SDF_REVOLVE, &nd, node))) return err;
   nd->u.rev = rv;
@@ -778,12 +841,19 @@ static double eval_sweep(const karst_sdf_t *t, const karst_i_sweep_t *sw, const 
   /* Lower bound first: the section lies in the disc of radius rho, so
    * w >= hypot(x, y) - rho, and the combination is non-decreasing in w. */
   double wlo = sqrt(x * x + y * y) - sw->rho;
-  double lo = s_flat == -INFINITY ? wlo : extrude(wlo, s_flat);
+  /* a morphing section's field is divided by its Lipschitz factor (morph.c) */
+  double k = sw->morph ? t->morphs[sw->morph - 1].k : 1.0;
+  double lo = (s_flat == -INFINITY ? wlo : extrude(wlo, s_flat)) / k;
   lo = mx(lo, s_mitre);
   if (lo >= ub) return lo;
-  double q[2] = {x / sw->radius, y / sw->radius};
-  double w = sw->radius * karst_section_distance(&t->sections[sw->section], q);
-  double f = s_flat == -INFINITY ? w : extrude(w, s_flat);
+  double w;
+  if (sw->morph) {
+    w = karst_i_morph_sweep_w(t, &t->morphs[sw->morph - 1], l, x, y);
+  } else {
+    double q[2] = {x / sw->radius, y / sw->radius};
+    w = sw->radius * karst_section_distance(&t->sections[sw->section], q);
+  }
+  double f = (s_flat == -INFINITY ? w : extrude(w, s_flat)) / k;
   return mx(f, s_mitre);
 }
 
@@ -793,7 +863,7 @@ static double eval_revolve(const karst_sdf_t *t, const karst_i_revolve_t *rv, co
   double z = dot3(v, rv->axis);
   double vp[3] = {v[0] - z * rv->axis[0], v[1] - z * rv->axis[1], v[2] - z * rv->axis[2]};
   double r = sqrt(dot3(vp, vp));
-  double s = mx(dot3(v, rv->n[0]), dot3(v, rv->n[1]));
+  double s = mx(dot3(v, rv->n[0]), dot3(v, rv->n[1])) - rv->offset;
   double lo = mx(sqrt(r * r + z * z) - rv->rho, s); /* the section lies in the disc of radius rho */
   if (lo >= ub) return lo;
   const karst_section_t *sec = &t->sections[rv->section];
@@ -801,7 +871,13 @@ static double eval_revolve(const karst_sdf_t *t, const karst_i_revolve_t *rv, co
                   (r * rv->sx[1] + z * rv->sz[1]) / rv->radius};
   double q2[2] = {(-r * rv->sx[0] + z * rv->sz[0]) / rv->radius,
                   (-r * rv->sx[1] + z * rv->sz[1]) / rv->radius};
-  double w = rv->radius * mn(karst_section_distance(sec, q1), karst_section_distance(sec, q2));
+  double w;
+  if (rv->morph) {
+    const karst_i_morph_t *m = &t->morphs[rv->morph - 1];
+    w = rv->radius * mn(karst_i_morph_mix_w(t, m, m->wa, q1), karst_i_morph_mix_w(t, m, m->wa, q2));
+  } else {
+    w = rv->radius * mn(karst_section_distance(sec, q1), karst_section_distance(sec, q2));
+  }
   return mx(w, s);
 }
 
@@ -891,21 +967,45 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
   case KARST_SDF_UNION:
     v = eval_union(t, nd, p, ub, &lab, touched);
     break;
-  case KARST_SDF_INTERSECTION:
-  case KARST_SDF_DIFFERENCE: {
+  case KARST_SDF_INTERSECTION: {
     int la, lb;
     double a = karst_i_sdf_eval(t, nd->u.bin.a, p, INFINITY, &la, touched);
     double b = karst_i_sdf_eval(t, nd->u.bin.b, p, INFINITY, &lb, touched);
-    if (nd->kind == KARST_SDF_DIFFERENCE) b = -b;
+    v = a >= b ? a : b;
+    lab = a >= b ? la : lb;
+    break;
+  }
+  case KARST_SDF_DIFFERENCE: {
+    /* max(a, -b) >= a: a at or above ub decides; else b is needed exactly
+     * only when -b > a, that is below -a */
+    int la, lb;
+    double a = karst_i_sdf_eval(t, nd->u.bin.a, p, ub, &la, touched);
+    if (a >= ub) {
+      v = a, lab = la;
+      break;
+    }
+    double b = -karst_i_sdf_eval(t, nd->u.bin.b, p, -a, &lb, touched);
     v = a >= b ? a : b;
     lab = a >= b ? la : lb;
     break;
   }
   case KARST_SDF_BLEND: {
+    /* smin(a, b) >= min(a, b) - k/4, and equals min(a, b) when |a - b| >= k:
+     * each child is needed exactly only below ub + k/4, and then the other
+     * only within k of it */
     int la, lb;
-    double a = karst_i_sdf_eval(t, nd->u.bin.a, p, INFINITY, &la, touched);
-    double b = karst_i_sdf_eval(t, nd->u.bin.b, p, INFINITY, &lb, touched);
-    double k = nd->u.bin.k;
+    double k = nd->u.bin.k, ua = isfinite(ub) ? ub + 0.25 * k : INFINITY;
+    double a = karst_i_sdf_eval(t, nd->u.bin.a, p, ua, &la, touched), b;
+    if (a >= ua) {
+      b = karst_i_sdf_eval(t, nd->u.bin.b, p, ua, &lb, touched);
+      if (b >= ua) {
+        v = mx(mn(a, b) - 0.25 * k, ub), lab = a <= b ? la : lb; /* >= ub */
+        break;
+      }
+      a = karst_i_sdf_eval(t, nd->u.bin.a, p, b + k, &la, touched);
+    } else {
+      b = karst_i_sdf_eval(t, nd->u.bin.b, p, a + k, &lb, touched);
+    }
     double h = mx(k - fabs(a - b), 0.0) / k;
     v = mn(a, b) - 0.25 * k * h * h;
     lab = a <= b ? la : lb;
@@ -918,12 +1018,24 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     double cub = isfinite(ub) ? ub * scale + nz->amplitude : INFINITY;
     double f = karst_i_sdf_eval(t, nz->child, p, cub, &lab, touched);
     if (f >= cub) {
-      v = (f - nz->amplitude) / scale; /* >= ub, a valid answer under the contract */
+      v = mx((f - nz->amplitude) / scale, ub); /* >= ub, a valid answer under the contract */
     } else {
       v = (f + nz->amplitude * karst_i_noise_eval(nz, p)) / scale;
     }
     break;
   }
+  case KARST_SDF_WARP:
+    v = karst_i_warp_eval(t, nd, p, ub, &lab, touched);
+    break;
+  case KARST_SDF_DETAILS:
+    v = karst_i_details_eval(t, nd, p, ub, &lab, touched);
+    break;
+  case KARST_SDF_ROUND_CONE:
+    v = karst_i_round_cone_eval(nd, p);
+    break;
+  case KARST_SDF_RESCALE:
+    v = karst_i_rescale_eval(t, nd, p, ub, &lab, touched);
+    break;
   default:
     v = INFINITY;
     break;
@@ -967,10 +1079,12 @@ void karst_sdf_stats(const karst_sdf_t *t, karst_sdf_stats_t *st) {
   for (karst_int_t i = 0; i < t->n_nodes; i++)
     st->by_kind[t->nodes[i].kind]++;
   st->n_bvh_nodes = t->n_bvh;
-  st->memory_bytes = sizeof *t + (size_t)t->n_nodes * sizeof *t->nodes +
-                     (size_t)t->n_kids * sizeof *t->kids + (size_t)t->n_bvh * sizeof *t->bvh +
-                     (size_t)t->n_sections * sizeof *t->sections +
-                     (size_t)t->n_terrains * sizeof *t->terrains;
+  st->memory_bytes =
+      sizeof *t + (size_t)t->n_nodes * sizeof *t->nodes + (size_t)t->n_kids * sizeof *t->kids +
+      (size_t)t->n_bvh * sizeof *t->bvh + (size_t)t->n_sections * sizeof *t->sections +
+      (size_t)t->n_terrains * sizeof *t->terrains + (size_t)t->n_warps * sizeof *t->warps;
+  for (karst_int_t i = 0; i < t->n_images; i++)
+    st->memory_bytes += (size_t)t->images[i].w * (size_t)t->images[i].h * sizeof(float);
   for (int i = 0; i < t->n_terrains; i++)
     if (t->terrains[i].z)
       st->memory_bytes +=

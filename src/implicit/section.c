@@ -270,6 +270,15 @@ static double bezier_dist2(const double *p0, const double *p1, const double *p2,
   return best;
 }
 
+/* Squared distance from q to the segment p0 p2. */
+static double segment_dist2(const double *p0, const double *p2, const double *q) {
+  double ux = p2[0] - p0[0], uy = p2[1] - p0[1], vx = q[0] - p0[0], vy = q[1] - p0[1];
+  double uu = ux * ux + uy * uy, t = uu > 0 ? (vx * ux + vy * uy) / uu : 0;
+  t = t < 0 ? 0 : (t > 1 ? 1 : t);
+  double dx = vx - t * ux, dy = vy - t * uy;
+  return dx * dx + dy * dy;
+}
+
 /* Lower bound of the squared distance from q to the convex hull (box) of the piece. */
 static double hull_box_dist2(const double *p0, const double *p1, const double *p2,
                              const double *q) {
@@ -343,14 +352,31 @@ static int piece_crossings(const double *p0, const double *p1, const double *p2,
  * Time complexity: O(pieces).
  */
 double karst_section_distance(const karst_section_t *s, const double q[2]) {
-  double best = INFINITY;
-  int cross = 0;
+  double best = INFINITY, box[KARST_SECTION_MAX_PIECES];
+  int cross = 0, order[KARST_SECTION_MAX_PIECES];
   int m = 2 * s->n;
+  /* nearest hull boxes first, so that the others are mostly pruned */
   for (int k = 0; k < s->n; k++) {
     const double *p0 = s->cp[2 * k], *p1 = s->cp[2 * k + 1], *p2 = s->cp[(2 * k + 2) % m];
     cross += piece_crossings(p0, p1, p2, q);
-    if (hull_box_dist2(p0, p1, p2, q) >= best) continue;
-    double d = bezier_dist2(p0, p1, p2, q);
+    box[k] = hull_box_dist2(p0, p1, p2, q);
+    int at = k;
+    while (at > 0 && box[order[at - 1]] > box[k]) {
+      order[at] = order[at - 1];
+      at--;
+    }
+    order[at] = k;
+  }
+  for (int i = 0; i < s->n; i++) {
+    int k = order[i];
+    if (box[k] >= best) break;
+    const double *p0 = s->cp[2 * k], *p1 = s->cp[2 * k + 1], *p2 = s->cp[(2 * k + 2) % m];
+    double d;
+    if (p1[0] == 0.5 * (p0[0] + p2[0]) && p1[1] == 0.5 * (p0[1] + p2[1])) {
+      d = segment_dist2(p0, p2, q); /* a straight piece: no cubic to solve */
+    } else {
+      d = bezier_dist2(p0, p1, p2, q);
+    }
     if (d < best) best = d;
   }
   double d = sqrt(best);

@@ -612,6 +612,14 @@ karst_error_t write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t 
     pd->GetCellData()->AddArray(lab);
     pd->GetCellData()->SetActiveScalars(name);
   }
+  if (m->tri_feature) {
+    auto feat = vtkSmartPointer<vtkIntArray>::New();
+    feat->SetName("feature");
+    feat->SetNumberOfValues(m->n_triangles);
+    for (karst_int_t t = 0; t < m->n_triangles; t++)
+      feat->SetValue(t, m->tri_feature[t]);
+    pd->GetCellData()->AddArray(feat);
+  }
   add_versions(pd->GetFieldData());
   describe_arrays(pd, "mesh");
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
@@ -1059,7 +1067,8 @@ extern "C" karst_error_t karst_vtk_write_samples(karst_ctx_t *ctx, const char *p
 
 /**
  * Write a triangle mesh as .vtp polygons, with the Int32 cell array
- * @c tri_label_name ("label" when NULL) when @c tri_label is set; that
+ * @c tri_label_name ("label" when NULL) when @c tri_label is set, and the
+ * Int32 cell array "feature" when @c tri_feature is set; that
  * array is the active cell scalar. A label array named "tunnel_type" comes
  * with the "tunnel_type_names" lookup table in field data.
  *

@@ -45,8 +45,9 @@ static void lef64(unsigned char *b, double d) {
 
 /**
  * Binary little-endian PLY (vertices as double x, y, z; faces as a uchar
- * count and int indices, plus an int "tunnel_type" per face when labelled),
- * with a header comment per component of karst_versions(), written atomically.
+ * count and int indices, plus an int "tunnel_type" per face when labelled
+ * and an int "feature" when the mesh has features), with a header comment
+ * per component of karst_versions(), written atomically.
  * @return KARST_SUCCESS; KARST_EINVAL (bad mesh); KARST_ERANGE (more than
  *         2^31-1 vertices); KARST_EIO. Time complexity: O(V + T).
  */
@@ -71,6 +72,7 @@ karst_error_t karst_mesh_write_ply(karst_ctx_t *ctx, const char *path, const kar
           (long long)m->n_vertices, (long long)m->n_triangles);
   if (m->tri_label)
     fprintf(f.fp, "property int %s\n", m->tri_label_name ? m->tri_label_name : "label");
+  if (m->tri_feature) fprintf(f.fp, "property int feature\n");
   fprintf(f.fp, "end_header\n");
   unsigned char b[24];
   for (karst_int_t i = 0; i < m->n_vertices; i++) {
@@ -79,14 +81,18 @@ karst_error_t karst_mesh_write_ply(karst_ctx_t *ctx, const char *path, const kar
     fwrite(b, 1, 24, f.fp);
   }
   for (karst_int_t i = 0; i < m->n_triangles; i++) {
-    unsigned char t[17];
+    unsigned char t[21];
     t[0] = 3;
     for (int c = 0; c < 3; c++)
       le32(t + 1 + 4 * c, (uint32_t)(int32_t)m->tri[3 * i + c]);
     size_t n = 13;
     if (m->tri_label) {
-      le32(t + 13, (uint32_t)(int32_t)m->tri_label[i]);
-      n = 17;
+      le32(t + n, (uint32_t)(int32_t)m->tri_label[i]);
+      n += 4;
+    }
+    if (m->tri_feature) {
+      le32(t + n, (uint32_t)(int32_t)m->tri_feature[i]);
+      n += 4;
     }
     fwrite(t, 1, n, f.fp);
   }

@@ -37,6 +37,7 @@ void karst_mesh_destroy(karst_mesh_t *m) {
   free(m->xyz);
   free(m->tri);
   free(m->tri_label);
+  free(m->tri_feature);
   memset(m, 0, sizeof *m);
 }
 
@@ -616,7 +617,8 @@ karst_error_t karst_mesh_polygonize(karst_ctx_t *ctx, const karst_sdf_t *sdf, co
       !(remap = malloc((size_t)(maxv > 0 ? maxv : 1) * sizeof *remap)) ||
       !(m.xyz = malloc((size_t)(nv > 0 ? nv : 1) * 3 * sizeof *m.xyz)) ||
       !(m.tri = malloc((size_t)(nt > 0 ? nt : 1) * 3 * sizeof *m.tri)) ||
-      !(m.tri_label = malloc((size_t)(nt > 0 ? nt : 1) * sizeof *m.tri_label))) {
+      !(m.tri_label = malloc((size_t)(nt > 0 ? nt : 1) * sizeof *m.tri_label)) ||
+      !(m.tri_feature = malloc((size_t)(nt > 0 ? nt : 1) * sizeof *m.tri_feature))) {
     err = karst_set_error(ctx, KARST_ENOMEM, "polygonize: out of memory for %lld vertices",
                           (long long)nv);
     goto cleanup;
@@ -644,7 +646,8 @@ karst_error_t karst_mesh_polygonize(karst_ctx_t *ctx, const karst_sdf_t *sdf, co
     for (karst_int_t i = 0; i < o->nt; i++) {
       for (int k = 0; k < 3; k++)
         m.tri[3 * m.n_triangles + k] = remap[o->tri[3 * i + k]];
-      m.tri_label[m.n_triangles] = o->label[i];
+      m.tri_label[m.n_triangles] = KARST_SDF_LABEL_TYPE(o->label[i]);
+      m.tri_feature[m.n_triangles] = KARST_SDF_LABEL_FEATURE(o->label[i]);
       m.n_triangles++;
     }
     free(o->vkey), free(o->vxyz), free(o->tri), free(o->label);

@@ -69,6 +69,55 @@ void karst_scenario_init(karst_scenario_t *sc) {
   sc->classification.radius[KARST_TUNNEL_EPIKARST].max = 0.5;
   sc->seed = 1;
   sc->realisations = 1;
+  karst_geometry_init(&sc->geometry);
+}
+
+/**
+ * Defaults of the geometry section (docs/geometry.md): junctions blended over
+ * the smallest radius there; wall details after the morphology of each
+ * conduit type (fine isotropic roughness in phreatic tubes and the epikarst,
+ * flow-aligned scallops and flutes on keyhole and canyon walls, breakdown
+ * roughness in chambers); speleothems in chambers, passages and beds.
+ * Time complexity: O(1).
+ */
+void karst_geometry_init(karst_geometry_t *g) {
+  memset(g, 0, sizeof *g);
+  g->blend = -1;
+  g->blend_factor = 1.0;
+  g->continuation_angle = 45.0;
+  /* amplitude (m), wavelength (m), bandwidth (1/m), orientation (degrees), anisotropy */
+  static const double det[KARST_TUNNEL_TYPE_COUNT][5] = {
+      {0.02, 0.25, 4.0, 0, 0.0},  /* tube */
+      {0.03, 0.40, 2.0, 90, 0.7}, /* keyhole */
+      {0.05, 0.50, 1.5, 90, 0.9}, /* canyon: horizontal flutes along the flow */
+      {0.02, 0.50, 2.0, 0, 0.3},  /* bed */
+      {0.03, 0.40, 2.0, 0, 0.5},  /* passage */
+      {0.02, 0.20, 5.0, 0, 0.0},  /* epikarst */
+      {0.05, 0.80, 1.25, 0, 0.0}, /* chamber */
+  };
+  /* density (1/m²), pair height (m), min and max length (m) */
+  static const double spe[KARST_TUNNEL_TYPE_COUNT][4] = {
+      {0, 4, 0.2, 1.0},    {0, 4, 0.2, 1.0}, {0, 4, 0.2, 1.0},    {0.01, 3, 0.1, 0.5},
+      {0.02, 4, 0.2, 1.2}, {0, 4, 0.2, 1.0}, {0.08, 6, 0.3, 2.5},
+  };
+  for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++) {
+    karst_wall_details_t *w = &g->details[t];
+    w->amplitude = det[t][0];
+    w->wavelength = det[t][1];
+    w->bandwidth = det[t][2];
+    w->orientation = det[t][3];
+    w->anisotropy = det[t][4];
+    karst_speleothem_rule_t *r = &g->speleothems[t];
+    r->density = spe[t][0];
+    r->clearance = 0.5;
+    r->pair_height = spe[t][1];
+    r->min_length = spe[t][2];
+    r->max_length = spe[t][3];
+  }
+  g->speleothem_relief = 0.01;
+  g->fracture_relief = 0;
+  g->fracture_spacing = 2.0;
+  g->fracture_width = 0.3;
 }
 
 static void free_perm(karst_perm_node_t *n) {
@@ -1118,6 +1167,150 @@ static karst_error_t read_radius(reader_t *r, yaml_node_t *n, void *base, const 
   return KARST_SUCCESS;
 }
 
+/* --- geometry (karst mesh: docs/geometry.md) -------------------------------- */
+
+/* geometry.blend: "auto" (the smallest radius at each junction times
+ * blend_factor, stored as -1) or a width >= 0 m. */
+static karst_error_t read_blend(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_geometry_t *g = base;
+  char d[80];
+  if (n->type == YAML_SCALAR_NODE && is_plain(n) && !strcmp(scalar(n), "auto")) {
+    g->blend = -1;
+    return KARST_SUCCESS;
+  }
+  double v = 0;
+  karst_error_t err = get_number(r, n, path, &v);
+  if (err) return err;
+  if (!(v >= 0))
+    return fail_at(r, n, KARST_ERANGE, "%s must be auto or a width >= 0 m, got %s", path,
+                   describe(n, d, sizeof d));
+  g->blend = v;
+  return KARST_SUCCESS;
+}
+
+static const field_t wall_fields[] = {
+    {.key = "amplitude",
+     .type = T_NUM,
+     .off = offsetof(karst_wall_details_t, amplitude),
+     .range = RANGE_GE(0, " m")},
+    {.key = "wavelength",
+     .type = T_NUM,
+     .off = offsetof(karst_wall_details_t, wavelength),
+     .range = RANGE_GT(0, " m")},
+    {.key = "bandwidth",
+     .type = T_NUM,
+     .off = offsetof(karst_wall_details_t, bandwidth),
+     .range = RANGE_GT(0, " per m")},
+    {.key = "orientation",
+     .type = T_NUM,
+     .off = offsetof(karst_wall_details_t, orientation),
+     .range = RANGE_CLOSED(-90, 90, " degrees")},
+    {.key = "anisotropy",
+     .type = T_NUM,
+     .off = offsetof(karst_wall_details_t, anisotropy),
+     .range = RANGE_CLOSED(0, 1, "")},
+    {.key = "tilt",
+     .type = T_NUM,
+     .off = offsetof(karst_wall_details_t, tilt),
+     .range = RANGE_CLOSED(0, 60, " degrees")},
+    {.key = "tilt_direction", .type = T_NUM, .off = offsetof(karst_wall_details_t, tilt_direction)},
+};
+static const schema_t wall_schema = {wall_fields, 7};
+
+#define WALL_OF(t, name)                                                                           \
+  { .key = name, .type = T_MAP, .off = (t) * sizeof(karst_wall_details_t), .sub = &wall_schema }
+static const field_t details_fields[] = {
+    WALL_OF(KARST_TUNNEL_TUBE, "tube"),       WALL_OF(KARST_TUNNEL_KEYHOLE, "keyhole"),
+    WALL_OF(KARST_TUNNEL_CANYON, "canyon"),   WALL_OF(KARST_TUNNEL_BED, "bed"),
+    WALL_OF(KARST_TUNNEL_PASSAGE, "passage"), WALL_OF(KARST_TUNNEL_EPIKARST, "epikarst"),
+    WALL_OF(KARST_TUNNEL_CHAMBER, "chamber"),
+};
+#undef WALL_OF
+static const schema_t details_schema = {details_fields, KARST_TUNNEL_TYPE_COUNT};
+
+static const field_t speleothem_fields[] = {
+    {.key = "density",
+     .type = T_NUM,
+     .off = offsetof(karst_speleothem_rule_t, density),
+     .range = RANGE_GE(0, " per m²")},
+    {.key = "clearance",
+     .type = T_NUM,
+     .off = offsetof(karst_speleothem_rule_t, clearance),
+     .range = RANGE_GE(0, " m")},
+    {.key = "pair_height",
+     .type = T_NUM,
+     .off = offsetof(karst_speleothem_rule_t, pair_height),
+     .range = RANGE_GE(0, " m")},
+    {.key = "min_length",
+     .type = T_NUM,
+     .off = offsetof(karst_speleothem_rule_t, min_length),
+     .range = RANGE_GT(0, " m")},
+    {.key = "max_length",
+     .type = T_NUM,
+     .off = offsetof(karst_speleothem_rule_t, max_length),
+     .range = RANGE_GT(0, " m")},
+};
+static const schema_t speleothem_schema = {speleothem_fields, 5};
+
+/* geometry.speleothems: {chamber: {density: ..}, ...}, min_length <= max_length. */
+static karst_error_t read_speleothems(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_geometry_t *g = base;
+  const char *names[KARST_TUNNEL_TYPE_COUNT];
+  char d[80], sub[PATH_LEN];
+  for (int i = 0; i < KARST_TUNNEL_TYPE_COUNT; i++)
+    names[i] = karst_tunnel_type_name((karst_tunnel_type_t)i);
+  if (n->type != YAML_MAPPING_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a map from tunnel type to a map, got %s", path,
+                   describe(n, d, sizeof d));
+  for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
+    int t = 0;
+    karst_error_t err = check_key(r, n, p, names, KARST_TUNNEL_TYPE_COUNT, path, NULL, &t);
+    if (err) return err;
+    yaml_node_t *v = yaml_document_get_node(r->doc, p->value);
+    join(sub, path, names[t]);
+    karst_speleothem_rule_t *rule = &g->speleothems[t];
+    if ((err = walk_map(r, v, &speleothem_schema, rule, sub, NULL))) return err;
+    if (!(rule->min_length <= rule->max_length))
+      return fail_at(r, v, KARST_ERANGE, "%s: min_length (%g m) must be <= max_length (%g m)", sub,
+                     rule->min_length, rule->max_length);
+  }
+  return KARST_SUCCESS;
+}
+
+static const field_t geometry_fields[] = {
+    {.key = "blend", .type = T_FN, .fn = read_blend},
+    {.key = "blend_factor",
+     .type = T_NUM,
+     .off = offsetof(karst_geometry_t, blend_factor),
+     .range = RANGE_GT(0, "")},
+    {.key = "continuation_angle",
+     .type = T_NUM,
+     .off = offsetof(karst_geometry_t, continuation_angle),
+     .range = RANGE_CLOSED(0, 90, " degrees")},
+    {.key = "details",
+     .type = T_MAP,
+     .off = offsetof(karst_geometry_t, details),
+     .sub = &details_schema},
+    {.key = "speleothems", .type = T_FN, .fn = read_speleothems},
+    {.key = "speleothem_relief",
+     .type = T_NUM,
+     .off = offsetof(karst_geometry_t, speleothem_relief),
+     .range = RANGE_GE(0, " m")},
+    {.key = "fracture_relief",
+     .type = T_NUM,
+     .off = offsetof(karst_geometry_t, fracture_relief),
+     .range = RANGE_GE(0, " m")},
+    {.key = "fracture_spacing",
+     .type = T_NUM,
+     .off = offsetof(karst_geometry_t, fracture_spacing),
+     .range = RANGE_GT(0, " m")},
+    {.key = "fracture_width",
+     .type = T_NUM,
+     .off = offsetof(karst_geometry_t, fracture_width),
+     .range = RANGE_GT(0, " m")},
+};
+static const schema_t geometry_schema = {geometry_fields, 9};
+
 /* --- geological surfaces ------------------------------------------------- */
 
 /* The file @p name resolved relative to the scenario file (caller frees), or NULL (no memory). */
@@ -1756,8 +1949,12 @@ static const field_t top_fields[] = {
      .off = offsetof(karst_scenario_t, classification),
      .sub = &classification_schema},
     {.key = "random", .type = T_MAP, .sub = &random_schema},
+    {.key = "geometry",
+     .type = T_MAP,
+     .off = offsetof(karst_scenario_t, geometry),
+     .sub = &geometry_schema},
 };
-static const schema_t top_schema = {top_fields, 22};
+static const schema_t top_schema = {top_fields, 23};
 _Static_assert(sizeof top_fields / sizeof top_fields[0] <= MAX_FIELDS, "raise MAX_FIELDS");
 
 /* ------------------------------------------------------------------------ */

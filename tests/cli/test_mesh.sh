@@ -25,6 +25,10 @@ check 2 "bad voxel" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/a.ply" --voxel -1
 check 2 "bad box" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/a.ply" --box 1,2,3,0,5,6
 check 2 "carve without scenario" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/a.ply" --carve
 check 2 "unknown option" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/a.ply" --frob
+check 2 "negative blend" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/a.ply" --blend -1
+grep -q -- "--blend needs a width >= 0 in metres (0: hard union), got '-1'" "$TMP/err" && ok "blend message" || bad "blend message"
+check 2 "blend not a number" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/a.ply" --blend wide
+check 2 "bad realisation" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/a.ply" --realisation -3
 check 0 "help" "$KARST" help mesh
 check 1 "missing network" "$KARST" mesh /nonexistent/x.pl -o "$TMP/a.ply"
 grep -q "/nonexistent/x.pl" "$TMP/err" && ok "missing file named" || bad "missing file not named"
@@ -64,13 +68,14 @@ head = data[:end].decode().split('\n')
 assert head[1] == 'format binary_little_endian 1.0', head[1]
 nv = int([l for l in head if l.startswith('element vertex')][0].split()[2])
 nf = int([l for l in head if l.startswith('element face')][0].split()[2])
-assert 'property int tunnel_type' in head
-assert len(data) == end + 24 * nv + 17 * nf, 'size'
+assert 'property int tunnel_type' in head and 'property int feature' in head
+assert len(data) == end + 24 * nv + 21 * nf, 'size'
 edges = {}
 off = end + 24 * nv
-for (c, a, b, d, t) in struct.iter_unpack('<Biiii', data[off:off + 17 * nf]):
+for (c, a, b, d, t, ft) in struct.iter_unpack('<Biiiii', data[off:off + 21 * nf]):
     assert c == 3 and 0 <= min(a, b, d) and max(a, b, d) < nv
     assert t == 0, 'survey edges are tubes (label 0), got %d' % t
+    assert ft in (0, 1), 'feature is wall (0) or speleothem (1), got %d' % ft
     for e in ((a, b), (b, d), (d, a)):
         edges[e] = edges.get(e, 0) + 1
 assert all(n == 1 for n in edges.values()), 'an edge used twice in one direction'
@@ -83,6 +88,31 @@ EOF
 # above, and two runs give the same bytes
 check 0 "mesh again with 1 thread" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/mon1.ply" --voxel 0.5 --radius 0.8 -j 1 --quiet
 cmp -s "$TMP/mon.ply" "$TMP/mon1.ply" && ok "same file with 1 and 2 threads" || bad "output depends on the thread count"
+
+# The scenario's geometry section reaches karst mesh: a section with a hard union and no wall details
+# gives the same bytes as --blend 0 --no-details (same box and seed); a bad value in it is refused
+# with its file, line and column, before any output.
+cat > "$TMP/geo.yaml" <<'EOF'
+domain: {min: [-1000, -1000, -1000], max: [1000, 1000, 1000]}
+terrain: {elevation: 999}
+key_points:
+  - {type: spring, position: [0, 0, 0]}
+random: {seed: 5}
+geometry:
+  blend: 0
+  details:
+    tube: {amplitude: 0}
+EOF
+BOX=-25,-80,-25,30,10,15
+check 0 "geometry section from the scenario" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/geo.ply" --voxel 0.5 --radius 0.8 --scenario "$TMP/geo.yaml" --box $BOX --quiet
+check 0 "the same by options" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/opt.ply" --voxel 0.5 --radius 0.8 --blend 0 --no-details --seed 5 --box $BOX --quiet
+check 0 "the default (blended, detailed) in that box" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/def.ply" --voxel 0.5 --radius 0.8 --seed 5 --box $BOX --quiet
+cmp -s "$TMP/geo.ply" "$TMP/opt.ply" && ok "geometry section read (same bytes)" || bad "geometry section not applied"
+cmp -s "$TMP/geo.ply" "$TMP/def.ply" && bad "hard union without details equals the default mesh" || ok "the default mesh is blended and detailed"
+sed -i 's/  blend: 0/  blend: -2/' "$TMP/geo.yaml"
+check 1 "bad geometry value" "$KARST" mesh "$DATA/Monachou.pl" -o "$TMP/geo2.ply" --scenario "$TMP/geo.yaml" --quiet
+grep -q "geo.yaml:7:10: geometry.blend must be auto or a width >= 0 m, got -2" "$TMP/err" && ok "bad geometry named by line and column" || { bad "geometry message"; cat "$TMP/err"; }
+[ ! -e "$TMP/geo2.ply" ] && ok "no output after a bad geometry section" || bad "output left"
 
 # Far from the origin (Monachou moved to UTM-like coordinates, easting +600 000 m, northing
 # +5 123 000 m, where float32 steps are 6 cm and 0.5 m): the STL is written relative to an origin
@@ -119,7 +149,7 @@ head = ply[:end].decode().split('\n')
 nv = int([l for l in head if l.startswith('element vertex')][0].split()[2])
 nf = int([l for l in head if l.startswith('element face')][0].split()[2])
 xyz = list(struct.iter_unpack('<3d', ply[end:end + 24 * nv]))
-faces = list(struct.iter_unpack('<Biiii', ply[end + 24 * nv:end + 24 * nv + 17 * nf]))
+faces = list(struct.iter_unpack('<Biiiii', ply[end + 24 * nv:end + 24 * nv + 21 * nf]))
 n = struct.unpack('<I', stl[80:84])[0]
 assert n == nf > 1000, (n, nf)
 worst = 0
@@ -146,6 +176,8 @@ r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update()
 pd = r.GetOutput()
 assert pd.GetNumberOfPolys() > 1000, pd.GetNumberOfPolys()
 assert pd.GetCellData().GetArray('tunnel_type') is not None
+feat = pd.GetCellData().GetArray('feature')
+assert feat is not None and set(feat.GetValue(i) for i in range(feat.GetNumberOfTuples())) <= {0, 1}
 fe = vtk.vtkFeatureEdges(); fe.SetInputData(pd)
 fe.BoundaryEdgesOn(); fe.NonManifoldEdgesOn(); fe.FeatureEdgesOff(); fe.ManifoldEdgesOff(); fe.Update()
 assert fe.GetOutput().GetNumberOfCells() == 0, fe.GetOutput().GetNumberOfCells()

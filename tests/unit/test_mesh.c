@@ -17,6 +17,7 @@
 
 #include "karst.h"
 #include "mesh/mesh_internal.h"
+#include "sdf_check.h"
 #include "test_util.h"
 
 /* Shortest triangle side of a mesh, in metres. */
@@ -217,15 +218,7 @@ static void test_deterministic(void **state) {
   karst_mesh_t m1, m2;
   karst_mesh_init(&m1);
   karst_mesh_init(&m2);
-  ctx.nthreads = 1;
-  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.3, &m1, NULL), KARST_SUCCESS);
-  ctx.nthreads = 2;
-  assert_int_equal(karst_mesh_polygonize(&ctx, t, box, 0.3, &m2, NULL), KARST_SUCCESS);
-  assert_int_equal(m1.n_vertices, m2.n_vertices);
-  assert_int_equal(m1.n_triangles, m2.n_triangles);
-  assert_memory_equal(m1.xyz, m2.xyz, (size_t)m1.n_vertices * 3 * sizeof(double));
-  assert_memory_equal(m1.tri, m2.tri, (size_t)m1.n_triangles * 3 * sizeof(karst_int_t));
-  assert_memory_equal(m1.tri_label, m2.tri_label, (size_t)m1.n_triangles * sizeof(int));
+  assert_same_on_1_and_2_threads(t, box, 0.3, &m1, &m2);
   assert_good_mesh(&m1);
   karst_mesh_destroy(&m1);
   karst_mesh_destroy(&m2);
@@ -419,7 +412,7 @@ static void test_writers(void **state) {
   memcpy(&x0, hb + 84 + 12, 4); /* little-endian host */
   assert_close(x0, (float)m.xyz[3 * m.tri[0]], 0);
 
-  /* PLY: header, then V * 24 + T * 17 bytes; check the last vertex and face */
+  /* PLY: header, then V * 24 + T * 21 bytes; check the last vertex and face */
   f = fopen(ply, "rb");
   assert_non_null(f);
   char line[256];
@@ -436,22 +429,23 @@ static void test_writers(void **state) {
   assert_true(label_prop);
   long body = ftell(f);
   fseek(f, 0, SEEK_END);
-  assert_int_equal(ftell(f) - body, 24 * m.n_vertices + 17 * m.n_triangles);
+  assert_int_equal(ftell(f) - body, 24 * m.n_vertices + 21 * m.n_triangles);
   fseek(f, body + 24 * (m.n_vertices - 1), SEEK_SET);
   double xyz[3];
   assert_int_equal(fread(xyz, 8, 3, f), 3);
   for (int c = 0; c < 3; c++)
     assert_close(xyz[c], m.xyz[3 * (m.n_vertices - 1) + c], 0);
-  fseek(f, -17, SEEK_END);
-  unsigned char face[17];
-  assert_int_equal(fread(face, 1, 17, f), 17);
+  fseek(f, -21, SEEK_END);
+  unsigned char face[21];
+  assert_int_equal(fread(face, 1, 21, f), 21);
   fclose(f);
   assert_int_equal(face[0], 3);
-  int32_t idx[4];
-  memcpy(idx, face + 1, 16);
+  int32_t idx[5];
+  memcpy(idx, face + 1, 20);
   for (int k = 0; k < 3; k++)
     assert_int_equal(idx[k], m.tri[3 * (m.n_triangles - 1) + k]);
   assert_int_equal(idx[3], KARST_TUNNEL_BED);
+  assert_int_equal(idx[4], KARST_SDF_FEATURE_WALL);
   remove(ply);
   remove(stl);
   rmdir(dir);
