@@ -73,6 +73,23 @@ typedef struct karst_i_node {
     } bin;
     karst_i_noise_t noise;
     karst_i_revolve_t rev;
+    struct {
+      double u[3], d; /* u.p - d */
+    } plane;
+    struct {
+      karst_int_t first, n; /* children kids[first .. first+n), in fold order */
+      double R;
+    } sint;
+    struct {
+      karst_int_t first; /* 3 n doubles in the tree's coordinate pool */
+      int n, dim;        /* points; 0 point, 1 segment, 2 polygon */
+      double radius;
+      double o[3], e1[3], e2[3], nrm[3]; /* polygon frame (dim 2) */
+    } thick;
+    struct {
+      karst_sdf_field_fn fn;
+      const void *arg;
+    } ext;
   } u;
 } karst_i_node_t;
 
@@ -93,6 +110,8 @@ struct karst_sdf {
   karst_int_t n_bvh, cap_bvh;
   karst_section_t *sections;
   int n_sections, cap_sections;
+  double *coords; /* thick primitives' points */
+  karst_int_t n_coords, cap_coords;
   karst_terrain_t *terrains; /* owned copies (z arrays owned) */
   int n_terrains, cap_terrains;
   karst_int_t root;
@@ -114,6 +133,21 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
  * up is the hint made orthogonal to u (world y, then x, for vertical axes),
  * side = up x u. Returns -1 when no frame can be made. */
 int karst_i_sweep_frame(const double u[3], const double up[3], double side[3], double upv[3]);
+
+/* A new node of @p kind (label KARST_SDF_NO_LABEL, unbounded); *nd is valid
+ * until the next node is made. */
+karst_error_t karst_i_sdf_new_node(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t kind,
+                                   karst_i_node_t **nd, karst_int_t *id);
+/* Grow a box by the rounding pad (KARST_I_BOX_PAD_*). */
+void karst_i_pad_box(double box[6]);
+/* Grow an array to hold @p need items; 0 or -1 (out of memory). */
+int karst_i_grow(void **p, karst_int_t *cap, karst_int_t need, size_t size);
+
+/* Fields of the blocks' nodes (smooth.c); same contract as karst_i_sdf_eval. */
+double karst_i_eval_smooth_intersection(const karst_sdf_t *t, const karst_i_node_t *nd,
+                                        const double p[3], double ub, int *label,
+                                        karst_int_t *touched);
+double karst_i_eval_thick(const karst_sdf_t *t, const karst_i_node_t *nd, const double p[3]);
 
 /* Empty a tree (keeps its storage): no half-built tree survives a failure. */
 void karst_i_sdf_clear(karst_sdf_t *t);

@@ -57,6 +57,7 @@ void karst_sdf_free(karst_sdf_t *t) {
   free(t->kids);
   free(t->bvh);
   free(t->sections);
+  free(t->coords);
   free(t);
 }
 
@@ -68,6 +69,7 @@ void karst_i_sdf_clear(karst_sdf_t *t) {
   t->n_terrains = 0;
   t->n_nodes = t->n_kids = t->n_bvh = 0;
   t->n_sections = 0;
+  t->n_coords = 0;
   t->root = -1;
 }
 
@@ -82,6 +84,20 @@ static karst_error_t new_node(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t
   (*nd)->kind = kind;
   (*nd)->label = KARST_SDF_NO_LABEL;
   return KARST_SUCCESS;
+}
+
+karst_error_t karst_i_sdf_new_node(karst_ctx_t *ctx, karst_sdf_t *t, karst_sdf_kind_t kind,
+                                   karst_i_node_t **nd, karst_int_t *id) {
+  return new_node(ctx, t, kind, nd, id);
+}
+
+int karst_i_grow(void **p, karst_int_t *cap, karst_int_t need, size_t size) {
+  return grow(p, cap, need, size);
+}
+
+static void pad_box(double box[6]);
+void karst_i_pad_box(double box[6]) {
+  pad_box(box);
 }
 
 static void pad_box(double box[6]) {
@@ -910,6 +926,18 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     lab = a <= b ? la : lb;
     break;
   }
+  case KARST_SDF_PLANE:
+    v = dot3(nd->u.plane.u, p) - nd->u.plane.d;
+    break;
+  case KARST_SDF_SMOOTH_INTERSECTION:
+    v = karst_i_eval_smooth_intersection(t, nd, p, ub, &lab, touched);
+    break;
+  case KARST_SDF_THICK:
+    v = karst_i_eval_thick(t, nd, p);
+    break;
+  case KARST_SDF_EXTERNAL:
+    v = nd->u.ext.fn(nd->u.ext.arg, p, ub, &lab);
+    break;
   case KARST_SDF_NOISE: {
     const karst_i_noise_t *nz = &nd->u.noise;
     double scale = 1.0 + nz->amplitude * nz->lipschitz;
@@ -969,6 +997,7 @@ void karst_sdf_stats(const karst_sdf_t *t, karst_sdf_stats_t *st) {
   st->memory_bytes = sizeof *t + (size_t)t->n_nodes * sizeof *t->nodes +
                      (size_t)t->n_kids * sizeof *t->kids + (size_t)t->n_bvh * sizeof *t->bvh +
                      (size_t)t->n_sections * sizeof *t->sections +
+                     (size_t)t->n_coords * sizeof *t->coords +
                      (size_t)t->n_terrains * sizeof *t->terrains;
   for (int i = 0; i < t->n_terrains; i++)
     if (t->terrains[i].z)
