@@ -71,6 +71,23 @@ typedef struct karst_blocks_warp {
   const char *image; /**< PGM or PNG path for KARST_RELIEF_IMAGE (borrowed) */
 } karst_blocks_warp_t;
 
+/** A greyscale relief image for the warping (PGM P2/P5 or PNG), values in [0, 1]. */
+typedef struct karst_blocks_relief {
+  int width, height;
+  float *v;            /**< width × height, row 0 at the bottom */
+  double lipschitz_px; /**< Lipschitz constant of the bilinear interpolant, per pixel */
+} karst_blocks_relief_t;
+
+/** Largest width or height of a relief image (pixels). */
+#define KARST_BLOCKS_RELIEF_MAX_SIDE 16384
+
+/** Read a relief image (format by content); errors name the file. */
+karst_error_t karst_blocks_relief_load(karst_ctx_t *ctx, const char *path,
+                                       karst_blocks_relief_t *r);
+void karst_blocks_relief_destroy(karst_blocks_relief_t *r);
+/** Bilinear, periodic value at (u, v) in pixels. */
+double karst_blocks_relief_sample(const karst_blocks_relief_t *r, double u, double v);
+
 /**
  * Parameters of one tile. karst_blocks_tile_params_init fills every field
  * with the defaults of a type (docs/blocks.md lists them with their source).
@@ -78,7 +95,7 @@ typedef struct karst_blocks_warp {
 typedef struct karst_blocks_tile_params {
   int type;              /**< karst_block_type_t */
   double size;           /**< s: side of the cubic tile (m), default 20 (§4) */
-  double poisson_radius; /**< r: smallest distance between sample points (m), default 0.71 */
+  double poisson_radius; /**< r: smallest distance between sample points (m), default 0.69 */
   double graph_radius;   /**< points closer than this are neighbours (m), default 2 r */
   double smooth_radius;  /**< R of the smooth intersection (m), default 0.25 (§4.2) */
   double aperture;       /**< joint aperture: faces move in by half of it (m), default 0.04 */
@@ -186,6 +203,15 @@ int karst_blocks_segment_visible(const karst_blocks_tile_t *tile, const double a
 karst_error_t karst_blocks_tile_mesh(karst_ctx_t *ctx, const karst_blocks_tile_t *tile,
                                      double voxel, karst_mesh_t *out);
 
+/**
+ * Write run.json: every parameter of the @p n tiles and their Table 1
+ * statistics (points, discs, blocks, mean points per block, seconds);
+ * @p extra (may be NULL) adds JSON members to the top object. Atomic.
+ */
+karst_error_t karst_blocks_write_run(karst_ctx_t *ctx, const char *path,
+                                     const karst_blocks_tile_t *const *tiles, int n,
+                                     const char *command, const char *extra);
+
 /* ------------------------------------------------------------------------ */
 /* Replication over a terrain (§5).                                          */
 /* ------------------------------------------------------------------------ */
@@ -234,6 +260,70 @@ karst_int_t karst_blocks_replica_count(const karst_blocks_replica_t *rep);
  */
 karst_error_t karst_blocks_replica_node(karst_ctx_t *ctx, const karst_blocks_replica_t *rep,
                                         karst_sdf_t *tree, karst_int_t *node);
+
+/* ------------------------------------------------------------------------ */
+/* The blocks section of a scenario (read by src/scenario/scenario.c).       */
+/* ------------------------------------------------------------------------ */
+
+/** A stratum by elevation band: below @c below (the last may be unbounded). */
+typedef struct karst_blocks_stratum {
+  char *name;
+  double below; /**< top of the band (m); +infinity when not given */
+  int tile;     /**< karst_block_type_t of its blocks */
+  int line, column;
+} karst_blocks_stratum_t;
+
+/** The `blocks` section: tile parameters shared by the tiles, presence, strata. */
+typedef struct karst_blocks_section {
+  double tile_size, poisson_radius, graph_radius, smooth_radius, aperture, hull_margin;
+  double voxel;      /**< polygonization of terrain_blocks.vtp (m), default 0.5 */
+  double tile_voxel; /**< polygonization of tiles/<type>.vtp (m), default 0.1 */
+  uint64_t seed;
+  int has_seed;     /**< else the scenario's random.seed */
+  double region[4]; /**< x0, y0, x1, y1 of the amplified part of the terrain */
+  int has_region;   /**< else the scenario's domain */
+  karst_blocks_presence_t presence;
+  int warp_relief; /**< karst_relief_kind_t */
+  double warp_amplitude, warp_wavelength;
+  char *warp_image; /**< as given (relative to the scenario) */
+  int n_strata;
+  karst_blocks_stratum_t *strata;
+  int line, column; /**< where the section starts */
+} karst_blocks_section_t;
+
+/** Defaults (docs/blocks.md). */
+void karst_blocks_section_init(karst_blocks_section_t *b);
+/** Release what the section holds and the section itself (NULL allowed). */
+void karst_blocks_section_free(karst_blocks_section_t *b);
+/** The elevation-band stratum of @p p (a karst_blocks_stratum_fn; @p arg is the section). */
+int karst_blocks_section_stratum(void *arg, const double p[3]);
+/** Tile parameters of type @p type from the section (defaults of the type, the section's values).
+ */
+void karst_blocks_section_tile_params(const karst_blocks_section_t *b, int type, uint64_t seed,
+                                      karst_blocks_tile_params_t *par);
+
+/* ------------------------------------------------------------------------ */
+/* A scenario's terrain amplified with blocks.                               */
+/* ------------------------------------------------------------------------ */
+
+typedef struct karst_blocks_amplified karst_blocks_amplified_t;
+
+/**
+ * Tiles of the section's strata, their replication over the scenario's
+ * terrain in the section's region (default the domain) and T ∪ R added to
+ * @p tree as *node (see amplify.c). @p sc and @p tree must outlive *out.
+ */
+karst_error_t karst_blocks_amplify(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_sdf_t *tree,
+                                   karst_blocks_amplified_t **out, karst_int_t *node);
+void karst_blocks_amplified_free(karst_blocks_amplified_t *a);
+/** The tiles (one per distinct type, in the order of the strata); returns their count. */
+int karst_blocks_amplified_tiles(const karst_blocks_amplified_t *a,
+                                 const karst_blocks_tile_t *const **tiles);
+const karst_blocks_replica_t *karst_blocks_amplified_replica(const karst_blocks_amplified_t *a);
+/** The amplified region (lo, hi): region × the domain's z range. */
+void karst_blocks_amplified_box(const karst_blocks_amplified_t *a, double box[6]);
+/** Per-triangle block_id and block_type from a polygonized tree's labels (-1: no block). */
+void karst_blocks_mesh_labels(karst_mesh_t *m, int *id, int *type);
 
 /** Labels of block triangles: KARST_BLOCKS_LABEL_BASE + type << 20 | block id. */
 #define KARST_BLOCKS_LABEL_BASE (1 << 24)

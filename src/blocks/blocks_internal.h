@@ -60,4 +60,9 @@ karst_error_t karst_i_blocks_poisson(karst_ctx_t *ctx, double s, double r, int p
 int karst_i_blocks_segment_disc(const double a[3], const double b[3], const double c[3],
                                 const double n[3], double radius, double *t);
 
+/* Field of block i at p (tile frame), with the evaluation contract of
+ * implicit_internal.h (exact below ub); *label (may be NULL) gets its label. */
+double karst_i_blocks_block_eval(const karst_blocks_tile_t *t, karst_int_t i, const double p[3],
+                                 double ub, int *label);
+
 #endif

@@ -47,12 +47,12 @@ void karst_blocks_tile_params_init(karst_blocks_tile_params_t *p, int type) {
   memset(p, 0, sizeof *p);
   p->type = type;
   p->size = 20.0;
-  p->poisson_radius = 0.71;
-  p->graph_radius = 2 * 0.71;
+  p->poisson_radius = 0.69;
+  p->graph_radius = 2 * 0.69;
   p->smooth_radius = 0.25;
   p->aperture = 0.1;
-  p->hull_margin = 2 * 0.71;
-  p->degenerate_radius = 0.71;
+  p->hull_margin = 2 * 0.69;
+  p->degenerate_radius = 0.69;
   p->dart_passes = KARST_SAMPLING_DART_PASSES;
   p->seed = 1;
   p->disc_spacing = 2.0;
@@ -67,7 +67,7 @@ void karst_blocks_tile_params_init(karst_blocks_tile_params_t *p, int type) {
     p->n_discs = 15;
     break;
   case KARST_BLOCK_PRISMATIC:
-    p->n_discs = 18;
+    p->n_discs = 15;
     p->disc_radius_min = 3.0, p->disc_radius_max = 7.0;
     p->tilt = 12.0;
     break;
@@ -87,8 +87,8 @@ void karst_blocks_tile_params_init(karst_blocks_tile_params_t *p, int type) {
     p->disc_radius_min = 1.5, p->disc_radius_max = 2.5; /* s/10 */
     break;
   case KARST_BLOCK_COLUMNAR:
-    p->n_discs = 21;
-    p->n_bedding = 4;
+    p->n_discs = 14;
+    p->n_bedding = 3;
     p->bedding_spacing = 3.0;
     p->disc_radius_min = 10.0, p->disc_radius_max = 20.0; /* continuous: s/2 to s */
     break;
@@ -1052,12 +1052,23 @@ typedef struct pkey {
   double u[3], d;
 } pkey_t;
 
+/* Keys order by family, then plane offset: translates of a family along
+ * its plane (M orthogonal to n) are the same plane and end up adjacent. */
 static int pkey_cmp(const void *pa, const void *pb) {
   const pkey_t *a = pa, *b = pb;
   if (a->f != b->f) return a->f < b->f ? -1 : 1;
+  if (a->d != b->d || a->u[0] != b->u[0]) {
+    double sa = a->u[0] + a->u[1] + a->u[2], sb = b->u[0] + b->u[1] + b->u[2];
+    if (sa != sb) return sa < sb ? -1 : 1;
+    if (a->d != b->d) return a->d < b->d ? -1 : 1;
+  }
   for (int k = 0; k < 3; k++)
     if (a->M[k] != b->M[k]) return a->M[k] < b->M[k] ? -1 : 1;
   return 0;
+}
+
+static int same_plane(const pkey_t *a, const pkey_t *b, double tol) {
+  return a->f == b->f && fabs(a->d - b->d) <= tol && dot3(a->u, b->u) > 0;
 }
 
 /* Whether the points span a volume (not within tol of a plane). */
@@ -1183,7 +1194,7 @@ static void build_one(block_job_t *J, karst_int_t ci) {
   qsort(keys, (size_t)n_keys, sizeof *keys, pkey_cmp);
   karst_int_t nk = 0;
   for (karst_int_t i = 0; i < n_keys; i++) {
-    if (nk > 0 && pkey_cmp(&keys[nk - 1], &keys[i]) == 0) continue;
+    if (nk > 0 && same_plane(&keys[nk - 1], &keys[i], tol)) continue;
     int ok = 1;
     for (karst_int_t j = 0; j < n && ok; j++)
       if (dot3(keys[i].u, pts + 3 * j) - keys[i].d > tol) ok = 0;
@@ -1214,10 +1225,20 @@ static void build_one(block_job_t *J, karst_int_t ci) {
     if (dot3(planes + 4 * np, inner) - planes[4 * np + 3] < -tol) np++;
   }
   if (karst_i_cgal_halfspaces(planes, np, inner, 1e3 * tol, &R->poly, msg, sizeof msg)) {
-    snprintf(R->msg, sizeof R->msg, "block %lld: intersection of %lld half-spaces: %s",
-             (long long)ci, (long long)np, msg);
-    R->failed = 1;
-    goto cleanup;
+    /* numerically hopeless cells (near-parallel planes meeting far away):
+     * fall back to the grown hull alone, then to a thick primitive */
+    karst_int_t nh = 0;
+    for (karst_int_t i = 0; i < n_hp; i++) {
+      memcpy(planes + 4 * nh, hp + 4 * i, 4 * sizeof *planes);
+      planes[4 * nh + 3] += par->hull_margin;
+      nh++;
+    }
+    if (karst_i_cgal_halfspaces(planes, nh, inner, 1e3 * tol, &R->poly, msg, sizeof msg)) {
+      R->kind = KARST_BLOCK_THICK;
+      R->pts = pts, R->n_pts = n_pts;
+      pts = NULL;
+      goto cleanup;
+    }
   }
   R->kind = KARST_BLOCK_CONVEX;
   for (int k = 0; k < 3; k++)
@@ -1496,8 +1517,8 @@ cleanup:
 /* Evaluation.                                                             */
 /* ---------------------------------------------------------------------- */
 
-static double block_eval_ub(const karst_blocks_tile_t *t, karst_int_t i, const double p[3],
-                            double ub, int *label) {
+double karst_i_blocks_block_eval(const karst_blocks_tile_t *t, karst_int_t i, const double p[3],
+                                 double ub, int *label) {
   const karst_blocks_block_t *B = &t->blocks[i];
   const karst_blocks_tile_params_t *par = &t->par;
   int lab = KARST_BLOCKS_LABEL(par->type, i);
@@ -1522,7 +1543,7 @@ static double block_eval_ub(const karst_blocks_tile_t *t, karst_int_t i, const d
 /** Field of block @p i at @p p, tile coordinates (see blocks.h). O(planes). */
 double karst_blocks_block_eval(const karst_blocks_tile_t *t, karst_int_t i, const double p[3]) {
   if (!t || i < 0 || i >= t->n_blocks) return INFINITY;
-  return block_eval_ub(t, i, p, INFINITY, NULL);
+  return karst_i_blocks_block_eval(t, i, p, INFINITY, NULL);
 }
 
 /** Periodic field of the tile, min over blocks and lattice copies. O(blocks). */
@@ -1536,7 +1557,7 @@ double karst_blocks_tile_eval(const karst_blocks_tile_t *t, const double p[3]) {
         double x[3] = {q[0] - s * lx, q[1] - s * ly, q[2] - s * lz};
         for (karst_int_t i = 0; i < t->n_blocks; i++) {
           if (karst_i_sdbox(t->blocks[i].box, x) >= best) continue;
-          double v = block_eval_ub(t, i, x, best, NULL);
+          double v = karst_i_blocks_block_eval(t, i, x, best, NULL);
           if (v < best) best = v;
         }
       }
@@ -1573,7 +1594,7 @@ typedef struct one_block {
 
 static double one_block_field(const void *arg, const double p[3], double ub, int *label) {
   const one_block_t *o = arg;
-  return block_eval_ub(o->t, o->i, p, ub, label);
+  return karst_i_blocks_block_eval(o->t, o->i, p, ub, label);
 }
 
 /**
