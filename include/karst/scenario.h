@@ -177,6 +177,8 @@ typedef struct karst_classification {
   karst_radius_range_t radius[KARST_TUNNEL_TYPE_COUNT]; /**< indexed by karst_tunnel_type_t */
 } karst_classification_t;
 
+struct karst_blocks_section; /* include/karst/blocks.h */
+
 typedef struct karst_scenario {
   char *path;                  /**< file the scenario was read from (NULL if built in code) */
   char *name;
@@ -209,6 +211,7 @@ typedef struct karst_scenario {
   karst_srcpos_t pos_water_table; /**< water_table.elevation value */
   karst_srcpos_t pos_key_points;  /**< the key_points list */
   karst_srcpos_t pos_sampling;    /**< the sampling map */
+  struct karst_blocks_section *blocks; /**< the blocks section (karst blocks), NULL when absent */
 } karst_scenario_t;
 
 /** Fill @p sc with every documented default (docs/scenario.md): no key points, flat terrain at 100 m. */

@@ -17,6 +17,7 @@
 
 #include <yaml.h>
 
+#include "karst/blocks.h"
 #include "scenario_internal.h"
 
 /* ------------------------------------------------------------------------ */
@@ -84,6 +85,7 @@ void karst_scenario_destroy(karst_scenario_t *sc) {
   }
   free(sc->key_points);
   free(sc->prescribed);
+  karst_blocks_section_free(sc->blocks);
   memset(sc, 0, sizeof *sc);
 }
 
@@ -1148,6 +1150,8 @@ static const field_t random_fields[] = {
 };
 static const schema_t random_schema = {random_fields, 2};
 
+#include "scenario/scenario_blocks.inc"
+
 static const field_t top_fields[] = {
     {.key = "name", .type = T_STR, .off = offsetof(karst_scenario_t, name)},
     {.key = "units", .type = T_FN, .fn = read_units},
@@ -1188,8 +1192,9 @@ static const field_t top_fields[] = {
      .off = offsetof(karst_scenario_t, classification),
      .sub = &classification_schema},
     {.key = "random", .type = T_MAP, .sub = &random_schema},
+    {.key = "blocks", .type = T_FN, .fn = read_blocks},
 };
-static const schema_t top_schema = {top_fields, 17};
+static const schema_t top_schema = {top_fields, 18};
 _Static_assert(sizeof top_fields / sizeof top_fields[0] <= MAX_FIELDS, "raise MAX_FIELDS");
 
 /* ------------------------------------------------------------------------ */
