@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "cli.h"
+#include "karst/blocks.h"
 
 static const char *ext_of(const char *path) {
   const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
@@ -103,7 +104,7 @@ static karst_error_t check_sdf_size(karst_ctx_t *ctx, const char *path, const do
 static int run(int argc, char **argv) {
   const char *in = NULL, *out = NULL, *scen_path = NULL, *sdf_path = NULL;
   double voxel = 0.5, box[6];
-  int have_box = 0, carve = 0, quiet = 0, threads = 0;
+  int have_box = 0, carve = 0, quiet = 0, threads = 0, blocks = 0;
   karst_implicit_params_t par;
   karst_implicit_params_init(&par);
   for (int i = 1; i < argc; i++) {
@@ -132,6 +133,8 @@ static int run(int argc, char **argv) {
       par.bend_spheres = 1;
     } else if (strcmp(a, "--carve") == 0) {
       carve = 1;
+    } else if (strcmp(a, "--blocks") == 0) {
+      blocks = 1;
     } else if (strcmp(a, "--scenario") == 0) {
       if (!more) return cli_usage_error("mesh", "--scenario needs a file name");
       scen_path = argv[++i];
@@ -179,6 +182,8 @@ static int run(int argc, char **argv) {
     return cli_usage_error("mesh", "--sdf '%s': the extension must be .vti", sdf_path);
   if (carve && !scen_path)
     return cli_usage_error("mesh", "--carve needs --scenario (the terrain comes from it)");
+  if (blocks && !carve)
+    return cli_usage_error("mesh", "--blocks needs --carve (the blocks amplify the terrain)");
 
   karst_ctx_t ctx;
   cli_ctx_init(&ctx, quiet, 0);
@@ -188,6 +193,7 @@ static int run(int argc, char **argv) {
   karst_scenario_t sc;
   karst_scenario_init(&sc);
   karst_sdf_t *sdf = NULL;
+  karst_blocks_amplified_t *amp = NULL;
   karst_mesh_t mesh;
   karst_mesh_init(&mesh);
   karst_fileset_t outs;
@@ -204,8 +210,16 @@ static int run(int argc, char **argv) {
   if (scen_path && (err = karst_scenario_load(&ctx, scen_path, &sc))) goto fail;
   if ((err = karst_sdf_create(&ctx, &sdf))) goto fail;
   karst_implicit_stats_t bst;
-  if ((err = karst_implicit_build(&ctx, &net, &par, carve ? &sc.terrain : NULL, sdf, &bst)))
+  if ((err = karst_implicit_build(&ctx, &net, &par, carve && !blocks ? &sc.terrain : NULL, sdf,
+                                  &bst)))
     goto fail;
+  if (blocks) { /* the conduits carved out of the block-amplified terrain (docs/blocks.md) */
+    karst_int_t conduits = karst_sdf_root(sdf), rock, root;
+    if ((err = karst_blocks_amplify(&ctx, &sc, sdf, &amp, &rock)) ||
+        (err = karst_sdf_difference(&ctx, sdf, rock, conduits, &root)) ||
+        (err = karst_sdf_set_root(&ctx, sdf, root)))
+      goto fail;
+  }
   double t1 = now_s();
   double base[6], margin = 0;
   if (have_box) {
@@ -222,6 +236,17 @@ static int run(int argc, char **argv) {
   if (sdf_path && (err = check_sdf_size(&ctx, sdf_path, base, margin, voxel))) goto fail;
   karst_polygonize_stats_t pst;
   if ((err = karst_mesh_polygonize(&ctx, sdf, box, voxel, &mesh, &pst))) goto fail;
+  if (blocks && mesh.n_triangles > 0) { /* block triangles are rock, not a tunnel type */
+    int *id = malloc((size_t)mesh.n_triangles * sizeof *id),
+        *ty = malloc((size_t)mesh.n_triangles * sizeof *ty);
+    if (id && ty) karst_blocks_mesh_labels(&mesh, id, ty);
+    free(id);
+    free(ty);
+    if (!id || !ty) {
+      err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
+      goto fail;
+    }
+  }
   double t2 = now_s();
   writing = out;
   if ((err = karst_mesh_write(&ctx, tmp_out, &mesh))) goto fail_write;
@@ -255,7 +280,7 @@ static int run(int argc, char **argv) {
         box[3], box[4], box[5], (long long)ss.n_nodes, (long long)ss.by_kind[KARST_SDF_SWEEP],
         (long long)ss.by_kind[KARST_SDF_REVOLVE], (long long)ss.by_kind[KARST_SDF_SPHERE],
         (long long)ss.by_kind[KARST_SDF_ELLIPSOID], ss.memory_bytes / 1e6, t1 - t0, t2 - t1,
-        ctx.nthreads, carve ? ", terrain carved" : "");
+        ctx.nthreads, blocks ? ", block-amplified terrain carved" : carve ? ", terrain carved" : "");
   }
   goto done;
 fail_write:
@@ -266,6 +291,7 @@ done:
   karst_fileset_abort(&outs);
   karst_mesh_destroy(&mesh);
   karst_sdf_free(sdf);
+  karst_blocks_amplified_free(amp);
   karst_scenario_destroy(&sc);
   karst_network_destroy(&net);
   return status;
@@ -274,7 +300,8 @@ done:
 const cli_command_t cli_cmd_mesh = {
     "mesh", run, "polygonize the conduits of a network into a closed triangle mesh",
     "usage: karst mesh NETWORK.vtp -o cave.vtp [--voxel 0.5] [--box x0,y0,z0,x1,y1,z1]\n"
-    "                  [--carve --scenario S.yaml] [--sdf cave.vti] [--noise A] [--radius R]\n"
+    "                  [--carve [--blocks] --scenario S.yaml] [--sdf cave.vti] [--noise A]\n"
+    "                  [--radius R]\n"
     "                  [--spheres] [--seed S] [-j THREADS] [--quiet]\n\n"
     "Builds the implicit geometry of the network's conduits (Paris et al. 2021, §6: one sweep\n"
     "of the tunnel type's cross-section per edge, scaled by its \"radius\", the sections revolved\n"
@@ -289,6 +316,9 @@ const cli_command_t cli_cmd_mesh = {
     "  --box ...      region to mesh; the mesh is closed where the solid leaves it (default:\n"
     "                 the scenario's domain with --scenario, else the conduits plus 2 voxels)\n"
     "  --carve        mesh the rock: the scenario's terrain minus the conduits\n"
+    "  --blocks       with --carve: the terrain amplified with the rock blocks of the\n"
+    "                 scenario's blocks section (docs/blocks.md), so a cave entrance in a\n"
+    "                 cliff of blocks is one mesh\n"
     "  --scenario S   scenario file (terrain for --carve, default box)\n"
     "  --sdf F.vti    also write the sampled field as VTK image data (contour it at 0)\n"
     "  --noise A      wall irregularities of at most A metres (default 0: smooth walls)\n"
