@@ -1,0 +1,268 @@
+/* Hostile input for the rock blocks: the blocks section of a scenario
+ * (src/scenario/scenario_blocks.inc) and the relief image reader
+ * (src/blocks/relief.c). Every bad file must give a non-zero code and a
+ * message naming the file, the line and column (scenario) and the field,
+ * never a crash (the suite runs under ASan and UBSan). */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "karst.h"
+#include "karst/blocks.h"
+#include "test_util.h"
+
+static char dir[256];
+
+static void write_file(const char *path, const void *data, size_t n) {
+  FILE *fp = fopen(path, "wb");
+  assert_non_null(fp);
+  assert_int_equal(fwrite(data, 1, n, fp), n);
+  fclose(fp);
+}
+
+static const char *base = "domain: {min: [0, 0, 0], max: [100, 100, 100]}\n"
+                          "terrain: {elevation: 90}\n"
+                          "key_points:\n"
+                          "  - {type: sink, position: [10, 10, 80]}\n"
+                          "  - {type: spring, position: [90, 90, 20]}\n";
+
+/* Load a scenario made of base + @p blocks; returns the code, message in ctx. */
+static karst_error_t load(karst_ctx_t *ctx, const char *blocks, karst_scenario_t *sc) {
+  char path[300], text[4096];
+  snprintf(path, sizeof path, "%s/s.yaml", dir);
+  snprintf(text, sizeof text, "%s%s", base, blocks);
+  write_file(path, text, strlen(text));
+  karst_scenario_init(sc);
+  return karst_scenario_load(ctx, path, sc);
+}
+
+static void expect_error(const char *blocks, const char *line_col, const char *words) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_error_t err = load(&ctx, blocks, &sc);
+  if (err == KARST_SUCCESS || !strstr(ctx.errmsg, line_col) || !strstr(ctx.errmsg, words)) {
+    print_error("for:\n%s\ngot %d: %s\nexpected %s and '%s'\n", blocks, err, ctx.errmsg, line_col,
+                words);
+    karst_scenario_destroy(&sc);
+    fail();
+  }
+  karst_scenario_destroy(&sc);
+}
+
+static void test_section_ok(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  assert_int_equal(load(&ctx,
+                        "blocks:\n"
+                        "  tile_size: 10\n"
+                        "  poisson_radius: 0.5\n"
+                        "  seed: 42\n"
+                        "  region: [10, 20, 60, 80]\n"
+                        "  presence: {distance: [-2, 0.5], max_slope: 0.4, anchors: 5}\n"
+                        "  strata: [{name: lower, below: 120, tile: equidimensional},\n"
+                        "           {name: upper, tile: tabular}]\n",
+                        &sc),
+                   KARST_SUCCESS);
+  const karst_blocks_section_t *b = sc.blocks;
+  assert_non_null(b);
+  assert_close(b->tile_size, 10, 0);
+  assert_close(b->poisson_radius, 0.5, 0);
+  assert_true(b->has_seed && b->seed == 42);
+  assert_true(b->has_region);
+  assert_close(b->region[3], 80, 0);
+  assert_close(b->presence.dist_min, -2, 0);
+  assert_close(b->presence.dist_max, 0.5, 0);
+  assert_int_equal(b->presence.n_anchors, 5);
+  assert_int_equal(b->n_strata, 2);
+  assert_string_equal(b->strata[0].name, "lower");
+  assert_close(b->strata[0].below, 120, 0);
+  assert_int_equal(b->strata[1].tile, KARST_BLOCK_TABULAR);
+  assert_true(isinf(b->strata[1].below));
+  double lo[3] = {0, 0, 119.9}, hi[3] = {0, 0, 120};
+  assert_int_equal(karst_blocks_section_stratum(sc.blocks, lo), 0);
+  assert_int_equal(karst_blocks_section_stratum(sc.blocks, hi), 1);
+  karst_scenario_destroy(&sc);
+  /* no section: NULL, nothing else changes */
+  assert_int_equal(load(&ctx, "", &sc), KARST_SUCCESS);
+  assert_null(sc.blocks);
+  karst_scenario_destroy(&sc);
+}
+
+static void test_section_errors(void **state) {
+  (void)state;
+  expect_error("blocks: 5\n", ":6:9:", "blocks must be a map");
+  expect_error("blocks:\n  tile_sise: 20\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:3:", "did you mean 'tile_size'");
+  expect_error("blocks:\n  strata: [{name: a, tile: tabulr}]\n",
+               ":7:28:", "did you mean 'tabular'");
+  expect_error("blocks:\n  tile_size: 20\n", ":7:3:", "required key 'strata'");
+  expect_error("blocks:\n  strata: []\n", ":7:3:", "at least one stratum");
+  expect_error("blocks:\n  strata: 3\n", ":7:11:", "list of maps");
+  expect_error("blocks:\n  strata: [{name: a, tile: tabular}, {name: b, tile: columnar}]\n",
+               ":7:12:", "needs 'below'");
+  expect_error("blocks:\n  strata: [{name: a, below: 50, tile: tabular}, {name: b, below: 40, "
+               "tile: columnar}]\n",
+               ":7:49:", "must be above");
+  expect_error("blocks:\n  strata: [{name: a, below: 50, tile: tabular}, {name: a, tile: "
+               "columnar}]\n",
+               ":7:49:", "already named");
+  expect_error("blocks:\n  poisson_radius: .nan\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:19:", "finite");
+  expect_error("blocks:\n  poisson_radius: -1\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:19:", "> 0 m");
+  expect_error("blocks:\n  poisson_radius: ten\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:19:", "must be a number");
+  expect_error("blocks:\n  poisson_radius: 5\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:3:", "poisson_radius must be within");
+  expect_error("blocks:\n  presence: {max_slope: 2}\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:25:", "max_slope must be within (0, 1]");
+  expect_error("blocks:\n  presence: {distance: [3, 1]}\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:3:", "v_a <= v_b");
+  expect_error("blocks:\n  presence: {anchors: 0}\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:23:", "anchors");
+  expect_error("blocks:\n  region: [5, 0, 1, 10]\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:11:", "x0 < x1");
+  expect_error("blocks:\n  region: [5, 0, 1]\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:11:", "4 numbers");
+  expect_error("blocks:\n  warp: {relief: image}\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:3:", "needs warp.image");
+  expect_error("blocks:\n  warp: {relief: bumps}\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:18:", "none, noise, image");
+  expect_error("blocks:\n  seed: -3\n  strata: [{name: a, tile: tabular}]\n",
+               ":7:9:", "unsigned 64-bit");
+  expect_error("blocks:\n  strata: [{name: \"\", tile: tabular}]\n", ":7:19:", "non-empty");
+  expect_error("blocks:\n  strata: [{tile: tabular}]\n", ":7:12:", "required key 'name'");
+  expect_error("blocks:\n  strata: [{name: a, tile: tabular}]\nblocks:\n  strata: []\n",
+               ":8:1:", "duplicate key 'blocks'");
+}
+
+/* ---------------------------------------------------------------------- */
+/* Relief images.                                                          */
+/* ---------------------------------------------------------------------- */
+
+/* A 4 x 3 greyscale PNG (8 bits), rows from the top: 0 85 170 255 / 255 170 85 0 / 0 0 255 255
+ * (written by Python's zlib and struct; the bytes below are the file). */
+static const unsigned char png_good[79] = {
+    137, 80,  78,  71,  13, 10,  26,  10,  0,   0,   0,   13,  73, 72, 68, 82,  0,   0,  0,  4,
+    0,   0,   0,   3,   8,  0,   0,   0,   0,   145, 159, 241, 26, 0,  0,  0,   22,  73, 68, 65,
+    84,  120, 156, 99,  96, 8,   93,  245, 159, 225, 255, 170, 80, 6,  32, 248, 255, 31, 0,  42,
+    228, 5,   251, 149, 91, 231, 184, 0,   0,   0,   0,   73,  69, 78, 68, 174, 66,  96, 130};
+/* The start of a PNG whose header claims 100000 pixels a row. */
+static const unsigned char png_huge[60] = {
+    137, 80,  78,  71, 13, 10, 26, 10, 0, 0,   0,  13, 73,  72,  68,  82, 0,  1,  134, 160,
+    0,   0,   0,   1,  8,  0,  0,  0,  0, 120, 21, 73, 9,   0,   0,   0,  10, 73, 68,  65,
+    84,  120, 156, 99, 96, 0,  0,  0,  2, 0,   1,  72, 175, 164, 113, 0,  0,  0,  0,   73};
+
+static karst_error_t relief_of(const void *data, size_t n, karst_blocks_relief_t *r,
+                               karst_ctx_t *ctx) {
+  char path[300];
+  snprintf(path, sizeof path, "%s/relief.img", dir);
+  write_file(path, data, n);
+  return karst_blocks_relief_load(ctx, path, r);
+}
+
+static void test_relief_good(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_blocks_relief_t r;
+  const char *p2 = "P2\n# a comment\n3 2\n4\n0 1 2\n3 4 0\n";
+  assert_int_equal(relief_of(p2, strlen(p2), &r, &ctx), KARST_SUCCESS);
+  assert_int_equal(r.width, 3);
+  assert_int_equal(r.height, 2);
+  assert_close(r.v[0], 0.0, 0);
+  assert_close(r.v[4], 1.0, 0);
+  assert_close(karst_blocks_relief_sample(&r, 0.5, 0), 0.125, 1e-7);
+  assert_close(karst_blocks_relief_sample(&r, 3.5, 0), 0.125, 1e-7); /* periodic */
+  assert_close(karst_blocks_relief_sample(&r, -2.5, 0), 0.125, 1e-7);
+  assert_close(r.lipschitz_px, 1.0 * sqrt(2.0), 1e-7); /* 4 -> 0: the largest step */
+  karst_blocks_relief_destroy(&r);
+  unsigned char p5[] = {'P', '5', '\n', '2',  ' ',  '1',  '\n', '6', '5',
+                        '5', '3', '5',  '\n', 0xff, 0xff, 0x00, 0x00};
+  assert_int_equal(relief_of(p5, sizeof p5, &r, &ctx), KARST_SUCCESS);
+  assert_close(r.v[0], 1.0, 0);
+  assert_close(r.v[1], 0.0, 0);
+  karst_blocks_relief_destroy(&r);
+  assert_int_equal(relief_of(png_good, sizeof png_good, &r, &ctx), KARST_SUCCESS);
+  assert_int_equal(r.width, 4);
+  assert_int_equal(r.height, 3);
+  /* bottom row first: the image's last row is 0 0 255 255 */
+  assert_close(r.v[0], 0.0, 1e-7);
+  assert_close(r.v[3], 1.0, 1e-7);
+  assert_close(r.v[2 * 4 + 1], 85.0 / 255, 1e-7); /* top row */
+  karst_blocks_relief_destroy(&r);
+}
+
+static void expect_bad(const void *data, size_t n, const char *words) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_blocks_relief_t r;
+  karst_error_t err = relief_of(data, n, &r, &ctx);
+  if (err == KARST_SUCCESS || !strstr(ctx.errmsg, "relief.img") || !strstr(ctx.errmsg, words)) {
+    print_error("got %d: %s, expected '%s'\n", err, ctx.errmsg, words);
+    if (!err) karst_blocks_relief_destroy(&r);
+    fail();
+  }
+  assert_null(r.v);
+}
+
+static void test_relief_hostile(void **state) {
+  (void)state;
+  expect_bad("", 0, "not a PGM");
+  expect_bad("P3\n1 1\n255\n0 0 0\n", 19, "not a PGM");
+  expect_bad("P2\n0 5\n255\n", 11, "width and height");
+  expect_bad("P2\n-1 5\n255\n", 12, "width and height");
+  expect_bad("P2\n99999999 99999999\n255\n", 25, "width and height");
+  expect_bad("P2\n2 2\n0\n0 0 0 0\n", 17, "maxval");
+  expect_bad("P2\n2 2\n70000\n0 0 0 0\n", 21, "maxval");
+  expect_bad("P2\n2 2\n255\n0 0 0\n", 17, "pixel 3 of 4");
+  expect_bad("P2\n2 2\n255\n0 0 0 x\n", 19, "pixel 3 of 4");
+  expect_bad("P2\n2 2\n255\n0 0 0 256\n", 21, "pixel 3 of 4");
+  expect_bad("P5\n4 4\n255\n\x01\x02\x03", 14, "ends after 3 of 16");
+  unsigned char p5[] = {'P', '5', '\n', '1', ' ', '1', '\n', '1', '0', '0', '\n', 200};
+  expect_bad(p5, sizeof p5, "above maxval");
+  expect_bad(png_good, 40, "not a readable PNG");
+  unsigned char bad_crc[sizeof png_good];
+  memcpy(bad_crc, png_good, sizeof bad_crc);
+  bad_crc[30] ^= 0x55;
+  expect_bad(bad_crc, sizeof bad_crc, "not a readable PNG");
+  expect_bad(png_huge, sizeof png_huge, "not a readable PNG");
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_blocks_relief_t r;
+  assert_int_equal(karst_blocks_relief_load(&ctx, "/nonexistent/relief.pgm", &r), KARST_EIO);
+  assert_non_null(strstr(ctx.errmsg, "/nonexistent/relief.pgm"));
+  assert_int_equal(karst_blocks_relief_load(&ctx, dir, &r), KARST_EPARSE); /* a directory */
+}
+
+static int setup(void **state) {
+  (void)state;
+  snprintf(dir, sizeof dir, "/tmp/karst_blocks_input_XXXXXX");
+  return mkdtemp(dir) ? 0 : -1;
+}
+static int teardown(void **state) {
+  (void)state;
+  char cmd[300];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  return system(cmd) == 0 ? 0 : -1;
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_section_ok),
+      cmocka_unit_test(test_section_errors),
+      cmocka_unit_test(test_relief_good),
+      cmocka_unit_test(test_relief_hostile),
+  };
+  return cmocka_run_group_tests(tests, setup, teardown);
+}
