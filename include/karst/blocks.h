@@ -71,23 +71,6 @@ typedef struct karst_blocks_warp {
   const char *image; /**< PGM or PNG path for KARST_RELIEF_IMAGE (borrowed) */
 } karst_blocks_warp_t;
 
-/** A greyscale relief image for the warping (PGM P2/P5 or PNG), values in [0, 1]. */
-typedef struct karst_blocks_relief {
-  int width, height;
-  float *v;            /**< width × height, row 0 at the bottom */
-  double lipschitz_px; /**< Lipschitz constant of the bilinear interpolant, per pixel */
-} karst_blocks_relief_t;
-
-/** Largest width or height of a relief image (pixels). */
-#define KARST_BLOCKS_RELIEF_MAX_SIDE 16384
-
-/** Read a relief image (format by content); errors name the file. */
-karst_error_t karst_blocks_relief_load(karst_ctx_t *ctx, const char *path,
-                                       karst_blocks_relief_t *r);
-void karst_blocks_relief_destroy(karst_blocks_relief_t *r);
-/** Bilinear, periodic value at (u, v) in pixels. */
-double karst_blocks_relief_sample(const karst_blocks_relief_t *r, double u, double v);
-
 /**
  * Parameters of one tile. karst_blocks_tile_params_init fills every field
  * with the defaults of a type (docs/blocks.md lists them with their source).

@@ -22,7 +22,7 @@ void karst_blocks_section_init(karst_blocks_section_t *b) {
   b->voxel = 0.5;
   b->tile_voxel = 0.1;
   karst_blocks_presence_init(&b->presence);
-  b->warp_relief = KARST_RELIEF_NONE;
+  b->warp_relief = KARST_BLOCKS_RELIEF_NONE;
   b->warp_amplitude = p.warp.amplitude;
   b->warp_wavelength = p.warp.wavelength;
 }
@@ -66,7 +66,7 @@ void karst_blocks_section_tile_params(const karst_blocks_section_t *b, int type,
   par->smooth_radius = b->smooth_radius;
   par->aperture = b->aperture;
   par->seed = seed;
-  par->warp.relief = (karst_relief_kind_t)b->warp_relief;
+  par->warp.relief = (karst_blocks_relief_kind_t)b->warp_relief;
   par->warp.amplitude = b->warp_amplitude;
   par->warp.wavelength = b->warp_wavelength;
   par->warp.image = b->warp_image;

@@ -59,7 +59,7 @@ void karst_blocks_tile_params_init(karst_blocks_tile_params_t *p, int type) {
   p->disc_radius_min = 4.0;
   p->disc_radius_max = 6.0;
   p->bedding_spacing = 0;
-  p->warp.relief = KARST_RELIEF_NONE;
+  p->warp.relief = KARST_BLOCKS_RELIEF_NONE;
   p->warp.amplitude = 0.15;
   p->warp.wavelength = 2.0;
   switch (type) {
@@ -170,12 +170,12 @@ karst_error_t karst_blocks_tile_params_check(karst_ctx_t *ctx,
                                "blocks: authored block %d is unbounded; a block must be bounded",
                                i);
   }
-  if (p->warp.relief != KARST_RELIEF_NONE) {
+  if (p->warp.relief != KARST_BLOCKS_RELIEF_NONE) {
     if (!(p->warp.amplitude >= 0) || !(p->warp.amplitude <= s / 10))
       return bad(ctx, "warp.amplitude", p->warp.amplitude, "within [0, s/10] m");
     if (!(p->warp.wavelength > 0) || !(p->warp.wavelength <= 10 * s))
       return bad(ctx, "warp.wavelength", p->warp.wavelength, "within (0, 10 s] m");
-    if (p->warp.relief == KARST_RELIEF_IMAGE && !p->warp.image)
+    if (p->warp.relief == KARST_BLOCKS_RELIEF_IMAGE && !p->warp.image)
       return karst_set_error(ctx, KARST_EINVAL, "blocks: warp relief 'image' needs an image file");
   }
   return KARST_SUCCESS;

@@ -1,6 +1,6 @@
 /* Hostile input for the rock blocks: the blocks section of a scenario
- * (src/scenario/scenario_blocks.inc) and the relief image reader
- * (src/blocks/relief.c). Every bad file must give a non-zero code and a
+ * (src/scenario/scenario_blocks.inc); the relief images are read by
+ * src/io/image.c, whose hostile inputs are in test_image.c. Every bad file must give a non-zero code and a
  * message naming the file, the line and column (scenario) and the field,
  * never a crash (the suite runs under ASan and UBSan). */
 #include <math.h>
@@ -146,105 +146,6 @@ static void test_section_errors(void **state) {
                ":8:1:", "duplicate key 'blocks'");
 }
 
-/* ---------------------------------------------------------------------- */
-/* Relief images.                                                          */
-/* ---------------------------------------------------------------------- */
-
-/* A 4 x 3 greyscale PNG (8 bits), rows from the top: 0 85 170 255 / 255 170 85 0 / 0 0 255 255
- * (written by Python's zlib and struct; the bytes below are the file). */
-static const unsigned char png_good[79] = {
-    137, 80,  78,  71,  13, 10,  26,  10,  0,   0,   0,   13,  73, 72, 68, 82,  0,   0,  0,  4,
-    0,   0,   0,   3,   8,  0,   0,   0,   0,   145, 159, 241, 26, 0,  0,  0,   22,  73, 68, 65,
-    84,  120, 156, 99,  96, 8,   93,  245, 159, 225, 255, 170, 80, 6,  32, 248, 255, 31, 0,  42,
-    228, 5,   251, 149, 91, 231, 184, 0,   0,   0,   0,   73,  69, 78, 68, 174, 66,  96, 130};
-/* The start of a PNG whose header claims 100000 pixels a row. */
-static const unsigned char png_huge[60] = {
-    137, 80,  78,  71, 13, 10, 26, 10, 0, 0,   0,  13, 73,  72,  68,  82, 0,  1,  134, 160,
-    0,   0,   0,   1,  8,  0,  0,  0,  0, 120, 21, 73, 9,   0,   0,   0,  10, 73, 68,  65,
-    84,  120, 156, 99, 96, 0,  0,  0,  2, 0,   1,  72, 175, 164, 113, 0,  0,  0,  0,   73};
-
-static karst_error_t relief_of(const void *data, size_t n, karst_blocks_relief_t *r,
-                               karst_ctx_t *ctx) {
-  char path[300];
-  snprintf(path, sizeof path, "%s/relief.img", dir);
-  write_file(path, data, n);
-  return karst_blocks_relief_load(ctx, path, r);
-}
-
-static void test_relief_good(void **state) {
-  (void)state;
-  karst_ctx_t ctx;
-  karst_ctx_init(&ctx);
-  karst_blocks_relief_t r;
-  const char *p2 = "P2\n# a comment\n3 2\n4\n0 1 2\n3 4 0\n";
-  assert_int_equal(relief_of(p2, strlen(p2), &r, &ctx), KARST_SUCCESS);
-  assert_int_equal(r.width, 3);
-  assert_int_equal(r.height, 2);
-  assert_close(r.v[0], 0.0, 0);
-  assert_close(r.v[4], 1.0, 0);
-  assert_close(karst_blocks_relief_sample(&r, 0.5, 0), 0.125, 1e-7);
-  assert_close(karst_blocks_relief_sample(&r, 3.5, 0), 0.125, 1e-7); /* periodic */
-  assert_close(karst_blocks_relief_sample(&r, -2.5, 0), 0.125, 1e-7);
-  assert_close(r.lipschitz_px, 1.0 * sqrt(2.0), 1e-7); /* 4 -> 0: the largest step */
-  karst_blocks_relief_destroy(&r);
-  unsigned char p5[] = {'P', '5', '\n', '2',  ' ',  '1',  '\n', '6', '5',
-                        '5', '3', '5',  '\n', 0xff, 0xff, 0x00, 0x00};
-  assert_int_equal(relief_of(p5, sizeof p5, &r, &ctx), KARST_SUCCESS);
-  assert_close(r.v[0], 1.0, 0);
-  assert_close(r.v[1], 0.0, 0);
-  karst_blocks_relief_destroy(&r);
-  assert_int_equal(relief_of(png_good, sizeof png_good, &r, &ctx), KARST_SUCCESS);
-  assert_int_equal(r.width, 4);
-  assert_int_equal(r.height, 3);
-  /* bottom row first: the image's last row is 0 0 255 255 */
-  assert_close(r.v[0], 0.0, 1e-7);
-  assert_close(r.v[3], 1.0, 1e-7);
-  assert_close(r.v[2 * 4 + 1], 85.0 / 255, 1e-7); /* top row */
-  karst_blocks_relief_destroy(&r);
-}
-
-static void expect_bad(const void *data, size_t n, const char *words) {
-  karst_ctx_t ctx;
-  karst_ctx_init(&ctx);
-  karst_blocks_relief_t r;
-  karst_error_t err = relief_of(data, n, &r, &ctx);
-  if (err == KARST_SUCCESS || !strstr(ctx.errmsg, "relief.img") || !strstr(ctx.errmsg, words)) {
-    print_error("got %d: %s, expected '%s'\n", err, ctx.errmsg, words);
-    if (!err) karst_blocks_relief_destroy(&r);
-    fail();
-  }
-  assert_null(r.v);
-}
-
-static void test_relief_hostile(void **state) {
-  (void)state;
-  expect_bad("", 0, "not a PGM");
-  expect_bad("P3\n1 1\n255\n0 0 0\n", 19, "not a PGM");
-  expect_bad("P2\n0 5\n255\n", 11, "width and height");
-  expect_bad("P2\n-1 5\n255\n", 12, "width and height");
-  expect_bad("P2\n99999999 99999999\n255\n", 25, "width and height");
-  expect_bad("P2\n2 2\n0\n0 0 0 0\n", 17, "maxval");
-  expect_bad("P2\n2 2\n70000\n0 0 0 0\n", 21, "maxval");
-  expect_bad("P2\n2 2\n255\n0 0 0\n", 17, "pixel 3 of 4");
-  expect_bad("P2\n2 2\n255\n0 0 0 x\n", 19, "pixel 3 of 4");
-  expect_bad("P2\n2 2\n255\n0 0 0 256\n", 21, "pixel 3 of 4");
-  expect_bad("P5\n4 4\n255\n\x01\x02\x03", 14, "ends after 3 of 16");
-  unsigned char p5[] = {'P', '5', '\n', '1', ' ', '1', '\n', '1', '0', '0', '\n', 200};
-  expect_bad(p5, sizeof p5, "above maxval");
-  expect_bad(png_good, 40, "not a readable PNG");
-  unsigned char bad_crc[sizeof png_good];
-  memcpy(bad_crc, png_good, sizeof bad_crc);
-  bad_crc[30] ^= 0x55;
-  expect_bad(bad_crc, sizeof bad_crc, "not a readable PNG");
-  expect_bad(png_huge, sizeof png_huge, "not a readable PNG");
-  karst_ctx_t ctx;
-  karst_ctx_init(&ctx);
-  karst_blocks_relief_t r;
-  assert_int_equal(karst_blocks_relief_load(&ctx, "/nonexistent/relief.pgm", &r), KARST_EIO);
-  assert_non_null(strstr(ctx.errmsg, "/nonexistent/relief.pgm"));
-  assert_int_equal(karst_blocks_relief_load(&ctx, dir, &r), KARST_EPARSE); /* a directory */
-}
-
 static int setup(void **state) {
   (void)state;
   snprintf(dir, sizeof dir, "/tmp/karst_blocks_input_XXXXXX");
@@ -261,8 +162,6 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_section_ok),
       cmocka_unit_test(test_section_errors),
-      cmocka_unit_test(test_relief_good),
-      cmocka_unit_test(test_relief_hostile),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }
