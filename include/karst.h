@@ -18,6 +18,7 @@
 #include "karst/ensemble.h"
 #include "karst/generate.h"
 #include "karst/graph.h"
+#include "karst/image.h"
 #include "karst/implicit.h"
 #include "karst/io.h"
 #include "karst/json.h"

@@ -60,15 +60,19 @@ typedef struct karst_disc {
   double c[3], n[3], radius;
 } karst_disc_t;
 
-/** Where the relief of the warping comes from. */
-typedef enum { KARST_RELIEF_NONE = 0, KARST_RELIEF_NOISE, KARST_RELIEF_IMAGE } karst_relief_kind_t;
+/** Where the relief of the blocks' warping comes from (the warp node of implicit.h). */
+typedef enum {
+  KARST_BLOCKS_RELIEF_NONE = 0, /**< no warping */
+  KARST_BLOCKS_RELIEF_NOISE,    /**< procedural value-noise turbulence */
+  KARST_BLOCKS_RELIEF_IMAGE     /**< a greyscale image (PGM or PNG, karst_image_read) */
+} karst_blocks_relief_kind_t;
 
-/** The relief d of the gradient-based warping (§4.3). */
+/** The relief d of the gradient-based warping ω⁻¹ of each block (§4.3). */
 typedef struct karst_blocks_warp {
-  karst_relief_kind_t relief; /**< none (default), procedural noise, or a greyscale image */
-  double amplitude;           /**< largest displacement (m), default 0.15 */
+  karst_blocks_relief_kind_t relief; /**< none (default), procedural noise, or an image */
+  double amplitude;  /**< largest displacement (m), default 0.15 */
   double wavelength; /**< noise wavelength, or the ground size of the image (m), default 2 */
-  const char *image; /**< PGM or PNG path for KARST_RELIEF_IMAGE (borrowed) */
+  const char *image; /**< PGM or PNG path for KARST_BLOCKS_RELIEF_IMAGE (borrowed) */
 } karst_blocks_warp_t;
 
 /**

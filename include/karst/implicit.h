@@ -4,7 +4,7 @@
  *        a construction tree of 1-Lipschitz signed-distance bounds whose leaves
  *        are skeletal primitives (sweeps of piecewise-quadratic cross-sections,
  *        ellipsoids, spheres, the terrain heightfield, boxes) and whose inner
- *        nodes are Boolean, blending and noise operators.
+ *        nodes are Boolean, blending, noise and warping operators.
  *
  * Sign convention (one, everywhere): a node's field is NEGATIVE INSIDE the
  * solid it describes and positive outside. The terrain's solid is the
@@ -27,6 +27,7 @@
 #define KARST_IMPLICIT_H
 
 #include "karst/common.h"
+#include "karst/image.h"
 #include "karst/network.h"
 #include "karst/scenario.h"
 
@@ -90,6 +91,7 @@ typedef enum {
   KARST_SDF_SMOOTH_INTERSECTION,
   KARST_SDF_THICK,
   KARST_SDF_EXTERNAL,
+  KARST_SDF_WARP,
   KARST_SDF_KIND_COUNT
 } karst_sdf_kind_t;
 
@@ -241,6 +243,107 @@ typedef double (*karst_sdf_field_fn)(const void *arg, const double p[3], double 
 karst_error_t karst_sdf_external(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_sdf_field_fn fn,
                                  const void *arg, const double box[6], int label,
                                  karst_int_t *node);
+
+/* ------------------------------------------------------------------------ */
+/* Gradient-based warping (Paris et al. 2020, §4.3; shared with the blocks).  */
+/* ------------------------------------------------------------------------ */
+
+/** What the relief d of a warp node is. */
+typedef enum {
+  KARST_RELIEF_NOISE = 0, /**< procedural value-noise turbulence d(u, v), tri-planar */
+  KARST_RELIEF_IMAGE,     /**< a greyscale image tiled over each plane, tri-planar */
+  KARST_RELIEF_FUNCTION,  /**< the caller's function d(u, v), tri-planar */
+  KARST_RELIEF_FRACTURES, /**< grooves along the planes of fracture families (3-D, no projection) */
+  KARST_RELIEF_KIND_COUNT
+} karst_relief_kind_t;
+
+/** Most fracture families of a KARST_RELIEF_FRACTURES relief. */
+#define KARST_RELIEF_MAX_PLANES 16
+/** Most octaves of a KARST_RELIEF_NOISE relief. */
+#define KARST_RELIEF_MAX_OCTAVES 8
+
+/**
+ * A caller's relief: a value in [-1, 1] at plane coordinates (u, v) in
+ * metres, Lipschitz with the constant declared in karst_relief_t.fn_lipschitz
+ * (1/m). It must be a pure, thread-safe function of its arguments.
+ */
+typedef double (*karst_relief_fn)(const void *user, double u, double v);
+
+/**
+ * The relief of a warp node, |d| <= |amplitude| everywhere. Fill with
+ * karst_relief_init() and set the fields of its kind.
+ */
+typedef struct karst_relief {
+  karst_relief_kind_t kind;
+  double amplitude; /**< A (m): d = A x (a relief in [-1, 1]); negative flips it */
+  /* KARST_RELIEF_NOISE: fBm of value noise, octave o of wavelength λ/2^o and weight 2^-o */
+  double wavelength; /**< λ of the first octave (m), default 1 */
+  int octaves;       /**< 1..KARST_RELIEF_MAX_OCTAVES, default 3 */
+  /* KARST_RELIEF_IMAGE: d = A (2 grey - 1), bilinear, repeated every tile metres */
+  const karst_image_t *image; /**< copied into the tree */
+  double tile;                /**< metres covered by the image's width, default 1 */
+  /* KARST_RELIEF_FUNCTION: d = A fn(user, u, v) */
+  karst_relief_fn fn;
+  const void *user;    /**< must outlive the tree */
+  double fn_lipschitz; /**< Lipschitz constant of fn (1/m) */
+  /* KARST_RELIEF_FRACTURES: d = -A Σ_k w_k max_i b((n_k.p - c_ki) / width) / Σ_k w_k, b(x) =
+   * (1 - x²)², fracture i of family k at c_ki = (i + U) spacing along n_k (U uniform) */
+  int n_planes;                               /**< 1..KARST_RELIEF_MAX_PLANES */
+  double normals[KARST_RELIEF_MAX_PLANES][3]; /**< normals of the families (normalised here) */
+  double weights[KARST_RELIEF_MAX_PLANES];    /**< w_k >= 0, not all 0 */
+  double spacing;                             /**< mean fracture spacing (m), default 2 */
+  double width; /**< groove half-width (m), <= 4 spacing, default 0.3 */
+} karst_relief_t;
+
+/** Defaults of a relief of @p kind (amplitude 0.05 m; see karst_relief_t). */
+void karst_relief_init(karst_relief_t *r, karst_relief_kind_t kind);
+
+/** How a warp node takes the gradient of its child and where it displaces. */
+typedef struct karst_warp_params {
+  double epsilon;    /**< step of the finite-difference gradient of the child (m), default 0.2 */
+  double grad_floor; /**< m in g = G / max(|G|, m), in (0, 1], default 0.5 */
+  double band;       /**< > 0: displace only where |child| < band (m), faded out; INFINITY
+                          (default): everywhere, as in the paper */
+} karst_warp_params_t;
+
+/** Fill @p p with the documented defaults. */
+void karst_warp_params_init(karst_warp_params_t *p);
+
+/**
+ * Gradient-based warping (Paris et al. 2020, §4.3): the child c evaluated at
+ * p + δ(p) with
+ *     δ(p) = g(p) Σ_i α_i(p) d(γ_i(p)),  α_i = |g(p) . u_i|,
+ * γ_i the projections on the yz, xz and xy planes and g the child's
+ * normalised gradient (tri-planar; a KARST_RELIEF_FRACTURES relief is used as
+ * δ = g d(p)). The gradient is the child's, by a tetrahedral finite
+ * difference of step ε (exact for linear fields), normalised as
+ * g = G / max(|G|, m) so that it is Lipschitz (constant 1/(ε m)) and fades
+ * where the child has no direction (|G| < m, e.g. on a medial axis). With
+ * δ being L_δ-Lipschitz (bound in warp.c), the warped field is
+ * (1 + L_δ)-Lipschitz; it is divided by that factor (band = INFINITY), or, with
+ * a finite band, δ is faded out by (1 - (c/band)²)² and the factor is applied
+ * only within band + max|δ| of the surface (a piecewise-linear rescaling
+ * that keeps the zero set and the distance bound, see warp.c), so that the
+ * field far from the surface stays a tight distance bound.
+ * @param child  any node
+ * @param relief the relief (copied; an image is copied into the tree)
+ * @param par    NULL for the defaults
+ * @param rng    draws the seed of noise and fracture positions (may be NULL for
+ *               image and function reliefs)
+ * @return KARST_SUCCESS; KARST_EINVAL naming the bad field; KARST_ENOMEM.
+ * Time: 6 child evaluations near the surface, 1 far from it.
+ */
+karst_error_t karst_sdf_warp(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t child,
+                             const karst_relief_t *relief, const karst_warp_params_t *par,
+                             karst_rng_t *rng, karst_int_t *node);
+
+/**
+ * The relief of warp node @p node at a point (tri-planar reliefs: d(u, v) at
+ * (u, v) = (p[0], p[1]); fractures: d(p)). For tests and pictures.
+ */
+double karst_sdf_warp_relief(const karst_sdf_t *sdf, karst_int_t node, const double p[3]);
+/** The factor 1 + L_δ of warp node @p node (1 when its amplitude is 0). */
+double karst_sdf_warp_lipschitz(const karst_sdf_t *sdf, karst_int_t node);
 
 /** Make @p node the root evaluated by karst_sdf_eval(). */
 karst_error_t karst_sdf_set_root(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t node);

@@ -11,6 +11,7 @@
 #include "core/parallel_internal.h"
 #include "geometry/geometry_internal.h"
 #include "implicit/implicit_internal.h"
+#include "karst/image.h"
 #include "karst/mesh.h"
 #include "karst/sampling.h"
 
@@ -34,7 +35,7 @@ const char *const *karst_block_type_names(void) {
 
 /* Random streams of a tile, derived from (seed, stream): one per stage so
  * that changing one stage's draws leaves the others alone. */
-enum { STREAM_POINTS = 1, STREAM_DISCS = 2, STREAM_SPLITS = 3 };
+enum { STREAM_POINTS = 1, STREAM_DISCS = 2, STREAM_SPLITS = 3, STREAM_WARP = 4 };
 
 /**
  * Defaults of a block type. Sizes follow §4 (s = 20 m, R = 0.25 m, disc
@@ -1280,6 +1281,22 @@ static double tri_volume(const karst_mesh_t *m) {
   return v / 6.0;
 }
 
+/* b_i = c_i ∘ ω⁻¹ (§4.3): the block's field through the warp node of
+ * src/implicit/warp.c, which divides by its Lipschitz factor so that the
+ * block stays 1-Lipschitz. No-op without a relief. */
+static karst_error_t warp_block(karst_ctx_t *ctx, karst_sdf_t *sdf,
+                                const karst_blocks_tile_params_t *par, const karst_relief_t *relief,
+                                karst_rng_t *rng, int label, karst_int_t *node) {
+  if (par->warp.relief == KARST_BLOCKS_RELIEF_NONE || !(par->warp.amplitude > 0))
+    return KARST_SUCCESS;
+  karst_int_t w;
+  karst_error_t err = karst_sdf_warp(ctx, sdf, *node, relief, NULL, rng, &w);
+  if (err) return err;
+  sdf->nodes[w].label = label;
+  *node = w;
+  return KARST_SUCCESS;
+}
+
 void karst_blocks_tile_free(karst_blocks_tile_t *t) {
   if (!t) return;
   free(t->xyz);
@@ -1328,6 +1345,8 @@ karst_error_t karst_blocks_tile_create(karst_ctx_t *ctx, const karst_blocks_tile
   memset(&C, 0, sizeof C);
   bres_t *res = NULL;
   karst_int_t *kids = NULL;
+  karst_image_t image;
+  karst_image_init(&image);
   if (!T) return karst_set_error(ctx, KARST_ENOMEM, "blocks: out of memory");
   T->par = *par;
   double s = par->size;
@@ -1422,6 +1441,22 @@ karst_error_t karst_blocks_tile_create(karst_ctx_t *ctx, const karst_blocks_tile
   if (!T->blocks || !T->hulls || !T->members || !T->unwrapped) goto nomem;
   T->n_blocks = nb;
   if ((err = karst_sdf_create(ctx, &T->sdf))) goto fail;
+  /* the warping of every block (§4.3): one relief for the tile */
+  karst_relief_t relief;
+  karst_rng_t wrng;
+  karst_rng_derive(&wrng, par->seed, STREAM_WARP, 0);
+  if (par->warp.relief != KARST_BLOCKS_RELIEF_NONE) {
+    int img = par->warp.relief == KARST_BLOCKS_RELIEF_IMAGE;
+    karst_relief_init(&relief, img ? KARST_RELIEF_IMAGE : KARST_RELIEF_NOISE);
+    relief.amplitude = par->warp.amplitude;
+    if (img) {
+      if ((err = karst_image_read(ctx, par->warp.image, &image))) goto fail;
+      relief.image = &image;
+      relief.tile = par->warp.wavelength;
+    } else {
+      relief.wavelength = par->warp.wavelength;
+    }
+  }
   for (karst_int_t i = 0; i < C.n; i++) {
     karst_blocks_block_t *B = &T->blocks[i];
     bres_t *R = &res[i];
@@ -1441,6 +1476,7 @@ karst_error_t karst_blocks_tile_create(karst_ctx_t *ctx, const karst_blocks_tile
       if ((err = karst_sdf_thick(ctx, T->sdf, R->n_pts, R->pts, par->degenerate_radius,
                                  KARST_I_BLOCKS_FLAT_REL * par->poisson_radius, label, &B->node)))
         goto fail;
+      if ((err = warp_block(ctx, T->sdf, par, &relief, &wrng, label, &B->node))) goto fail;
       karst_sdf_node_box(T->sdf, B->node, B->box);
       continue;
     }
@@ -1466,7 +1502,8 @@ karst_error_t karst_blocks_tile_create(karst_ctx_t *ctx, const karst_blocks_tile
                                              par->smooth_radius, R->box, &B->node)))
       goto fail;
     T->sdf->nodes[B->node].label = label;
-    memcpy(B->box, R->box, sizeof B->box);
+    if ((err = warp_block(ctx, T->sdf, par, &relief, &wrng, label, &B->node))) goto fail;
+    karst_sdf_node_box(T->sdf, B->node, B->box);
   }
   for (int k = 0; k < par->n_authored; k++) {
     karst_blocks_block_t *B = &T->blocks[C.n + k];
@@ -1500,6 +1537,7 @@ fail:
   T = NULL;
 cleanup:
   free(kids);
+  karst_image_destroy(&image);
   if (res)
     for (karst_int_t i = 0; i < C.n; i++) {
       free(res[i].pts);

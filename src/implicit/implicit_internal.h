@@ -42,6 +42,41 @@ typedef struct karst_i_noise {
   uint64_t seed;
 } karst_i_noise_t;
 
+/* A warp node's relief and constants (warp.c). */
+typedef struct karst_i_warp {
+  karst_int_t child;
+  karst_relief_kind_t kind;
+  double amp;         /* A, signed */
+  double eps, gfloor; /* finite-difference step, gradient floor m */
+  double band;        /* INFINITY: displace everywhere */
+  double dmax;        /* largest |δ| */
+  double lip;         /* 1 + L_δ: Lipschitz constant of the warped field */
+  double rc;          /* band mode: the rescaling is linear (slope 1/lip) on |f| < rc */
+  double rlip;        /* Lipschitz constant of the relief d itself (m/m) */
+  /* noise */
+  double wavelength;
+  int octaves;
+  uint64_t seed;
+  /* image */
+  int image; /* index into the tree's images */
+  double tile;
+  /* function */
+  karst_relief_fn fn;
+  const void *user;
+  /* fractures */
+  int n_planes;
+  double normal[KARST_RELIEF_MAX_PLANES][3], weight[KARST_RELIEF_MAX_PLANES];
+  double spacing, width;
+} karst_i_warp_t;
+
+/* An image held by the tree (warp reliefs), with its bilinear Lipschitz
+ * constant in grey levels per pixel (tiled). */
+typedef struct karst_i_image {
+  int w, h;
+  float *v;
+  double lip;
+} karst_i_image_t;
+
 typedef struct karst_i_node {
   karst_sdf_kind_t kind;
   int label;
@@ -90,6 +125,9 @@ typedef struct karst_i_node {
       karst_sdf_field_fn fn;
       const void *arg;
     } ext;
+    struct {
+      karst_int_t index; /* into the tree's warps */
+    } warp;
   } u;
 } karst_i_node_t;
 
@@ -114,6 +152,10 @@ struct karst_sdf {
   karst_int_t n_coords, cap_coords;
   karst_terrain_t *terrains; /* owned copies (z arrays owned) */
   int n_terrains, cap_terrains;
+  karst_i_warp_t *warps;
+  karst_int_t n_warps, cap_warps;
+  karst_i_image_t *images; /* owned copies (pixels owned) */
+  karst_int_t n_images, cap_images;
   karst_int_t root;
 };
 
@@ -148,6 +190,16 @@ double karst_i_eval_smooth_intersection(const karst_sdf_t *t, const karst_i_node
                                         const double p[3], double ub, int *label,
                                         karst_int_t *touched);
 double karst_i_eval_thick(const karst_sdf_t *t, const karst_i_node_t *nd, const double p[3]);
+/* Gradient of node @p child at @p p by the tetrahedral finite difference of
+ * step @p eps (warp.c): G = (1/4ε) Σ_k v_k f(p + ε v_k) over the vertices
+ * v_k of the cube (±1, ±1, ±1) with an even number of minus signs. Exact for
+ * linear fields; for a 1-Lipschitz f, G is (1/ε)-Lipschitz in p. */
+void karst_i_fd_gradient(const karst_sdf_t *t, karst_int_t child, const double p[3], double eps,
+                         double G[3], karst_int_t *touched);
+
+/* Field of a warp node (warp.c); same contract as karst_i_sdf_eval. */
+double karst_i_warp_eval(const karst_sdf_t *t, const karst_i_node_t *nd, const double p[3],
+                         double ub, int *label, karst_int_t *touched);
 
 /* Empty a tree (keeps its storage): no half-built tree survives a failure. */
 void karst_i_sdf_clear(karst_sdf_t *t);

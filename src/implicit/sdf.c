@@ -58,6 +58,10 @@ void karst_sdf_free(karst_sdf_t *t) {
   free(t->bvh);
   free(t->sections);
   free(t->coords);
+  for (karst_int_t i = 0; i < t->n_images; i++)
+    free(t->images[i].v);
+  free(t->images);
+  free(t->warps);
   free(t);
 }
 
@@ -70,6 +74,9 @@ void karst_i_sdf_clear(karst_sdf_t *t) {
   t->n_nodes = t->n_kids = t->n_bvh = 0;
   t->n_sections = 0;
   t->n_coords = 0;
+  for (karst_int_t i = 0; i < t->n_images; i++)
+    free(t->images[i].v);
+  t->n_images = t->n_warps = 0;
   t->root = -1;
 }
 
@@ -951,6 +958,9 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     }
     break;
   }
+  case KARST_SDF_WARP:
+    v = karst_i_warp_eval(t, nd, p, ub, &lab, touched);
+    break;
   default:
     v = INFINITY;
     break;
@@ -994,11 +1004,13 @@ void karst_sdf_stats(const karst_sdf_t *t, karst_sdf_stats_t *st) {
   for (karst_int_t i = 0; i < t->n_nodes; i++)
     st->by_kind[t->nodes[i].kind]++;
   st->n_bvh_nodes = t->n_bvh;
-  st->memory_bytes = sizeof *t + (size_t)t->n_nodes * sizeof *t->nodes +
-                     (size_t)t->n_kids * sizeof *t->kids + (size_t)t->n_bvh * sizeof *t->bvh +
-                     (size_t)t->n_sections * sizeof *t->sections +
-                     (size_t)t->n_coords * sizeof *t->coords +
-                     (size_t)t->n_terrains * sizeof *t->terrains;
+  st->memory_bytes =
+      sizeof *t + (size_t)t->n_nodes * sizeof *t->nodes + (size_t)t->n_kids * sizeof *t->kids +
+      (size_t)t->n_bvh * sizeof *t->bvh + (size_t)t->n_sections * sizeof *t->sections +
+      (size_t)t->n_coords * sizeof *t->coords + (size_t)t->n_terrains * sizeof *t->terrains +
+      (size_t)t->n_warps * sizeof *t->warps;
+  for (karst_int_t i = 0; i < t->n_images; i++)
+    st->memory_bytes += (size_t)t->images[i].w * (size_t)t->images[i].h * sizeof(float);
   for (int i = 0; i < t->n_terrains; i++)
     if (t->terrains[i].z)
       st->memory_bytes +=
