@@ -14,6 +14,7 @@ struct karst_blocks_amplified {
   int *stratum_tile;
   karst_blocks_replica_t *rep;
   const karst_blocks_section_t *sec;
+  char *image; /* the relief image, relative to the scenario */
   double box[6];
 };
 
@@ -22,6 +23,7 @@ void karst_blocks_amplified_free(karst_blocks_amplified_t *a) {
   for (int k = 0; k < a->n_tiles; k++)
     karst_blocks_tile_free(a->tiles[k]);
   free(a->stratum_tile);
+  free(a->image);
   karst_blocks_replica_free(a->rep);
   free(a);
 }
@@ -67,6 +69,17 @@ karst_error_t karst_blocks_amplify(karst_ctx_t *ctx, const karst_scenario_t *sc,
     goto fail;
   }
   uint64_t seed = b->has_seed ? b->seed : sc->seed;
+  if (b->warp_image) { /* relative to the scenario's directory, as the heightfield */
+    const char *path = sc->path ? sc->path : "", *slash = strrchr(path, '/');
+    size_t dl = (b->warp_image[0] == '/' || !slash) ? 0 : (size_t)(slash - path) + 1;
+    a->image = malloc(dl + strlen(b->warp_image) + 1);
+    if (!a->image) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "blocks: out of memory");
+      goto fail;
+    }
+    memcpy(a->image, path, dl);
+    strcpy(a->image + dl, b->warp_image);
+  }
   for (int i = 0; i < b->n_strata; i++) {
     int k = 0;
     while (k < a->n_tiles && a->tiles[k]->par.type != b->strata[i].tile)
@@ -74,6 +87,7 @@ karst_error_t karst_blocks_amplify(karst_ctx_t *ctx, const karst_scenario_t *sc,
     if (k == a->n_tiles) {
       karst_blocks_tile_params_t par;
       karst_blocks_section_tile_params(b, b->strata[i].tile, seed, &par);
+      par.warp.image = a->image;
       if ((err = karst_blocks_tile_create(ctx, &par, &a->tiles[k]))) goto fail;
       a->n_tiles++;
     }

@@ -593,32 +593,36 @@ static int push_piece(split_t *S, const karst_int_t *pts, karst_int_t n) {
   return 0;
 }
 
-/* Connected components (kept edges) of the points of P, pushed as pieces.
- * P may be overwritten (it is reordered into components). */
+/* Breadth-first search from @p root over kept edges through points stamped
+ * @p mark, restamping them @p done; the points reached are S->queue[0 .. n). */
+static karst_int_t bfs(work_t *W, split_t *S, karst_int_t root, int32_t mark, int32_t done) {
+  karst_int_t *q = S->queue, h = 0, t = 0;
+  q[t++] = root;
+  S->stamp[root] = done;
+  while (h < t) {
+    karst_int_t u = q[h++];
+    for (karst_int_t a = W->astart[u]; a < W->astart[u + 1]; a++) {
+      const karst_i_edge_t *E = &W->e[W->aedge[a]];
+      if (E->cut) continue;
+      karst_int_t v = W->aside[a] ? E->u : E->v;
+      if (S->stamp[v] != mark) continue;
+      S->stamp[v] = done;
+      q[t++] = v;
+    }
+  }
+  return t;
+}
+
+/* Connected components (kept edges) of the points of P, pushed as pieces. */
 static int push_components(work_t *W, split_t *S, karst_int_t *P, karst_int_t n) {
   int32_t mark = ++S->cur;
   for (karst_int_t i = 0; i < n; i++)
     S->stamp[P[i]] = mark;
   int32_t done = ++S->cur;
-  karst_int_t *q = S->queue;
   for (karst_int_t i = 0; i < n; i++) {
-    karst_int_t r = P[i];
-    if (S->stamp[r] != mark) continue;
-    karst_int_t h = 0, t = 0;
-    q[t++] = r;
-    S->stamp[r] = done;
-    while (h < t) {
-      karst_int_t u = q[h++];
-      for (karst_int_t a = W->astart[u]; a < W->astart[u + 1]; a++) {
-        const karst_i_edge_t *E = &W->e[W->aedge[a]];
-        if (E->cut) continue;
-        karst_int_t v = W->aside[a] ? E->u : E->v;
-        if (S->stamp[v] != mark) continue;
-        S->stamp[v] = done;
-        q[t++] = v;
-      }
-    }
-    if (push_piece(S, q, t)) return -1;
+    if (S->stamp[P[i]] != mark) continue;
+    karst_int_t t = bfs(W, S, P[i], mark, done);
+    if (push_piece(S, S->queue, t)) return -1;
   }
   return 0;
 }
@@ -669,22 +673,7 @@ static karst_int_t reachable(work_t *W, split_t *S, const karst_int_t *P, karst_
   int32_t mark = ++S->cur;
   for (karst_int_t i = 0; i < n; i++)
     S->stamp[P[i]] = mark;
-  int32_t done = ++S->cur;
-  karst_int_t *q = S->queue, h = 0, t = 0;
-  q[t++] = P[0];
-  S->stamp[P[0]] = done;
-  while (h < t) {
-    karst_int_t u = q[h++];
-    for (karst_int_t a = W->astart[u]; a < W->astart[u + 1]; a++) {
-      const karst_i_edge_t *E = &W->e[W->aedge[a]];
-      if (E->cut) continue;
-      karst_int_t v = W->aside[a] ? E->u : E->v;
-      if (S->stamp[v] != mark) continue;
-      S->stamp[v] = done;
-      q[t++] = v;
-    }
-  }
-  return t;
+  return bfs(W, S, P[0], mark, ++S->cur);
 }
 
 static void unwrapped(const work_t *W, const split_t *S, karst_int_t i, double u[3]) {

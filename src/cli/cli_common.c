@@ -156,3 +156,17 @@ int cli_parse_double(const char *s, double *out) {
   *out = v;
   return 0;
 }
+
+/* Check that @p path can be written, before any work, and add it to the
+ * outputs committed together; its temporary keeps the extension, by which
+ * the writers choose the format. */
+karst_error_t cli_add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
+                             const char **tmp) {
+  karst_error_t err = karst_check_writable(ctx, path);
+  if (err) return err;
+  char *t = karst_temp_name_ext(path);
+  if (!t) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+  err = karst_fileset_add(ctx, outs, path, t, tmp);
+  free(t);
+  return err;
+}

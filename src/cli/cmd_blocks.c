@@ -9,16 +9,6 @@
 #include "cli.h"
 #include "karst/blocks.h"
 
-static karst_error_t add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
-                                const char **tmp) {
-  karst_error_t err = karst_check_writable(ctx, path);
-  if (err) return err;
-  char *t = karst_temp_name_ext(path);
-  if (!t) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
-  err = karst_fileset_add(ctx, outs, path, t, tmp);
-  free(t);
-  return err;
-}
 
 static double cli_now(void) {
   struct timespec ts;
@@ -148,7 +138,7 @@ static int run(int argc, char **argv) {
     goto fail;
   }
   for (int i = 0; i < n_out; i++)
-    if ((err = add_output(&ctx, &outs, paths[i], &tmps[i]))) goto fail;
+    if ((err = cli_add_output(&ctx, &outs, paths[i], &tmps[i]))) goto fail;
   if (scen) {
     if ((err = karst_sdf_create(&ctx, &tree))) goto fail;
     karst_int_t root;

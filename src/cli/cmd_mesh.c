@@ -40,19 +40,6 @@ static double now_s(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-/* Check that @p path can be written, before any work, and add it to the
- * outputs committed together; its temporary keeps the extension, by which
- * the writers choose the format. */
-static karst_error_t add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
-                                const char **tmp) {
-  karst_error_t err = karst_check_writable(ctx, path);
-  if (err) return err;
-  char *t = karst_temp_name_ext(path);
-  if (!t) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
-  err = karst_fileset_add(ctx, outs, path, t, tmp);
-  free(t);
-  return err;
-}
 
 static double grid_points(const karst_int_t c[3]) {
   return (double)(c[0] + 1) * (double)(c[1] + 1) * (double)(c[2] + 1);
@@ -203,8 +190,8 @@ static int run(int argc, char **argv) {
   /* every output is checked before any work, written to a temporary, and
    * renamed into place only when all of them were written */
   const char *tmp_out = NULL, *tmp_sdf = NULL, *writing = NULL;
-  if ((err = add_output(&ctx, &outs, out, &tmp_out))) goto fail;
-  if (sdf_path && (err = add_output(&ctx, &outs, sdf_path, &tmp_sdf))) goto fail;
+  if ((err = cli_add_output(&ctx, &outs, out, &tmp_out))) goto fail;
+  if (sdf_path && (err = cli_add_output(&ctx, &outs, sdf_path, &tmp_sdf))) goto fail;
   double t0 = now_s();
   if ((err = karst_read_network(&ctx, in, KARST_FORMAT_AUTO, &net))) goto fail;
   if (scen_path && (err = karst_scenario_load(&ctx, scen_path, &sc))) goto fail;

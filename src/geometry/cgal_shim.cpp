@@ -281,12 +281,17 @@ extern "C" int karst_i_cgal_halfspaces(const double *planes, karst_int_t m, cons
     std::vector<K::Point_3> pts;
     for (const auto &x : pv)
       pts.emplace_back(x[0], x[1], x[2]);
-    if (!PMP::is_polygon_soup_a_polygon_mesh(polys)) {
+    /* PMP::volume wants triangles: the faces are convex, fans will do */
+    std::vector<std::array<std::size_t, 3>> fan;
+    for (const auto &poly : polys)
+      for (size_t k = 1; k + 1 < poly.size(); k++)
+        fan.push_back({poly[0], poly[k], poly[k + 1]});
+    if (!PMP::is_polygon_soup_a_polygon_mesh(fan)) {
       say(err, errlen, "the polytope's faces do not close");
       return -1;
     }
     Mesh P;
-    PMP::polygon_soup_to_polygon_mesh(pts, polys, P);
+    PMP::polygon_soup_to_polygon_mesh(pts, fan, P);
     if (!CGAL::is_closed(P)) {
       say(err, errlen, "the intersection of the half-spaces is not a closed polytope");
       return -1;

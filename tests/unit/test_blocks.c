@@ -204,8 +204,9 @@ static void test_box_tile(void **state) {
     assert_int_equal(B->n_planes, 6);
     assert_rel(B->volume, pow(s / 4, 3), 1e-9);
     assert_rel(B->cgal_volume, B->volume, 1e-9);
-    for (int a = 0; a < 3; a++) /* a box between two consecutive planes */
-      assert_close(B->box[a + 3] - B->box[a], s / 4, 1e-7);
+    for (int a = 0; a < 3; a++) /* between two consecutive planes; node boxes are padded by
+                                   KARST_I_BOX_PAD_ABS (1e-6 m) each side plus rounding */
+      assert_close(B->box[a + 3] - B->box[a], s / 4, 1e-5);
     /* the CGAL check of the polytope's own mesh: closed, outward */
     karst_i_cgal_report_t rep;
     assert_int_equal(karst_i_cgal_check_mesh(T->hulls[i].xyz, T->hulls[i].n_vertices,
@@ -354,6 +355,46 @@ static void test_block_meshes(void **state) {
   karst_blocks_tile_free(T);
 }
 
+/* The warped blocks (§4.3, the warp node of src/implicit/warp.c): within
+ * their stated bound, 1-Lipschitz, on random pairs near and across block
+ * surfaces, and really displaced (the field differs from the unwarped one). */
+static void test_warped_lipschitz(void **state) {
+  (void)state;
+  karst_blocks_tile_t *T[2] = {NULL, NULL};
+  for (int k = 0; k < 2; k++) {
+    karst_blocks_tile_params_t p;
+    small_params(&p, KARST_BLOCK_EQUIDIMENSIONAL, 5, 0.4);
+    if (k) {
+      p.warp.relief = KARST_BLOCKS_RELIEF_NOISE;
+      p.warp.amplitude = 0.08;
+      p.warp.wavelength = 0.5;
+    }
+    assert_int_equal(karst_blocks_tile_create(NULL, &p, &T[k]), KARST_SUCCESS);
+  }
+  assert_int_equal(T[0]->n_blocks, T[1]->n_blocks); /* the warp changes no cluster */
+  karst_rng_t r;
+  karst_rng_init(&r, 21, 0);
+  double worst = 0, moved = 0;
+  for (int i = 0; i < 4000; i++) {
+    karst_int_t b = (karst_int_t)karst_rng_below(&r, (uint64_t)T[1]->n_blocks);
+    const double *box = T[1]->blocks[b].box;
+    double p[3], q[3], d[3];
+    for (int a = 0; a < 3; a++)
+      p[a] = karst_rng_uniform_range(&r, box[a] - 0.2, box[a + 3] + 0.2);
+    karst_rng_unit_vector(&r, d);
+    double len = pow(10, karst_rng_uniform_range(&r, -3, 0));
+    for (int a = 0; a < 3; a++)
+      q[a] = p[a] + len * d[a];
+    double fp = karst_blocks_block_eval(T[1], b, p), fq = karst_blocks_block_eval(T[1], b, q);
+    worst = fmax(worst, fabs(fp - fq) / len);
+    moved = fmax(moved, fabs(fp - karst_blocks_block_eval(T[0], b, p)));
+  }
+  assert_true(worst <= 1 + 1e-9);
+  assert_true(moved > 0.005);
+  for (int k = 0; k < 2; k++)
+    karst_blocks_tile_free(T[k]);
+}
+
 /* Same seed, 1 or 2 threads: the same tile, bit for bit. */
 static void test_threads(void **state) {
   (void)state;
@@ -499,7 +540,7 @@ int main(void) {
       cmocka_unit_test(test_grid_flann_agree),  cmocka_unit_test(test_box_tile),
       cmocka_unit_test(test_visibility),        cmocka_unit_test(test_tile_periodic),
       cmocka_unit_test(test_block_meshes),      cmocka_unit_test(test_threads),
-      cmocka_unit_test(test_replication),
+      cmocka_unit_test(test_replication),       cmocka_unit_test(test_warped_lipschitz),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
