@@ -70,7 +70,7 @@ typedef enum {
 /** The relief d of the gradient-based warping ω⁻¹ of each block (§4.3). */
 typedef struct karst_blocks_warp {
   karst_blocks_relief_kind_t relief; /**< none (default), procedural noise, or an image */
-  double amplitude;  /**< largest displacement (m), default 0.15 */
+  double amplitude;                  /**< largest displacement (m), default 0.15 */
   double wavelength; /**< noise wavelength, or the ground size of the image (m), default 2 */
   const char *image; /**< PGM or PNG path for KARST_BLOCKS_RELIEF_IMAGE (borrowed) */
 } karst_blocks_warp_t;
@@ -208,7 +208,7 @@ typedef int (*karst_blocks_stratum_fn)(void *arg, const double p[3]);
 
 /** The presence criteria of §5, tested at the anchor points of a block copy. */
 typedef struct karst_blocks_presence {
-  double dist_min, dist_max; /**< [v_a, v_b]: terrain field at the anchor (m), default [-4, 1] */
+  double dist_min, dist_max; /**< [v_a, v_b]: terrain field at the anchor (m), default [-1, 2] */
   double max_slope; /**< ε: |g.u_z| must be below it, default 0.5 (wall steeper than 60°) */
   int n_anchors;    /**< anchor points per block, default 8 */
   double quorum;    /**< fraction that must pass, strictly more than it, default 0.5 */
@@ -309,8 +309,13 @@ int karst_blocks_amplified_tiles(const karst_blocks_amplified_t *a,
 const karst_blocks_replica_t *karst_blocks_amplified_replica(const karst_blocks_amplified_t *a);
 /** The amplified region (lo, hi): region × the domain's z range. */
 void karst_blocks_amplified_box(const karst_blocks_amplified_t *a, double box[6]);
-/** Per-triangle block_id and block_type from a polygonized tree's labels (-1: no block). */
-void karst_blocks_mesh_labels(karst_mesh_t *m, int *id, int *type);
+/** Step inside a triangle, in units of its mean edge, at which karst_blocks_relabel_mesh
+ *  asks the tree for the deciding primitive. */
+#define KARST_BLOCKS_RELABEL_DEPTH 0.25
+/** Per-triangle block_id and block_type (-1: no block) of a mesh polygonized from @p tree, and
+ *  its tunnel_type labels with -1 on blocks (see amplify.c). */
+void karst_blocks_relabel_mesh(karst_ctx_t *ctx, const karst_sdf_t *tree, karst_mesh_t *m, int *id,
+                               int *type);
 
 /** Labels of block triangles: KARST_BLOCKS_LABEL_BASE + type << 20 | block id. */
 #define KARST_BLOCKS_LABEL_BASE (1 << 24)

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/parallel_internal.h"
 #include "karst/blocks.h"
 
 struct karst_blocks_amplified {
@@ -114,19 +115,52 @@ fail:
   return err;
 }
 
-/**
- * Split the labels of a polygonized amplified terrain into per-triangle
- * block_id and block_type (-1 on the terrain and other primitives), and put
- * -1 in the mesh's own labels where a block decided (so a tunnel_type array
- * keeps only tunnel types). @p id and @p type hold m->n_triangles values.
- * Time complexity: O(triangles).
- */
-void karst_blocks_mesh_labels(karst_mesh_t *m, int *id, int *type) {
-  for (karst_int_t t = 0; t < m->n_triangles; t++) {
-    int l = m->tri_label ? m->tri_label[t] : -1, ty, i;
-    if (karst_blocks_label_decode(l, &ty, &i)) {
-      if (m->tri_label) m->tri_label[t] = -1;
-    }
-    id[t] = i, type[t] = ty;
+/* Task of karst_blocks_relabel_mesh: triangles t = tid, tid + nth, ... */
+typedef struct relabel_job {
+  const karst_sdf_t *tree;
+  karst_mesh_t *m;
+  int *id, *type;
+} relabel_job_t;
+
+static void task_relabel(void *arg, int tid, int nth) {
+  relabel_job_t *J = arg;
+  karst_mesh_t *m = J->m;
+  for (karst_int_t t = tid; t < m->n_triangles; t += nth) {
+    const double *a = m->xyz + 3 * m->tri[3 * t], *b = m->xyz + 3 * m->tri[3 * t + 1],
+                 *c = m->xyz + 3 * m->tri[3 * t + 2];
+    double e1[3], e2[3], n[3], q[3], len = 0;
+    for (int k = 0; k < 3; k++)
+      e1[k] = b[k] - a[k], e2[k] = c[k] - a[k];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; k++)
+      len += fabs(e1[k]) + fabs(e2[k]);
+    /* a point just inside the solid, as the polygonizer's inside corner */
+    double d = KARST_BLOCKS_RELABEL_DEPTH * len / 3;
+    for (int k = 0; k < 3; k++)
+      q[k] = (a[k] + b[k] + c[k]) / 3 - (nl > 0 ? d * n[k] / nl : 0);
+    int lab = KARST_SDF_NO_LABEL, ty, i;
+    (void)karst_sdf_eval(J->tree, q, &lab);
+    int blk = karst_blocks_label_decode(lab, &ty, &i);
+    if (m->tri_label) m->tri_label[t] = blk ? KARST_SDF_NO_LABEL : lab;
+    if (J->id) J->id[t] = i;
+    if (J->type) J->type[t] = ty;
   }
+}
+
+/**
+ * Label the triangles of a mesh polygonized from @p tree (whose root holds
+ * block copies) by the primitive that decides the field just inside each
+ * triangle (a step of KARST_BLOCKS_RELABEL_DEPTH times its size along the
+ * inward normal): @p id and @p type (may be NULL) receive the block id and
+ * type (-1 elsewhere); m->tri_label keeps tunnel types and is -1 on blocks.
+ * The polygonizer stores labels in 8 bits, too few for block labels.
+ * Runs on ctx->nthreads threads. Time: O(triangles × field cost).
+ */
+void karst_blocks_relabel_mesh(karst_ctx_t *ctx, const karst_sdf_t *tree, karst_mesh_t *m, int *id,
+                               int *type) {
+  relabel_job_t J = {tree, m, id, type};
+  karst_i_parallel_run(ctx && ctx->nthreads > 0 ? ctx->nthreads : 1, task_relabel, &J);
 }

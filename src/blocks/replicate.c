@@ -41,8 +41,8 @@ struct karst_blocks_replica {
 };
 
 void karst_blocks_presence_init(karst_blocks_presence_t *p) {
-  p->dist_min = -4.0;
-  p->dist_max = 1.0;
+  p->dist_min = -1.0;
+  p->dist_max = 2.0;
   p->max_slope = 0.5;
   p->n_anchors = 8;
   p->quorum = 0.5;

@@ -20,7 +20,7 @@ void karst_blocks_section_init(karst_blocks_section_t *b) {
   b->aperture = p.aperture;
   b->hull_margin = 0; /* the graph radius */
   b->voxel = 0.5;
-  b->tile_voxel = 0.1;
+  b->tile_voxel = 0.25;
   karst_blocks_presence_init(&b->presence);
   b->warp_relief = KARST_BLOCKS_RELIEF_NONE;
   b->warp_amplitude = p.warp.amplitude;

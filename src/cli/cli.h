@@ -27,8 +27,7 @@ void cli_note_failed_output(karst_ctx_t *ctx, karst_error_t err, const char *out
 karst_error_t cli_add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
                              const char **tmp);
 /* Print a usage error and the command's usage line; returns CLI_USAGE. */
-int cli_usage_error(const char *cmd, const char *fmt, ...)
-    __attribute__((format(printf, 2, 3)));
+int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Look up a command by name (NULL if none). */
 const cli_command_t *cli_find_command(const char *name);
 /* Parse a number argument strictly; returns 0 on success. */

@@ -9,7 +9,6 @@
 #include "cli.h"
 #include "karst/blocks.h"
 
-
 static double cli_now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -20,7 +19,7 @@ static int run(int argc, char **argv) {
   const char *scen = NULL, *outdir = NULL, *tile_name = NULL;
   uint64_t seed = 1;
   int have_seed = 0, quiet = 0, threads = 0, voxel_given = 0;
-  double voxel = 0.1;
+  double voxel = 0.25;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     int more = i + 1 < argc;
@@ -179,7 +178,7 @@ static int run(int argc, char **argv) {
       err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
       goto fail;
     }
-    karst_blocks_mesh_labels(&mesh, bid, btype);
+    karst_blocks_relabel_mesh(&ctx, tree, &mesh, bid, btype);
     free(mesh.tri_label);
     mesh.tri_label = NULL;
     const char *names[2] = {"block_id", "block_type"};
@@ -272,7 +271,7 @@ const cli_command_t cli_cmd_blocks = {
     "  DIR/run.json         every parameter and the Table 1 statistics of the tile\n\n"
     "  --seed S       seed of the tile (default 1)\n"
     "  --voxel H      polygonization step in metres (default: blocks.tile_voxel and\n"
-    "                 blocks.voxel of the scenario, 0.1 for --tile)\n"
+    "                 blocks.voxel of the scenario, 0.25 for --tile)\n"
     "  -j THREADS     worker threads (default: all processors); the output does not depend on it\n"
     "  --quiet        no progress and no summary\n\n"
     "The method and its departures from the paper are described in docs/blocks.md.\n"};

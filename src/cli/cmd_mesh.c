@@ -40,7 +40,6 @@ static double now_s(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-
 static double grid_points(const karst_int_t c[3]) {
   return (double)(c[0] + 1) * (double)(c[1] + 1) * (double)(c[2] + 1);
 }
@@ -223,17 +222,8 @@ static int run(int argc, char **argv) {
   if (sdf_path && (err = check_sdf_size(&ctx, sdf_path, base, margin, voxel))) goto fail;
   karst_polygonize_stats_t pst;
   if ((err = karst_mesh_polygonize(&ctx, sdf, box, voxel, &mesh, &pst))) goto fail;
-  if (blocks && mesh.n_triangles > 0) { /* block triangles are rock, not a tunnel type */
-    int *id = malloc((size_t)mesh.n_triangles * sizeof *id),
-        *ty = malloc((size_t)mesh.n_triangles * sizeof *ty);
-    if (id && ty) karst_blocks_mesh_labels(&mesh, id, ty);
-    free(id);
-    free(ty);
-    if (!id || !ty) {
-      err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
-      goto fail;
-    }
-  }
+  if (blocks) /* labels: tunnel types, -1 on the terrain and its blocks */
+    karst_blocks_relabel_mesh(&ctx, sdf, &mesh, NULL, NULL);
   double t2 = now_s();
   writing = out;
   if ((err = karst_mesh_write(&ctx, tmp_out, &mesh))) goto fail_write;
@@ -267,7 +257,10 @@ static int run(int argc, char **argv) {
         box[3], box[4], box[5], (long long)ss.n_nodes, (long long)ss.by_kind[KARST_SDF_SWEEP],
         (long long)ss.by_kind[KARST_SDF_REVOLVE], (long long)ss.by_kind[KARST_SDF_SPHERE],
         (long long)ss.by_kind[KARST_SDF_ELLIPSOID], ss.memory_bytes / 1e6, t1 - t0, t2 - t1,
-        ctx.nthreads, blocks ? ", block-amplified terrain carved" : carve ? ", terrain carved" : "");
+        ctx.nthreads,
+        blocks  ? ", block-amplified terrain carved"
+        : carve ? ", terrain carved"
+                : "");
   }
   goto done;
 fail_write:
