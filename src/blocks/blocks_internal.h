@@ -22,6 +22,8 @@
 /* A disc that a cluster wraps around grows in its plane by this factor per
  * step until the cluster falls apart (tile.c, make_clusters). */
 #define KARST_I_BLOCKS_GROWTH 1.5
+/* Newton steps projecting an anchor on the terrain surface (replicate.c). */
+#define KARST_I_BLOCKS_PROJECT_STEPS 4
 /* Step (m) of the central differences of the terrain gradient at anchors. */
 #define KARST_I_BLOCKS_GRAD_STEP 0.05
 
