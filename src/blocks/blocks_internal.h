@@ -21,7 +21,7 @@
 #define KARST_I_BLOCKS_CAP_REL 0.25
 /* A disc that a cluster wraps around grows in its plane by this factor per
  * step until the cluster falls apart (tile.c, make_clusters). */
-#define KARST_I_BLOCKS_GROWTH 1.5
+#define KARST_I_BLOCKS_GROWTH 2.0
 /* Newton steps projecting an anchor on the terrain surface (replicate.c). */
 #define KARST_I_BLOCKS_PROJECT_STEPS 4
 /* Step (m) of the central differences of the terrain gradient at anchors. */
