@@ -87,7 +87,8 @@ karst_error_t karst_i_blocks_poisson(karst_ctx_t *ctx, double s, double r, int p
   for (int i = 1; i < n_nbr; i++)
     for (int j = i; j > 0; j--) {
       int64_t *a = nbr + 3 * (j - 1), *b = nbr + 3 * j;
-      int64_t da = llabs(a[0]) + llabs(a[1]) + llabs(a[2]), db = llabs(b[0]) + llabs(b[1]) + llabs(b[2]);
+      int64_t da = llabs(a[0]) + llabs(a[1]) + llabs(a[2]),
+              db = llabs(b[0]) + llabs(b[1]) + llabs(b[2]);
       if (da <= db) break;
       for (int k = 0; k < 3; k++) {
         int64_t t = a[k];

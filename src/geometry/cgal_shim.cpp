@@ -8,10 +8,10 @@
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
-#include <CGAL/Surface_mesh.h>
-#include <CGAL/boost/graph/helpers.h>
-#include <CGAL/Triangulation_3.h>
 #include <CGAL/Random.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/Triangulation_3.h>
+#include <CGAL/boost/graph/helpers.h>
 
 #include <algorithm>
 #include <array>
@@ -114,14 +114,14 @@ static bool hull_mesh(const std::vector<K::Point_3> &pts, Mesh &out) {
     tris.push_back(tri);
   }
   /* deterministic order: by vertex triple (the triangulation's cell order follows its memory) */
-  std::sort(tris.begin(), tris.end(), [&](const std::array<std::size_t, 3> &a,
-                                          const std::array<std::size_t, 3> &b) {
-    for (int k = 0; k < 3; k++) {
-      const K::Point_3 &p = vp[a[k]], &q = vp[b[k]];
-      if (p != q) return p < q;
-    }
-    return false;
-  });
+  std::sort(tris.begin(), tris.end(),
+            [&](const std::array<std::size_t, 3> &a, const std::array<std::size_t, 3> &b) {
+              for (int k = 0; k < 3; k++) {
+                const K::Point_3 &p = vp[a[k]], &q = vp[b[k]];
+                if (p != q) return p < q;
+              }
+              return false;
+            });
   if (!PMP::is_polygon_soup_a_polygon_mesh(tris)) return false;
   PMP::polygon_soup_to_polygon_mesh(vp, tris, out);
   return true;
@@ -180,9 +180,9 @@ extern "C" int karst_i_cgal_hull_planes(const double *xyz, karst_int_t n, double
   return -1;
 }
 
-extern "C" int karst_i_cgal_halfspaces(const double *planes, karst_int_t m, const double interior[3],
-                                       double tol, karst_i_polytope_t *out, char *err,
-                                       size_t errlen) {
+extern "C" int karst_i_cgal_halfspaces(const double *planes, karst_int_t m,
+                                       const double interior[3], double tol,
+                                       karst_i_polytope_t *out, char *err, size_t errlen) {
   /* By polar duality about the interior point c: the half-space u.p <= d
    * becomes the point u / (d - u.c); the convex hull of those points
    * (CGAL::convex_hull_3 with the ordinary traits) has one vertex per face of

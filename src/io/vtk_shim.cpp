@@ -397,7 +397,7 @@ karst_error_t write_atomically(karst_ctx_t *ctx, const char *path, StreamedWrite
     int e = buf.finish();
     if (close(fd) != 0 && e == 0) e = errno;
     if (!ok || catcher->errors > 0 || writer->GetErrorCode() != vtkErrorCode::NoError || e != 0) {
-      std::string why = e != 0               ? std::string(std::strerror(e))
+      std::string why = e != 0                ? std::string(std::strerror(e))
                         : catcher->errors > 0 ? catcher->message()
                                               : error_code_text(writer->GetErrorCode());
       err = karst_set_error(ctx, KARST_EIO, "%s: cannot write: %s", path, why.c_str());
@@ -515,8 +515,8 @@ karst_error_t write_samples(karst_ctx_t *ctx, const char *path, const karst_samp
   return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
 
-karst_error_t write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m,
-                         int n_extra = 0, const char *const *extra_names = nullptr,
+karst_error_t write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m, int n_extra = 0,
+                         const char *const *extra_names = nullptr,
                          const int *const *extra = nullptr) {
   karst_error_t err;
   if ((err = check_path(ctx, path))) return err;

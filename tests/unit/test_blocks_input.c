@@ -1,8 +1,8 @@
 /* Hostile input for the rock blocks: the blocks section of a scenario
  * (src/scenario/scenario_blocks.inc); the relief images are read by
- * src/io/image.c, whose hostile inputs are in test_image.c. Every bad file must give a non-zero code and a
- * message naming the file, the line and column (scenario) and the field,
- * never a crash (the suite runs under ASan and UBSan). */
+ * src/io/image.c, whose hostile inputs are in test_image.c. Every bad file must give a non-zero
+ * code and a message naming the file, the line and column (scenario) and the field, never a crash
+ * (the suite runs under ASan and UBSan). */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
