@@ -162,7 +162,7 @@ static int edge_cmp(const void *pa, const void *pb) {
 }
 
 void karst_i_blocks_sort_edges(karst_i_edge_t *e, karst_int_t n) {
-  qsort(e, (size_t)n, sizeof *e, edge_cmp);
+  if (n > 1) qsort(e, (size_t)n, sizeof *e, edge_cmp);
 }
 
 static karst_error_t push_edge(karst_ctx_t *ctx, karst_i_edge_t **e, karst_int_t *n,

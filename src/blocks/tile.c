@@ -774,7 +774,7 @@ static int grow_split(work_t *W, split_t *S, const karst_int_t *P, karst_int_t n
       nx++;
     }
   }
-  qsort(x, (size_t)nx, sizeof *x, xedge_cmp);
+  if (nx > 1) qsort(x, (size_t)nx, sizeof *x, xedge_cmp);
   double reach = radius;
   karst_int_t k = 0;
   while (k < nx) {
