@@ -1671,7 +1671,8 @@ karst_error_t karst_blocks_tile_mesh(karst_ctx_t *ctx, const karst_blocks_tile_t
       if (l) out->tri_label = l;
       if (!q || !l) goto nomem;
     }
-    memcpy(out->xyz + 3 * out->n_vertices, m.xyz, 3 * (size_t)m.n_vertices * sizeof *m.xyz);
+    if (m.n_vertices > 0) /* an empty block mesh has no arrays */
+      memcpy(out->xyz + 3 * out->n_vertices, m.xyz, 3 * (size_t)m.n_vertices * sizeof *m.xyz);
     for (karst_int_t k = 0; k < m.n_triangles; k++) {
       for (int c = 0; c < 3; c++)
         out->tri[3 * (out->n_triangles + k) + c] = m.tri[3 * k + c] + out->n_vertices;

@@ -341,13 +341,34 @@ static void test_block_meshes(void **state) {
     for (karst_int_t t = 0; t < m.n_triangles; t++)
       nt += m.tri_label[t] == (int)b;
     if (!nt) continue;
-    karst_int_t *tri = malloc(3 * (size_t)nt * sizeof *tri), k = 0;
-    for (karst_int_t t = 0; t < m.n_triangles; t++)
-      if (m.tri_label[t] == (int)b) memcpy(tri + 3 * k++, m.tri + 3 * t, 3 * sizeof *tri);
+    /* the block's own vertices only (CGAL checks a soup without unused points) */
+    karst_int_t *tri = malloc(3 * (size_t)nt * sizeof *tri), k = 0, nv = 0;
+    karst_int_t *map = malloc((size_t)m.n_vertices * sizeof *map);
+    double *xyz = malloc(3 * (size_t)m.n_vertices * sizeof *xyz);
+    assert_true(tri && map && xyz);
+    for (karst_int_t v = 0; v < m.n_vertices; v++)
+      map[v] = -1;
+    for (karst_int_t t = 0; t < m.n_triangles; t++) {
+      if (m.tri_label[t] != (int)b) continue;
+      for (int c = 0; c < 3; c++) {
+        karst_int_t v = m.tri[3 * t + c];
+        if (map[v] < 0) {
+          map[v] = nv;
+          memcpy(xyz + 3 * nv++, m.xyz + 3 * v, 3 * sizeof *xyz);
+        }
+        tri[3 * k + c] = map[v];
+      }
+      k++;
+    }
     karst_i_cgal_report_t rep;
-    assert_int_equal(karst_i_cgal_check_mesh(m.xyz, m.n_vertices, tri, nt, &rep, NULL, 0), 0);
-    assert_true(rep.is_polygon_mesh && rep.closed && rep.outward);
+    char msg[256] = "";
+    int rc = karst_i_cgal_check_mesh(xyz, nv, tri, nt, &rep, msg, sizeof msg);
     free(tri);
+    free(map);
+    free(xyz);
+    if (rc) print_error("block %lld: %s\n", (long long)b, msg);
+    assert_int_equal(rc, 0);
+    assert_true(rep.is_polygon_mesh && rep.closed && rep.outward);
     blocks_seen++;
   }
   assert_true(blocks_seen >= T->n_blocks / 2);
