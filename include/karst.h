@@ -17,6 +17,7 @@
 #include "karst/crs.h"
 #include "karst/ensemble.h"
 #include "karst/generate.h"
+#include "karst/geology.h"
 #include "karst/graph.h"
 #include "karst/image.h"
 #include "karst/implicit.h"
@@ -28,9 +29,11 @@
 #include "karst/paths.h"
 #include "karst/readers.h"
 #include "karst/report.h"
+#include "karst/routing.h"
 #include "karst/sampling.h"
 #include "karst/scenario.h"
 #include "karst/skeleton.h"
+#include "karst/surface.h"
 #include "karst/vtk.h"
 
 #endif

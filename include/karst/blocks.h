@@ -56,9 +56,9 @@ int karst_block_type_from_name(const char *name);
 const char *const *karst_block_type_names(void);
 
 /** A fracture disc D(c, r, n) (§4.1): centre, unit normal, radius. */
-typedef struct karst_disc {
+typedef struct karst_blocks_disc {
   double c[3], n[3], radius;
-} karst_disc_t;
+} karst_blocks_disc_t;
 
 /** Where the relief of the blocks' warping comes from (the warp node of implicit.h). */
 typedef enum {
@@ -92,12 +92,13 @@ typedef struct karst_blocks_tile_params {
   double disc_spacing;      /**< Poisson radius of the disc centres (m), type default (§4.1) */
   double disc_radius_min;   /**< radius range of the type's ordinary discs (m) */
   double disc_radius_max;
-  double tilt;                    /**< degrees: prismatic irregularity, rhombohedral obliquity */
-  int n_bedding;                  /**< tabular bedding planes / columnar cross joints */
-  double bedding_spacing;         /**< smallest distance between bedding planes (m) */
-  int dart_passes;                /**< Poisson dart passes per background cell, default 8 */
-  uint64_t seed;                  /**< seed of the tile's random streams, default 1 */
-  const karst_disc_t *user_discs; /**< discs placed by the user (tile coordinates), borrowed */
+  double tilt;            /**< degrees: prismatic irregularity, rhombohedral obliquity */
+  int n_bedding;          /**< tabular bedding planes / columnar cross joints */
+  double bedding_spacing; /**< smallest distance between bedding planes (m) */
+  int dart_passes;        /**< Poisson dart passes per background cell, default 8 */
+  uint64_t seed;          /**< seed of the tile's random streams, default 1 */
+  const karst_blocks_disc_t
+      *user_discs; /**< discs placed by the user (tile coordinates), borrowed */
   int n_user_discs;
   /** User-authored blocks: nodes of @p authored (borrowed, tile coordinates,
    *  any construction tree). Sample points inside them are theirs; the
@@ -147,7 +148,7 @@ typedef struct karst_blocks_tile {
   karst_int_t n_points;
   double *xyz; /**< 3 n_points sample points in [0, s)³ */
   int n_discs;
-  karst_disc_t *discs; /**< random discs then the user's */
+  karst_blocks_disc_t *discs; /**< random discs then the user's */
   karst_int_t n_blocks;
   karst_blocks_block_t *blocks;
   karst_int_t *members; /**< sample indices of the blocks, block by block */

@@ -145,7 +145,7 @@ karst_error_t karst_blocks_tile_params_check(karst_ctx_t *ctx,
     return karst_set_error(ctx, KARST_EINVAL, "blocks: %d user discs announced, none given",
                            p->n_user_discs);
   for (int i = 0; i < p->n_user_discs; i++) {
-    const karst_disc_t *d = &p->user_discs[i];
+    const karst_blocks_disc_t *d = &p->user_discs[i];
     double nn = d->n[0] * d->n[0] + d->n[1] * d->n[1] + d->n[2] * d->n[2];
     for (int a = 0; a < 3; a++)
       if (!isfinite(d->c[a]) || !isfinite(d->n[a]))
@@ -233,7 +233,8 @@ static double torus_d2(const double *a, const double *b, double s) {
 #define DISC_TRIES 1000
 
 /* Draw the type's random discs (§4.1) into d (capacity n_discs); returns the count. */
-static int draw_discs(const karst_blocks_tile_params_t *p, karst_rng_t *rng, karst_disc_t *d) {
+static int draw_discs(const karst_blocks_tile_params_t *p, karst_rng_t *rng,
+                      karst_blocks_disc_t *d) {
   double s = p->size;
   int n = 0,
       nb = (p->type == KARST_BLOCK_TABULAR || p->type == KARST_BLOCK_COLUMNAR) ? p->n_bedding : 0;
@@ -249,7 +250,7 @@ static int draw_discs(const karst_blocks_tile_params_t *p, karst_rng_t *rng, kar
         if (dz < p->bedding_spacing) ok = 0;
       }
       if (!ok) continue;
-      karst_disc_t *D = &d[n++];
+      karst_blocks_disc_t *D = &d[n++];
       D->c[0] = x, D->c[1] = y, D->c[2] = z;
       D->n[0] = D->n[1] = 0, D->n[2] = 1;
       D->radius = p->type == KARST_BLOCK_TABULAR
@@ -281,7 +282,7 @@ static int draw_discs(const karst_blocks_tile_params_t *p, karst_rng_t *rng, kar
         if (torus_d2(c, d[j].c, s) < p->disc_spacing * p->disc_spacing) placed = 0;
     }
     if (!placed) break; /* the tile is full at this spacing */
-    karst_disc_t *D = &d[n++];
+    karst_blocks_disc_t *D = &d[n++];
     memcpy(D->c, c, sizeof c);
     double ax[3] = {0, 0, 0};
     switch (p->type) {
@@ -340,7 +341,7 @@ typedef struct work {
   double s, rg;
   karst_int_t n;
   const double *x;
-  karst_disc_t *discs;
+  karst_blocks_disc_t *discs;
   int n_discs;
   fam_t *fams;
   int n_fams, cap_fams;
@@ -366,7 +367,7 @@ static karst_error_t make_images(work_t *W, double lo, double hi) {
   double s = W->s;
   int cap = 0;
   for (int d = 0; d < W->n_discs; d++) {
-    const karst_disc_t *D = &W->discs[d];
+    const karst_blocks_disc_t *D = &W->discs[d];
     double ext[3];
     for (int a = 0; a < 3; a++)
       ext[a] = D->radius * sqrt(fmax(0.0, 1 - D->n[a] * D->n[a]));
@@ -497,7 +498,7 @@ static void task_cut(void *arg, int tid, int nth) {
     int imin = -1, imax = -1;
     for (int32_t q = W->bstart[b]; q < W->bstart[b + 1]; q++) {
       const image_t *I = &W->img[W->bidx[q]];
-      const karst_disc_t *D = &W->discs[I->disc];
+      const karst_blocks_disc_t *D = &W->discs[I->disc];
       double t;
       if (!karst_i_blocks_segment_disc(A, B, I->c, D->n, D->radius, &t)) continue;
       /* ties broken by the image index so the choice is one well-defined copy */
@@ -800,8 +801,8 @@ static int grow_split(work_t *W, split_t *S, const karst_int_t *P, karst_int_t n
  * crossing point is a convex combination of the two projections); otherwise
  * every pair across the plane is tested. */
 static int crosses(const work_t *W, const split_t *S, const karst_int_t *P, karst_int_t n,
-                   const double c[3], const karst_disc_t *D, karst_int_t *pos, karst_int_t *neg,
-                   int quick) {
+                   const double c[3], const karst_blocks_disc_t *D, karst_int_t *pos,
+                   karst_int_t *neg, int quick) {
   karst_int_t np = 0, nn = 0;
   int in_p = 0, in_n = 0;
   for (karst_int_t i = 0; i < n; i++) {
@@ -904,7 +905,7 @@ static karst_error_t make_clusters(work_t *W, clusters_t *C) {
     /* two rounds: the O(n) proof first for every disc copy, then the pair test */
     for (int quick = 1; quick >= 0 && !split; quick--)
       for (int d = 0; d < W->n_discs && !split; d++) {
-        const karst_disc_t *D = &W->discs[d];
+        const karst_blocks_disc_t *D = &W->discs[d];
         double ext[3];
         for (int a = 0; a < 3; a++)
           ext[a] = D->radius * sqrt(fmax(0.0, 1 - D->n[a] * D->n[a]));
@@ -1354,7 +1355,7 @@ karst_error_t karst_blocks_tile_create(karst_ctx_t *ctx, const karst_blocks_tile
   karst_rng_derive(&rng, par->seed, STREAM_DISCS, 0);
   T->n_discs = draw_discs(par, &rng, T->discs);
   for (int i = 0; i < par->n_user_discs; i++) {
-    karst_disc_t d = par->user_discs[i];
+    karst_blocks_disc_t d = par->user_discs[i];
     normalize3(d.n);
     T->discs[T->n_discs++] = d;
   }
@@ -1596,7 +1597,7 @@ int karst_blocks_segment_visible(const karst_blocks_tile_t *t, const double a[3]
                                  const double b[3]) {
   double s = t->par.size;
   for (int d = 0; d < t->n_discs; d++) {
-    const karst_disc_t *D = &t->discs[d];
+    const karst_blocks_disc_t *D = &t->discs[d];
     int mlo[3], mhi[3];
     for (int k = 0; k < 3; k++) {
       mlo[k] = (int)floor((fmin(a[k], b[k]) - D->c[k] - D->radius) / s) - 1;

@@ -180,10 +180,10 @@ static void test_box_tile(void **state) {
   karst_blocks_tile_params_t p;
   small_params(&p, KARST_BLOCK_EQUIDIMENSIONAL, s, 0.4);
   p.n_discs = 0;
-  karst_disc_t d[12];
+  karst_blocks_disc_t d[12];
   for (int a = 0; a < 3; a++)
     for (int k = 0; k < 4; k++) {
-      karst_disc_t *D = &d[4 * a + k];
+      karst_blocks_disc_t *D = &d[4 * a + k];
       memset(D, 0, sizeof *D);
       D->c[0] = D->c[1] = D->c[2] = 0.37 * s;
       D->c[a] = s / 8 + k * s / 4;
