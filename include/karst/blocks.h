@@ -111,6 +111,14 @@ typedef struct karst_blocks_tile_params {
 
 /** The defaults of @p type (Paris et al. 2020, §4.1 and Table 1; docs/blocks.md). */
 void karst_blocks_tile_params_init(karst_blocks_tile_params_t *par, int type);
+/**
+ * Another tile side and Poisson radius for @p par: the fracture discs' spacing, radii and
+ * bedding spacing scale with the side (the paper's distributions are for 20 m, §4.1; the disc
+ * counts stay), the graph radius and hull margin become 2 r and the degenerate radius r
+ * (docs/blocks.md). Smooth radius and aperture are left as they are. O(1).
+ */
+void karst_blocks_tile_params_resize(karst_blocks_tile_params_t *par, double size,
+                                     double poisson_radius);
 /** Check a parameter set: every value finite and in range, with a message naming it. */
 karst_error_t karst_blocks_tile_params_check(karst_ctx_t *ctx, const karst_blocks_tile_params_t *p);
 
@@ -253,6 +261,34 @@ karst_error_t karst_blocks_replica_node(karst_ctx_t *ctx, const karst_blocks_rep
 /* The blocks section of a scenario (read by src/scenario/scenario.c).       */
 /* ------------------------------------------------------------------------ */
 
+/** The node kinds of an authored block's construction tree (blocks.authored, docs/blocks.md). */
+typedef enum {
+  KARST_BLOCKS_SHAPE_SPHERE = 0,   /**< centre a, radius */
+  KARST_BLOCKS_SHAPE_BOX,          /**< corners a (min) and b (max) */
+  KARST_BLOCKS_SHAPE_UNION,        /**< of its children */
+  KARST_BLOCKS_SHAPE_INTERSECTION, /**< of its children */
+  KARST_BLOCKS_SHAPE_DIFFERENCE    /**< first child minus the others */
+} karst_blocks_shape_kind_t;
+
+/** A node of an authored block, in tile coordinates (m). */
+typedef struct karst_blocks_shape {
+  int kind; /**< karst_blocks_shape_kind_t */
+  double a[3], b[3], radius;
+  int n_children;
+  struct karst_blocks_shape *children;
+  int line, column; /**< where the node is in the scenario */
+} karst_blocks_shape_t;
+
+/** A user-authored block (§4.1) of the tile of type @c tile. */
+typedef struct karst_blocks_authored {
+  int tile; /**< karst_block_type_t */
+  karst_blocks_shape_t shape;
+  int line, column;
+} karst_blocks_authored_t;
+
+/** Bounding box lo[3], hi[3] of @p s (empty: lo > hi). O(nodes). */
+void karst_blocks_shape_box(const karst_blocks_shape_t *s, double box[6]);
+
 /** A stratum by elevation band: below @c below (the last may be unbounded). */
 typedef struct karst_blocks_stratum {
   char *name;
@@ -276,7 +312,9 @@ typedef struct karst_blocks_section {
   char *warp_image; /**< as given (relative to the scenario) */
   int n_strata;
   karst_blocks_stratum_t *strata;
-  int line, column; /**< where the section starts */
+  int n_authored;                    /**< user-authored blocks (blocks.authored) */
+  karst_blocks_authored_t *authored; /**< in tile coordinates, each in its type's tile */
+  int line, column;                  /**< where the section starts */
 } karst_blocks_section_t;
 
 /** Defaults (docs/blocks.md). */
@@ -289,6 +327,14 @@ int karst_blocks_section_stratum(void *arg, const double p[3]);
  */
 void karst_blocks_section_tile_params(const karst_blocks_section_t *b, int type, uint64_t seed,
                                       karst_blocks_tile_params_t *par);
+
+/**
+ * Add the authored blocks of the section @p b whose tile is @p type to @p tree: their node
+ * indices go to @p nodes (capacity b->n_authored), *n their count. O(nodes).
+ */
+karst_error_t karst_blocks_section_authored(karst_ctx_t *ctx, const karst_blocks_section_t *b,
+                                            int type, karst_sdf_t *tree, karst_int_t *nodes,
+                                            int *n);
 
 /* ------------------------------------------------------------------------ */
 /* A scenario's terrain amplified with blocks.                               */

@@ -15,7 +15,9 @@ struct karst_blocks_amplified {
   int *stratum_tile;
   karst_blocks_replica_t *rep;
   const karst_blocks_section_t *sec;
-  char *image; /* the relief image, relative to the scenario */
+  char *image;                 /* the relief image, relative to the scenario */
+  karst_sdf_t *authored;       /* the section's authored blocks, borrowed by the tiles */
+  karst_int_t *authored_nodes; /* their nodes, tile by tile */
   double box[6];
 };
 
@@ -23,6 +25,8 @@ void karst_blocks_amplified_free(karst_blocks_amplified_t *a) {
   if (!a) return;
   for (int k = 0; k < a->n_tiles; k++)
     karst_blocks_tile_free(a->tiles[k]);
+  karst_sdf_free(a->authored);
+  free(a->authored_nodes);
   free(a->stratum_tile);
   free(a->image);
   karst_blocks_replica_free(a->rep);
@@ -81,6 +85,15 @@ karst_error_t karst_blocks_amplify(karst_ctx_t *ctx, const karst_scenario_t *sc,
     memcpy(a->image, path, dl);
     strcpy(a->image + dl, b->warp_image);
   }
+  if (b->n_authored) {
+    if ((err = karst_sdf_create(ctx, &a->authored))) goto fail;
+    a->authored_nodes = malloc((size_t)b->n_authored * sizeof *a->authored_nodes);
+    if (!a->authored_nodes) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "blocks: out of memory");
+      goto fail;
+    }
+  }
+  int used = 0;
   for (int i = 0; i < b->n_strata; i++) {
     int k = 0;
     while (k < a->n_tiles && a->tiles[k]->par.type != b->strata[i].tile)
@@ -89,6 +102,14 @@ karst_error_t karst_blocks_amplify(karst_ctx_t *ctx, const karst_scenario_t *sc,
       karst_blocks_tile_params_t par;
       karst_blocks_section_tile_params(b, b->strata[i].tile, seed, &par);
       par.warp.image = a->image;
+      if (a->authored) { /* this type's authored blocks (tile coordinates) */
+        if ((err = karst_blocks_section_authored(ctx, b, par.type, a->authored,
+                                                 a->authored_nodes + used, &par.n_authored)))
+          goto fail;
+        par.authored = a->authored;
+        par.authored_nodes = a->authored_nodes + used;
+        used += par.n_authored;
+      }
       if ((err = karst_blocks_tile_create(ctx, &par, &a->tiles[k]))) goto fail;
       a->n_tiles++;
     }

@@ -98,6 +98,19 @@ void karst_blocks_tile_params_init(karst_blocks_tile_params_t *p, int type) {
   }
 }
 
+void karst_blocks_tile_params_resize(karst_blocks_tile_params_t *p, double size,
+                                     double poisson_radius) {
+  double k = size / p->size;
+  p->size = size;
+  p->disc_spacing *= k;
+  p->disc_radius_min *= k;
+  p->disc_radius_max *= k;
+  p->bedding_spacing *= k;
+  p->poisson_radius = poisson_radius;
+  p->graph_radius = p->hull_margin = 2 * poisson_radius;
+  p->degenerate_radius = poisson_radius;
+}
+
 static karst_error_t bad(karst_ctx_t *ctx, const char *what, double v, const char *rule) {
   return karst_set_error(ctx, KARST_ERANGE, "blocks: %s must be %s, got %g", what, rule, v);
 }

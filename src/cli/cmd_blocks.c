@@ -18,8 +18,8 @@ static double cli_now(void) {
 static int run(int argc, char **argv) {
   const char *scen = NULL, *outdir = NULL, *tile_name = NULL;
   uint64_t seed = 1;
-  int have_seed = 0, quiet = 0, threads = 0, voxel_given = 0;
-  double voxel = 0.25;
+  int have_seed = 0, quiet = 0, threads = 0, voxel_given = 0, resized = 0;
+  double voxel = 0.25, tile_size = 0, poisson_radius = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     int more = i + 1 < argc;
@@ -45,6 +45,13 @@ static int run(int argc, char **argv) {
                                more ? argv[i + 1] : "");
       voxel_given = 1;
       i++;
+    } else if (!strcmp(a, "--tile-size") || !strcmp(a, "--poisson-radius")) {
+      double *v = a[2] == 't' ? &tile_size : &poisson_radius;
+      if (!more || cli_parse_double(argv[i + 1], v) || !(*v > 0))
+        return cli_usage_error("blocks", "%s needs a length > 0 in metres, got '%s'", a,
+                               more ? argv[i + 1] : "");
+      resized = 1;
+      i++;
     } else if (!strcmp(a, "-j") || !strcmp(a, "--threads")) {
       if (!more || cli_parse_int(argv[i + 1], &threads) || threads < 1)
         return cli_usage_error("blocks", "%s needs a thread count >= 1, got '%s'", a,
@@ -67,6 +74,9 @@ static int run(int argc, char **argv) {
     return cli_usage_error("blocks", "--tile makes one tile without a scenario; give one of them");
   if (scen && have_seed)
     return cli_usage_error("blocks", "--seed goes with --tile; a scenario sets blocks.seed");
+  if (scen && resized)
+    return cli_usage_error("blocks", "--tile-size and --poisson-radius go with --tile; a scenario "
+                                     "sets blocks.tile_size and blocks.poisson_radius");
   int type = -1;
   if (tile_name) {
     type = karst_block_type_from_name(tile_name);
@@ -115,6 +125,15 @@ static int run(int argc, char **argv) {
     }
     if (!voxel_given) tvoxel = sc.blocks->tile_voxel;
   }
+  karst_blocks_tile_params_t par;
+  if (!scen) { /* checked before anything is written */
+    karst_blocks_tile_params_init(&par, type);
+    if (have_seed) par.seed = seed;
+    if (resized) /* the paper's side and radius unless given; discs scale with the side */
+      karst_blocks_tile_params_resize(&par, tile_size > 0 ? tile_size : par.size,
+                                      poisson_radius > 0 ? poisson_radius : par.poisson_radius);
+    if ((err = karst_blocks_tile_params_check(&ctx, &par))) goto fail;
+  }
   if ((err = karst_mkdir_p(&ctx, tiles_dir))) goto fail;
   /* every output checked and registered before any work */
   int n_out = 0;
@@ -146,9 +165,6 @@ static int run(int argc, char **argv) {
       goto fail;
     n_tiles = karst_blocks_amplified_tiles(amp, &tl);
   } else {
-    karst_blocks_tile_params_t par;
-    karst_blocks_tile_params_init(&par, type);
-    if (have_seed) par.seed = seed;
     if ((err = karst_blocks_tile_create(&ctx, &par, &tile))) goto fail;
     tl = (const karst_blocks_tile_t *const *)&tile;
     n_tiles = 1;
@@ -222,8 +238,10 @@ static int run(int argc, char **argv) {
              paths[n_tiles], (long long)mesh.n_triangles, (long long)on_blocks,
              (long long)karst_blocks_replica_count(karst_blocks_amplified_replica(amp)), v, tpoly);
   } else {
-    snprintf(cmd, sizeof cmd, "karst blocks --tile %s --seed %llu --voxel %g",
-             karst_block_type_name(type), (unsigned long long)tl[0]->par.seed, tvoxel);
+    snprintf(cmd, sizeof cmd,
+             "karst blocks --tile %s --seed %llu --voxel %g --tile-size %g --poisson-radius %g",
+             karst_block_type_name(type), (unsigned long long)tl[0]->par.seed, tvoxel,
+             tl[0]->par.size, tl[0]->par.poisson_radius);
   }
   writing = paths[n_out - 1];
   if ((err = karst_blocks_write_run(&ctx, tmps[n_out - 1], tl, n_tiles, cmd, extra)))
@@ -254,7 +272,8 @@ done:
 const cli_command_t cli_cmd_blocks = {
     "blocks", run, "rock blocks from fractured periodic tiles (Paris et al. 2020)",
     "usage: karst blocks SCENARIO.yaml -o DIR [--voxel H] [-j THREADS] [--quiet]\n"
-    "       karst blocks --tile TYPE -o DIR [--seed S] [--voxel H] [-j THREADS] [--quiet]\n\n"
+    "       karst blocks --tile TYPE -o DIR [--seed S] [--voxel H] [--tile-size S]\n"
+    "                    [--poisson-radius R] [-j THREADS] [--quiet]\n\n"
     "With a scenario, builds one tile per block type of the strata of its blocks section,\n"
     "replicates them over the scenario's terrain where the presence criteria hold (Paris et al.\n"
     "2020, §5: distance to the terrain, slope, stratum) and writes\n"
@@ -270,6 +289,10 @@ const cli_command_t cli_cmd_blocks = {
     "  DIR/tiles/TYPE.vtp   every block polygonized, closed, with the cell array block_id\n"
     "  DIR/run.json         every parameter and the Table 1 statistics of the tile\n\n"
     "  --seed S       seed of the tile (default 1)\n"
+    "  --tile-size S  side of the --tile tile in metres (default 20); the fracture discs'\n"
+    "                 sizes and spacings scale with it, their counts stay the paper's\n"
+    "  --poisson-radius R  smallest distance between sample points of the --tile tile in\n"
+    "                 metres (default 0.69: about 14 500 points in 20 m)\n"
     "  --voxel H      polygonization step in metres (default: blocks.tile_voxel and\n"
     "                 blocks.voxel of the scenario, 0.25 for --tile)\n"
     "  -j THREADS     worker threads (default: all processors); the output does not depend on it\n"

@@ -25,14 +25,7 @@
 static void small_params(karst_blocks_tile_params_t *p, int type, double s, double r) {
   karst_blocks_tile_params_init(p, type);
   double k = s / p->size;
-  p->size = s;
-  p->poisson_radius = r;
-  p->graph_radius = p->hull_margin = 2 * r;
-  p->degenerate_radius = r;
-  p->disc_spacing *= k;
-  p->disc_radius_min *= k;
-  p->disc_radius_max *= k;
-  p->bedding_spacing *= k;
+  karst_blocks_tile_params_resize(p, s, r);
   p->smooth_radius *= k;
   p->aperture *= k;
 }

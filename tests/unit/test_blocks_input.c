@@ -146,6 +146,110 @@ static void test_section_errors(void **state) {
                ":8:1:", "duplicate key 'blocks'");
 }
 
+/* blocks.authored: a construction tree read, built and evaluated (hand values: a 2 m cube minus
+ * a sphere of radius 1 at its corner, in the union with a sphere of radius 0.5 elsewhere). */
+static void test_authored_ok(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  assert_int_equal(load(&ctx,
+                        "blocks:\n"
+                        "  tile_size: 10\n"
+                        "  strata: [{name: a, tile: tabular}]\n"
+                        "  authored:\n"
+                        "    - tile: tabular\n"
+                        "      union:\n"
+                        "        - difference: [{box: {min: [1, 1, 1], max: [3, 3, 3]}},\n"
+                        "                       {sphere: {center: [3, 3, 3], radius: 1}}]\n"
+                        "        - {sphere: {center: [7, 7, 7], radius: 0.5}}\n"
+                        "    - {tile: tabular, box: {min: [5, 1, 1], max: [6, 2, 2]}}\n",
+                        &sc),
+                   KARST_SUCCESS);
+  const karst_blocks_section_t *b = sc.blocks;
+  assert_int_equal(b->n_authored, 2);
+  assert_int_equal(b->authored[0].tile, KARST_BLOCK_TABULAR);
+  assert_int_equal(b->authored[0].shape.kind, KARST_BLOCKS_SHAPE_UNION);
+  assert_int_equal(b->authored[0].shape.n_children, 2);
+  assert_int_equal(b->authored[0].shape.children[0].kind, KARST_BLOCKS_SHAPE_DIFFERENCE);
+  assert_int_equal(b->authored[0].line, 10);
+  double box[6];
+  karst_blocks_shape_box(&b->authored[0].shape, box);
+  assert_close(box[0], 1, 0);
+  assert_close(box[5], 7.5, 0);
+  karst_sdf_t *tree;
+  assert_int_equal(karst_sdf_create(NULL, &tree), KARST_SUCCESS);
+  karst_int_t nodes[2];
+  int n = -1;
+  assert_int_equal(
+      karst_blocks_section_authored(&ctx, b, KARST_BLOCK_EQUIDIMENSIONAL, tree, nodes, &n),
+      KARST_SUCCESS);
+  assert_int_equal(n, 0); /* none in that tile */
+  assert_int_equal(karst_blocks_section_authored(&ctx, b, KARST_BLOCK_TABULAR, tree, nodes, &n),
+                   KARST_SUCCESS);
+  assert_int_equal(n, 2);
+  double in_cube[3] = {1.5, 1.5, 2}, in_hole[3] = {2.8, 2.8, 2.8}, in_small[3] = {7, 7, 7.25},
+         out[3] = {5, 5, 5};
+  assert_true(karst_sdf_eval_node(tree, nodes[0], in_cube, NULL, NULL) < 0);
+  assert_true(karst_sdf_eval_node(tree, nodes[0], in_hole, NULL, NULL) > 0);
+  assert_close(karst_sdf_eval_node(tree, nodes[0], in_small, NULL, NULL), -0.25, 1e-12);
+  assert_true(karst_sdf_eval_node(tree, nodes[0], out, NULL, NULL) > 0);
+  double in_box[3] = {5.5, 1.5, 1.25};
+  assert_close(karst_sdf_eval_node(tree, nodes[1], in_box, NULL, NULL), -0.25, 1e-12);
+  karst_sdf_free(tree);
+  karst_scenario_destroy(&sc);
+}
+
+static void test_authored_errors(void **state) {
+  (void)state;
+  const char *head =
+      "blocks:\n  tile_size: 10\n  strata: [{name: a, tile: tabular}]\n  authored:\n";
+  char text[1024];
+#define AUTH(body, lc, words)                                                                      \
+  do {                                                                                             \
+    snprintf(text, sizeof text, "%s%s", head, body);                                               \
+    expect_error(text, lc, words);                                                                 \
+  } while (0)
+  AUTH("    - {sphere: {center: [5, 5, 5], radius: 1}}\n", ":10:7:", "needs 'tile'");
+  AUTH("    - {tile: tabular}\n", ":10:7:", "must contain one of sphere, box");
+  AUTH("    - {tile: columnar, sphere: {center: [5, 5, 5], radius: 1}}\n",
+       ":10:7:", "no stratum has the tile 'columnar'");
+  AUTH("    - {tile: tabulr, sphere: {center: [5, 5, 5], radius: 1}}\n",
+       ":10:14:", "did you mean 'tabular'");
+  AUTH("    - {tile: tabular, sphere: {center: [5, 5, 5], radius: 0}}\n", ":10:59:", "> 0 m");
+  AUTH("    - {tile: tabular, sphere: {center: [5, 5], radius: 1}}\n", ":10:40:", "3 numbers");
+  AUTH("    - {tile: tabular, sphere: {center: [9.5, 5, 5], radius: 1}}\n",
+       ":10:7:", "within the tile");
+  AUTH("    - {tile: tabular, box: {min: [1, 1, 1], max: [2, 0, 2]}}\n",
+       ":10:28:", "min must be below max");
+  AUTH("    - {tile: tabular, sphere: {center: [5, 5, 5], radius: 1}, box: {min: [1, 1, 1], max: "
+       "[2, 2, 2]}}\n",
+       ":10:63:", "has both 'sphere' and 'box'");
+  AUTH("    - {tile: tabular, cone: {}}\n", ":10:23:", "unknown key 'cone'");
+  AUTH("    - {tile: tabular, union: []}\n", ":10:30:", "from 1 to");
+  AUTH("    - {tile: tabular, difference: [{sphere: {center: [5, 5, 5], radius: 1}}]}\n",
+       ":10:35:", "from 2 to");
+  AUTH("    - {tile: tabular, union: 3}\n", ":10:30:", "list of nodes");
+  AUTH("    - {tile: tabular, union: [7]}\n", ":10:31:", "must be a map with one of");
+  AUTH("    - {tile: tabular, intersection: [{box: {min: [1, 1, 1], max: [2, 2, 2]}}, {box: {min: "
+       "[3, 3, 3], max: [4, 4, 4]}}]}\n",
+       ":10:7:", "non-empty shape");
+  AUTH("    - 5\n", ":10:7:", "must be a map");
+  expect_error("blocks:\n  strata: [{name: a, tile: tabular}]\n  authored: 5\n",
+               ":8:13:", "list of blocks");
+  /* an alias cycle or a very deep tree stops at the depth limit */
+  char deep[4096] = "";
+  size_t len = 0;
+  len += (size_t)snprintf(deep + len, sizeof deep - len, "%s    - tile: tabular\n      union:\n",
+                          head);
+  for (int i = 0; i < 20; i++)
+    len += (size_t)snprintf(deep + len, sizeof deep - len, "%*s- union:\n", 8 + 2 * i, "");
+  snprintf(deep + len, sizeof deep - len, "%*s- {sphere: {center: [5, 5, 5], radius: 1}}\n",
+           8 + 2 * 20, "");
+  expect_error(deep, ":", "nest deeper than 16 levels");
+#undef AUTH
+}
+
 static int setup(void **state) {
   (void)state;
   snprintf(dir, sizeof dir, "/tmp/karst_blocks_input_XXXXXX");
@@ -162,6 +266,8 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_section_ok),
       cmocka_unit_test(test_section_errors),
+      cmocka_unit_test(test_authored_ok),
+      cmocka_unit_test(test_authored_errors),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }
