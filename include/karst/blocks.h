@@ -131,13 +131,15 @@ typedef enum {
 
 typedef struct karst_blocks_block {
   karst_block_kind_t kind;
-  karst_int_t first, n_points; /**< its sample points: tile->members[first .. first+n_points) */
-  karst_int_t node;            /**< its field in tile->sdf (authored: in par.authored) */
-  double box[6];               /**< box of its solid, tile coordinates (may leave [0, s)³) */
-  double anchor[3];            /**< centroid of its points, inside [0, s)³ */
-  double volume;               /**< polytope volume, divergence theorem on its triangles */
-  double cgal_volume;          /**< the same measured by CGAL (PMP::volume) */
-  karst_int_t n_planes;        /**< planes of its smooth intersection */
+  /** its sample points: tile->members[first .. first+n_points); an authored block's
+   *  n_points counts the points inside it, which are not in tile->members */
+  karst_int_t first, n_points;
+  karst_int_t node;     /**< its field in tile->sdf (authored: in par.authored) */
+  double box[6];        /**< box of its solid, tile coordinates (may leave [0, s)³) */
+  double anchor[3];     /**< centroid of its points, inside [0, s)³ */
+  double volume;        /**< polytope volume, divergence theorem on its triangles */
+  double cgal_volume;   /**< the same measured by CGAL (PMP::volume) */
+  karst_int_t n_planes; /**< planes of its smooth intersection */
 } karst_blocks_block_t;
 
 /** The statistics of Table 1 of Paris et al. 2020, and a few more. */

@@ -142,7 +142,8 @@ static void task_presence(void *arg, int tid, int nth) {
         int pass = 0, tried = 0;
         for (int j = 0; j < A; j++) {
           double a[3];
-          if (j == 0 || B->n_points < A) {
+          /* an authored block's points are not in the members: its anchor only */
+          if (j == 0 || B->n_points < A || B->kind == KARST_BLOCK_AUTHORED) {
             if (j > 0) break;
             memcpy(a, B->anchor, sizeof a);
           } else { /* sample points spread through the block, in its frame */
