@@ -7,7 +7,7 @@
 # errors.
 set -euo pipefail
 KARST=$1
-SRC=$2
+SRC=$(cd "$2" && pwd)
 PY=/usr/bin/python3
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
