@@ -8,6 +8,7 @@ KARST=${1:-build/karst}
 analysis/survey_metrics.sh "$KARST"
 if [ -x analysis/presets_table2.sh ]; then analysis/presets_table2.sh "$KARST"; fi
 analysis/presets_realism.sh "$KARST"
+if [ -x analysis/blocks_table1.sh ]; then analysis/blocks_table1.sh "$(dirname "$KARST")"; fi
 /usr/bin/python3 - <<'PY'
 import re, pathlib
 p = pathlib.Path("paper/paper.md")

@@ -115,6 +115,10 @@ typedef enum {
   KARST_SDF_BLEND,
   KARST_SDF_NOISE,
   KARST_SDF_REVOLVE,
+  KARST_SDF_PLANE,
+  KARST_SDF_SMOOTH_INTERSECTION,
+  KARST_SDF_THICK,
+  KARST_SDF_EXTERNAL,
   KARST_SDF_WARP,
   KARST_SDF_DETAILS,
   KARST_SDF_ROUND_CONE,
@@ -257,6 +261,60 @@ karst_error_t karst_sdf_blend(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t a,
 karst_error_t karst_sdf_noise(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t child,
                               double amplitude, double wavelength, karst_rng_t *rng,
                               karst_int_t *node);
+
+/* ------------------------------------------------------------------------ */
+/* Convex blocks (Paris et al. 2020, §4.2) and external fields.              */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Half-space u.(p - o) <= 0 with outward unit normal @p u (normalised here):
+ * the exact signed distance to the plane, 1-Lipschitz, unbounded.
+ */
+karst_error_t karst_sdf_plane(karst_ctx_t *ctx, karst_sdf_t *sdf, const double o[3],
+                              const double u[3], karst_int_t *node);
+
+/**
+ * The smooth maximum of Paris et al. 2020, §4.2, in this tree's sign
+ * convention: smax_R(a, b) = max(a, b) + R k³/6, k = max(1 - |a - b|/R, 0).
+ * It equals max(a, b) when |a - b| >= R, exceeds it by at most R/6, and its
+ * gradient is (1 - k²/2) ∇a + (k²/2) ∇b (a >= b), a convex combination:
+ * 1-Lipschitz and C¹ (proof in smooth.c). R = 0 gives max(a, b).
+ */
+double karst_sdf_smooth_max(double a, double b, double R);
+
+/**
+ * Smooth intersection of @p n >= 1 children folded from the left,
+ * smax_R(... smax_R(f_0, f_1) ..., f_{n-1}) (the operator is not
+ * associative; the order is the caller's, as the paper notes). Its solid is
+ * inside every child's. @p box, when not NULL, is a box the caller knows to
+ * contain the solid (e.g. a convex block's vertices); NULL derives it from
+ * the bounded children (unbounded when none is).
+ */
+karst_error_t karst_sdf_smooth_intersection(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t n,
+                                            const karst_int_t *children, double R,
+                                            const double box[6], karst_int_t *node);
+
+/**
+ * The thick point, segment or polygon of Paris et al. 2020, §4.2 for
+ * degenerate clusters: the exact signed distance to the convex hull of @p n
+ * points (which must be coplanar within @p flat_tol metres), minus
+ * @p radius > 0. One point gives a sphere, collinear points a capsule,
+ * coplanar points a flat slab with rounded rims.
+ */
+karst_error_t karst_sdf_thick(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_int_t n, const double *xyz,
+                              double radius, double flat_tol, int label, karst_int_t *node);
+
+/**
+ * An external field, evaluated by a callback another module provides (the
+ * block replication of src/blocks/). Contract: fn is 1-Lipschitz, negative
+ * inside, returns its exact value and label when that value is below @p ub
+ * and otherwise any value >= ub, and is thread-safe. @p box (NULL:
+ * unbounded) must contain the solid; the field is clamped by it.
+ */
+typedef double (*karst_sdf_field_fn)(const void *arg, const double p[3], double ub, int *label);
+karst_error_t karst_sdf_external(karst_ctx_t *ctx, karst_sdf_t *sdf, karst_sdf_field_fn fn,
+                                 const void *arg, const double box[6], int label,
+                                 karst_int_t *node);
 
 /* ------------------------------------------------------------------------ */
 /* Gradient-based warping (Paris et al. 2020, §4.3; shared with the blocks).  */

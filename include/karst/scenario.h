@@ -333,6 +333,8 @@ typedef struct karst_classification {
   karst_radius_range_t radius[KARST_TUNNEL_TYPE_COUNT]; /**< indexed by karst_tunnel_type_t */
 } karst_classification_t;
 
+struct karst_blocks_section; /* include/karst/blocks.h */
+
 /**
  * Wall details of one tunnel type (geometry.details.<type>, docs/geometry.md):
  * the anisotropic surface Gabor noise of Zanni et al. 2012 (§2-4).
@@ -418,6 +420,7 @@ typedef struct karst_scenario {
   karst_srcpos_t pos_key_points;    /**< the key_points list */
   karst_srcpos_t pos_sampling;      /**< the sampling map */
   karst_geometry_t geometry;        /**< `karst mesh`: blending, wall details, speleothems */
+  struct karst_blocks_section *blocks; /**< the blocks section (karst blocks), NULL when absent */
 } karst_scenario_t;
 
 /** Fill @p sc with every documented default (docs/scenario.md): no key points, flat terrain at 100

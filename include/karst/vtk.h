@@ -63,6 +63,11 @@ typedef struct karst_mesh {
 
 /** Write a triangle mesh as .vtp polygons. */
 karst_error_t karst_vtk_write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m);
+/** The same with @p n_arrays further Int32 cell arrays @p arrays named @p names (one value per
+ *  triangle each), e.g. block_id and block_type. */
+karst_error_t karst_vtk_write_mesh_arrays(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m,
+                                          int n_arrays, const char *const *names,
+                                          const int *const *arrays);
 
 /** Polygons with integer cell arrays and field-data string lists (karst_vtk_write_polydata). */
 typedef struct karst_polydata {

@@ -24,6 +24,10 @@ int cli_fail(const char *cmd, const karst_ctx_t *ctx, karst_error_t err);
 /* A writer failed on the temporary file of @p output (its message names the temporary, which
  * is gone): reword ctx's message as "writing OUTPUT: message; no output was kept". */
 void cli_note_failed_output(karst_ctx_t *ctx, karst_error_t err, const char *output);
+/* Check that @p path can be written and add it to @p outs (written to *tmp,
+ * renamed on commit; the temporary keeps the extension). */
+karst_error_t cli_add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
+                             const char **tmp);
 /* Print a usage error and the command's usage line; returns CLI_USAGE. */
 int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Look up a command by name (NULL if none). */

@@ -53,7 +53,8 @@ static void progress_terminal(void *user, const char *stage, double done, double
   if (frac > 1) frac = 1;
   int width = 30, filled = (int)(frac * width);
   char bar[64];
-  for (int i = 0; i < width; i++) bar[i] = i < filled ? '#' : '.';
+  for (int i = 0; i < width; i++)
+    bar[i] = i < filled ? '#' : '.';
   bar[width] = '\0';
   double el = t - ps->t0, left = frac > 0 ? el * (1 - frac) / frac : NAN;
   fprintf(stderr, "\r%-16s [%s] %5.1f%%  %6.0fs left ", stage, bar, 100 * frac,
@@ -118,7 +119,9 @@ void cli_print_help(const cli_command_t *cmd) {
   printf("karst %s: %s\n\n%s", cmd->name, cmd->summary, cmd->usage);
 }
 
-int cli_is_help(const char *arg) { return strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0; }
+int cli_is_help(const char *arg) {
+  return strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0;
+}
 
 /* Digits only (strtoull alone would take " -5" as 2^64 - 5 and "+5" as 5). */
 int cli_parse_u64(const char *s, uint64_t *out) {
@@ -155,4 +158,18 @@ int cli_parse_double(const char *s, double *out) {
   if (errno || *end || !isfinite(v)) return -1;
   *out = v;
   return 0;
+}
+
+/* Check that @p path can be written, before any work, and add it to the
+ * outputs committed together; its temporary keeps the extension, by which
+ * the writers choose the format. */
+karst_error_t cli_add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
+                             const char **tmp) {
+  karst_error_t err = karst_check_writable(ctx, path);
+  if (err) return err;
+  char *t = karst_temp_name_ext(path);
+  if (!t) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
+  err = karst_fileset_add(ctx, outs, path, t, tmp);
+  free(t);
+  return err;
 }

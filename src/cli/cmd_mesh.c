@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "cli.h"
+#include "karst/blocks.h"
 
 static const char *ext_of(const char *path) {
   const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
@@ -37,20 +38,6 @@ static double now_s(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-/* Check that @p path can be written, before any work, and add it to the
- * outputs committed together; its temporary keeps the extension, by which
- * the writers choose the format. */
-static karst_error_t add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
-                                const char **tmp) {
-  karst_error_t err = karst_check_writable(ctx, path);
-  if (err) return err;
-  char *t = karst_temp_name_ext(path);
-  if (!t) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
-  err = karst_fileset_add(ctx, outs, path, t, tmp);
-  free(t);
-  return err;
 }
 
 static double grid_points(const karst_int_t c[3]) {
@@ -103,7 +90,7 @@ static karst_error_t check_sdf_size(karst_ctx_t *ctx, const char *path, const do
 static int run(int argc, char **argv) {
   const char *in = NULL, *out = NULL, *scen_path = NULL, *sdf_path = NULL;
   double voxel = 0.5, box[6], blend = NAN;
-  int have_box = 0, carve = 0, quiet = 0, threads = 0, have_seed = 0;
+  int have_box = 0, carve = 0, quiet = 0, threads = 0, have_seed = 0, blocks = 0;
   karst_implicit_params_t par;
   karst_implicit_params_init(&par);
   for (int i = 1; i < argc; i++) {
@@ -149,6 +136,8 @@ static int run(int argc, char **argv) {
       i++;
     } else if (strcmp(a, "--carve") == 0) {
       carve = 1;
+    } else if (strcmp(a, "--blocks") == 0) {
+      blocks = 1;
     } else if (strcmp(a, "--scenario") == 0) {
       if (!more) return cli_usage_error("mesh", "--scenario needs a file name");
       scen_path = argv[++i];
@@ -197,6 +186,8 @@ static int run(int argc, char **argv) {
     return cli_usage_error("mesh", "--sdf '%s': the extension must be .vti", sdf_path);
   if (carve && !scen_path)
     return cli_usage_error("mesh", "--carve needs --scenario (the terrain comes from it)");
+  if (blocks && !carve)
+    return cli_usage_error("mesh", "--blocks needs --carve (the blocks amplify the terrain)");
 
   karst_ctx_t ctx;
   cli_ctx_init(&ctx, quiet, 0);
@@ -206,6 +197,7 @@ static int run(int argc, char **argv) {
   karst_scenario_t sc;
   karst_scenario_init(&sc);
   karst_sdf_t *sdf = NULL;
+  karst_blocks_amplified_t *amp = NULL;
   karst_mesh_t mesh;
   karst_mesh_init(&mesh);
   karst_fileset_t outs;
@@ -220,9 +212,9 @@ static int run(int argc, char **argv) {
     err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
     goto fail;
   }
-  if ((err = add_output(&ctx, &outs, out, &tmp_out))) goto fail;
-  if (sdf_path && (err = add_output(&ctx, &outs, sdf_path, &tmp_sdf))) goto fail;
-  if ((err = add_output(&ctx, &outs, script, &tmp_script))) goto fail;
+  if ((err = cli_add_output(&ctx, &outs, out, &tmp_out))) goto fail;
+  if (sdf_path && (err = cli_add_output(&ctx, &outs, sdf_path, &tmp_sdf))) goto fail;
+  if ((err = cli_add_output(&ctx, &outs, script, &tmp_script))) goto fail;
   double t0 = now_s();
   if ((err = karst_read_network(&ctx, in, KARST_FORMAT_AUTO, &net))) goto fail;
   if (scen_path && (err = karst_scenario_load(&ctx, scen_path, &sc))) goto fail;
@@ -236,8 +228,16 @@ static int run(int argc, char **argv) {
   par.voxel = voxel;
   if ((err = karst_sdf_create(&ctx, &sdf))) goto fail;
   karst_implicit_stats_t bst;
-  if ((err = karst_implicit_build(&ctx, &net, &par, carve ? &sc.terrain : NULL, sdf, &bst)))
+  if ((err = karst_implicit_build(&ctx, &net, &par, carve && !blocks ? &sc.terrain : NULL, sdf,
+                                  &bst)))
     goto fail;
+  if (blocks) { /* the conduits carved out of the block-amplified terrain (docs/blocks.md) */
+    karst_int_t conduits = karst_sdf_root(sdf), rock, root;
+    if ((err = karst_blocks_amplify(&ctx, &sc, sdf, &amp, &rock)) ||
+        (err = karst_sdf_difference(&ctx, sdf, rock, conduits, &root)) ||
+        (err = karst_sdf_set_root(&ctx, sdf, root)))
+      goto fail;
+  }
   double t1 = now_s();
   double base[6], margin = 0;
   if (have_box) {
@@ -254,6 +254,8 @@ static int run(int argc, char **argv) {
   if (sdf_path && (err = check_sdf_size(&ctx, sdf_path, base, margin, voxel))) goto fail;
   karst_polygonize_stats_t pst;
   if ((err = karst_mesh_polygonize(&ctx, sdf, box, voxel, &mesh, &pst))) goto fail;
+  if (blocks) /* labels: tunnel types, -1 on the terrain and its blocks */
+    karst_blocks_relabel_mesh(&ctx, sdf, &mesh, NULL, NULL);
   double t2 = now_s();
   writing = out;
   if ((err = karst_mesh_write(&ctx, tmp_out, &mesh))) goto fail_write;
@@ -294,7 +296,9 @@ static int run(int argc, char **argv) {
         (long long)ss.by_kind[KARST_SDF_SPHERE], (long long)ss.by_kind[KARST_SDF_ELLIPSOID],
         (long long)bst.n_blends, (long long)bst.n_stalactites, (long long)bst.n_stalagmites,
         bst.details_lipschitz > 0 ? "wall details" : "smooth walls", ss.memory_bytes / 1e6, t1 - t0,
-        t2 - t1, ctx.nthreads, carve ? ", terrain carved" : "");
+        t2 - t1, ctx.nthreads, blocks  ? ", block-amplified terrain carved"
+        : carve ? ", terrain carved"
+                : "");
   }
   goto done;
 fail_write:
@@ -306,6 +310,7 @@ done:
   karst_fileset_abort(&outs);
   karst_mesh_destroy(&mesh);
   karst_sdf_free(sdf);
+  karst_blocks_amplified_free(amp);
   karst_scenario_destroy(&sc);
   karst_network_destroy(&net);
   return status;
@@ -314,7 +319,7 @@ done:
 const cli_command_t cli_cmd_mesh = {
     "mesh", run, "polygonize the conduits of a network into a closed triangle mesh",
     "usage: karst mesh NETWORK.vtp -o cave.vtp [--voxel 0.5] [--box x0,y0,z0,x1,y1,z1]\n"
-    "                  [--scenario S.yaml [--carve]] [--blend R] [--no-details]\n"
+    "                  [--scenario S.yaml [--carve [--blocks]]] [--blend R] [--no-details]\n"
     "                  [--no-speleothems] [--sdf cave.vti] [--noise A] [--radius R]\n"
     "                  [--spheres] [--seed S] [--realisation N] [-j THREADS] [--quiet]\n\n"
     "Builds the implicit geometry of the network's conduits (Paris et al. 2021, §6: one sweep\n"
@@ -339,6 +344,9 @@ const cli_command_t cli_cmd_mesh = {
     "                 geometry.blend, else the smallest radius at each junction)\n"
     "  --no-details   smooth walls (no wall details)\n"
     "  --no-speleothems  no stalactites or stalagmites\n"
+    "  --blocks       with --carve: the terrain amplified with the rock blocks of the\n"
+    "                 scenario's blocks section (docs/blocks.md), so a cave entrance in a\n"
+    "                 cliff of blocks is one mesh\n"
     "  --sdf F.vti    also write the sampled field as VTK image data (contour it at 0)\n"
     "  --noise A      also a solid sparse-Gabor wall noise of at most A metres (default 0)\n"
     "  --radius R     radius of edges without a \"radius\" attribute (default 1 m)\n"

@@ -171,6 +171,23 @@ typedef struct karst_i_node {
     karst_i_noise_t noise;
     karst_i_revolve_t rev;
     struct {
+      double u[3], d; /* u.p - d */
+    } plane;
+    struct {
+      karst_int_t first, n; /* children kids[first .. first+n), in fold order */
+      double R;
+    } sint;
+    struct {
+      karst_int_t first; /* 3 n doubles in the tree's coordinate pool */
+      int n, dim;        /* points; 0 point, 1 segment, 2 polygon */
+      double radius;
+      double o[3], e1[3], e2[3], nrm[3]; /* polygon frame (dim 2) */
+    } thick;
+    struct {
+      karst_sdf_field_fn fn;
+      const void *arg;
+    } ext;
+    struct {
       karst_int_t index; /* into the tree's warps (or details) */
     } warp;
     struct {
@@ -201,6 +218,8 @@ struct karst_sdf {
   karst_int_t n_bvh, cap_bvh;
   karst_section_t *sections;
   int n_sections, cap_sections;
+  double *coords; /* thick primitives' points */
+  karst_int_t n_coords, cap_coords;
   karst_terrain_t *terrains; /* owned copies (z arrays owned) */
   int n_terrains, cap_terrains;
   karst_i_warp_t *warps;
@@ -242,6 +261,11 @@ void karst_i_pad_box(double box[6]);
 /* Grow an array to hold @p need items; 0 or -1 (out of memory). */
 int karst_i_grow(void **p, karst_int_t *cap, karst_int_t need, size_t size);
 
+/* Fields of the blocks' nodes (smooth.c); same contract as karst_i_sdf_eval. */
+double karst_i_eval_smooth_intersection(const karst_sdf_t *t, const karst_i_node_t *nd,
+                                        const double p[3], double ub, int *label,
+                                        karst_int_t *touched);
+double karst_i_eval_thick(const karst_sdf_t *t, const karst_i_node_t *nd, const double p[3]);
 /* Gradient of node @p child at @p p, where its (exact) value is @p f0, by the
  * tetrahedral finite difference of step @p eps (warp.c): G = (1/4ε) Σ_k v_k
  * f(p + ε v_k) over the vertices v_k of the cube (±1, ±1, ±1) with an even

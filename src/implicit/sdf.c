@@ -58,6 +58,7 @@ void karst_sdf_free(karst_sdf_t *t) {
   free(t->kids);
   free(t->bvh);
   free(t->sections);
+  free(t->coords);
   for (karst_int_t i = 0; i < t->n_images; i++)
     free(t->images[i].v);
   free(t->images);
@@ -78,6 +79,7 @@ void karst_i_sdf_clear(karst_sdf_t *t) {
   t->n_terrains = 0;
   t->n_nodes = t->n_kids = t->n_bvh = 0;
   t->n_sections = 0;
+  t->n_coords = 0;
   for (karst_int_t i = 0; i < t->n_images; i++)
     free(t->images[i].v);
   t->n_images = t->n_warps = 0;
@@ -1011,6 +1013,18 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     lab = a <= b ? la : lb;
     break;
   }
+  case KARST_SDF_PLANE:
+    v = dot3(nd->u.plane.u, p) - nd->u.plane.d;
+    break;
+  case KARST_SDF_SMOOTH_INTERSECTION:
+    v = karst_i_eval_smooth_intersection(t, nd, p, ub, &lab, touched);
+    break;
+  case KARST_SDF_THICK:
+    v = karst_i_eval_thick(t, nd, p);
+    break;
+  case KARST_SDF_EXTERNAL:
+    v = nd->u.ext.fn(nd->u.ext.arg, p, ub, &lab);
+    break;
   case KARST_SDF_NOISE: {
     const karst_i_noise_t *nz = &nd->u.noise;
     double scale = 1.0 + nz->amplitude * nz->lipschitz;
@@ -1082,7 +1096,8 @@ void karst_sdf_stats(const karst_sdf_t *t, karst_sdf_stats_t *st) {
   st->memory_bytes =
       sizeof *t + (size_t)t->n_nodes * sizeof *t->nodes + (size_t)t->n_kids * sizeof *t->kids +
       (size_t)t->n_bvh * sizeof *t->bvh + (size_t)t->n_sections * sizeof *t->sections +
-      (size_t)t->n_terrains * sizeof *t->terrains + (size_t)t->n_warps * sizeof *t->warps;
+      (size_t)t->n_coords * sizeof *t->coords + (size_t)t->n_terrains * sizeof *t->terrains +
+      (size_t)t->n_warps * sizeof *t->warps;
   for (karst_int_t i = 0; i < t->n_images; i++)
     st->memory_bytes += (size_t)t->images[i].w * (size_t)t->images[i].h * sizeof(float);
   for (int i = 0; i < t->n_terrains; i++)

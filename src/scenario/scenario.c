@@ -17,6 +17,7 @@
 
 #include <yaml.h>
 
+#include "karst/blocks.h"
 #include "karst/geology.h"
 #include "karst/surface.h"
 #include "scenario_internal.h"
@@ -151,6 +152,7 @@ void karst_scenario_destroy(karst_scenario_t *sc) {
   }
   free(sc->key_points);
   free(sc->prescribed);
+  karst_blocks_section_free(sc->blocks);
   free(sc->strata);
   for (int i = 0; i < sc->n_exclusions; i++)
     free(sc->exclusions[i].polygon);
@@ -1900,6 +1902,8 @@ static const field_t random_fields[] = {
 };
 static const schema_t random_schema = {random_fields, 2};
 
+#include "scenario/scenario_blocks.inc"
+
 static const field_t top_fields[] = {
     {.key = "name", .type = T_STR, .off = offsetof(karst_scenario_t, name)},
     {.key = "units", .type = T_FN, .fn = read_units},
@@ -1953,8 +1957,9 @@ static const field_t top_fields[] = {
      .type = T_MAP,
      .off = offsetof(karst_scenario_t, geometry),
      .sub = &geometry_schema},
+    {.key = "blocks", .type = T_FN, .fn = read_blocks},
 };
-static const schema_t top_schema = {top_fields, 23};
+static const schema_t top_schema = {top_fields, 24};
 _Static_assert(sizeof top_fields / sizeof top_fields[0] <= MAX_FIELDS, "raise MAX_FIELDS");
 
 /* ------------------------------------------------------------------------ */
