@@ -269,6 +269,13 @@ karst_error_t karst_scenario_write_with_overrides(karst_ctx_t *ctx, const char *
                                                   const karst_scenario_override_t *ov, int n,
                                                   const char *header, const char *out);
 
+/**
+ * The text of the value scenario @p path gives at key path @p key (as for overrides), into
+ * @p out; KARST_ENOTFOUND when the file leaves the key to its default.
+ */
+karst_error_t karst_scenario_value_text(karst_ctx_t *ctx, const char *path, const char *key,
+                                        char *out, size_t size);
+
 /** Check the cross-field rules (key points inside the domain and below the terrain, a spring present ...). */
 karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc);
 

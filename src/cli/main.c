@@ -6,15 +6,15 @@
 
 /* Each cmd_<name>.c defines its table entry (name, function, summary, usage). */
 extern const cli_command_t cli_cmd_validate, cli_cmd_generate, cli_cmd_metrics, cli_cmd_ensemble,
-    cli_cmd_compare, cli_cmd_report, cli_cmd_mesh;
+    cli_cmd_compare, cli_cmd_report, cli_cmd_mesh, cli_cmd_calibrate;
 static int cmd_help(int argc, char **argv);
 static const cli_command_t cli_cmd_help = {"help", cmd_help, "show help for a command",
                                            "usage: karst help [COMMAND]\n"};
 
 /* The command table, in the order of the pipeline. */
 static const cli_command_t *const commands[] = {
-    &cli_cmd_help,     &cli_cmd_validate, &cli_cmd_generate, &cli_cmd_metrics,
-    &cli_cmd_ensemble, &cli_cmd_compare,  &cli_cmd_report,   &cli_cmd_mesh,
+    &cli_cmd_help,    &cli_cmd_validate,  &cli_cmd_generate, &cli_cmd_metrics, &cli_cmd_ensemble,
+    &cli_cmd_compare, &cli_cmd_calibrate, &cli_cmd_report,   &cli_cmd_mesh,
 };
 static const size_t n_commands = sizeof commands / sizeof commands[0];
 

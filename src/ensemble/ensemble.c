@@ -135,8 +135,9 @@ static karst_error_t remove_stale_temporaries(karst_ctx_t *ctx, const char *dir)
  * the lock on a file that another process has just unlinked; it then checks that the name
  * still refers to the inode it locked and tries again otherwise (the usual pattern for
  * removable lock files). A lock dies with its process, so kill -9 never leaves DIR locked. */
-static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, char **path_out) {
-  char *path = karst_i_path_join(dir, KARST_ENSEMBLE_LOCK_NAME);
+static karst_error_t take_lock_named(karst_ctx_t *ctx, const char *dir, const char *name,
+                                     const char *what, int *fd_out, char **path_out) {
+  char *path = karst_i_path_join(dir, name);
   *fd_out = -1;
   *path_out = NULL;
   if (!path) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
@@ -158,9 +159,9 @@ static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, c
         pid[got > 0 ? got : 0] = '\0';
         pid[strspn(pid, "0123456789")] = '\0';
         err = karst_set_error(ctx, KARST_EBUSY,
-                              "%s is in use by another karst ensemble (pid %s; lock %s); wait "
+                              "%s is in use by another karst %s (pid %s; lock %s); wait "
                               "for it to finish or use another output directory",
-                              dir, pid[0] ? pid : "unknown", path);
+                              dir, what, pid[0] ? pid : "unknown", path);
       } else {
         err = karst_set_error(ctx, KARST_EIO, "%s: cannot lock: %s", path, strerror(e));
       }
@@ -183,7 +184,11 @@ static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, c
   }
   free(path);
   return karst_set_error(ctx, KARST_EBUSY, "%s: cannot take the lock %s (it keeps changing)", dir,
-                         KARST_ENSEMBLE_LOCK_NAME);
+                         name);
+}
+
+static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, char **path_out) {
+  return take_lock_named(ctx, dir, KARST_ENSEMBLE_LOCK_NAME, "ensemble", fd_out, path_out);
 }
 
 /* Unlink while still holding the lock, then close (which releases it). */
@@ -871,4 +876,38 @@ void karst_ensemble_mpi_finish(int initialised) {
 #else
   (void)initialised;
 #endif
+}
+
+/* ------------------------------------------------------------------------ */
+/* For other stages that run ensembles (src/calibrate/): ensemble_internal.h */
+/* ------------------------------------------------------------------------ */
+/** The lock of take_lock on DIR/@p name (ensemble_internal.h). Time complexity: O(1). */
+karst_error_t karst_i_ensemble_lock(karst_ctx_t *ctx, const char *dir, const char *name,
+                                    const char *what, int *fd, char **path) {
+  return take_lock_named(ctx, dir, name, what, fd, path);
+}
+
+/** Release a lock of karst_i_ensemble_lock (ensemble_internal.h). Time complexity: O(1). */
+void karst_i_ensemble_unlock(int fd, char *path) {
+  release_lock(fd, path);
+}
+
+/** The MPI world as karst_ensemble_run sees it (ensemble_internal.h). Time complexity: O(1). */
+int karst_i_ensemble_world(int use_mpi, int *rank) {
+  return mpi_world(use_mpi, rank);
+}
+
+/** The worst error code over the ranks (ensemble_internal.h). Time complexity: one allreduce. */
+karst_error_t karst_i_ensemble_agree(int ranks, karst_error_t local) {
+  return mpi_agree(ranks, local);
+}
+
+/** Remove a file or directory tree (ensemble_internal.h). Time complexity: O(files). */
+int karst_i_remove_tree(const char *path) {
+  return remove_tree(path);
+}
+
+/** Remove leftovers ".*.tmp.*" of a killed run in @p dir (ensemble_internal.h). O(entries). */
+karst_error_t karst_i_remove_stale_temporaries(karst_ctx_t *ctx, const char *dir) {
+  return remove_stale_temporaries(ctx, dir);
 }

@@ -328,7 +328,8 @@ karst_error_t karst_i_overrides_apply(karst_ctx_t *ctx, const char *file, yaml_d
  * @param path  scenario file
  * @param ov    the overrides, each key at most once
  * @param n     their count (0: karst_scenario_load)
- * @param types NULL or @p n entries: what each override was read as
+ * @param types NULL or @p n entries: what each override was read as (also on failure, as far
+ *              as the walk got, so a caller can tell an integer key given 2.5)
  * @param sc    initialised scenario; replaced on success, untouched on failure
  * @return the codes of karst_scenario_load; KARST_EINVAL also for a malformed key path, a path
  *         through a value that is not a map or a list, and a numeric override of a key that
@@ -343,20 +344,73 @@ karst_error_t karst_scenario_load_with_overrides(karst_ctx_t *ctx, const char *p
   karst_error_t err = karst_i_overrides_init(ctx, &set, ov, n);
   if (err) return err;
   err = karst_i_scenario_load(ctx, path, &set, sc, NULL, NULL, NULL);
-  if (!err && types) memcpy(types, set.types, (size_t)n * sizeof *types);
+  if (types) memcpy(types, set.types, (size_t)n * sizeof *types); /* also on failure */
   karst_i_overrides_destroy(&set);
+  return err;
+}
+
+/* The node at key path @p key of @p doc (maps by key, lists by index), or NULL when the file
+ * does not give it; -1 for a malformed path. */
+static int lookup(yaml_document_t *doc, const char *key, yaml_node_t **out) {
+  step_t steps[MAX_STEPS];
+  const char *why;
+  int n = parse_path(key, steps, &why);
+  *out = NULL;
+  if (n < 0) return -1;
+  yaml_node_t *root = yaml_document_get_root_node(doc);
+  int cur = root ? (int)(root - doc->nodes.start) + 1 : 0;
+  for (int s = 0; s < n && cur; s++) {
+    yaml_node_t *node = yaml_document_get_node(doc, cur);
+    if (steps[s].name) {
+      yaml_node_pair_t *p =
+          node->type == YAML_MAPPING_NODE ? find_pair(doc, cur, steps[s].name, steps[s].len) : NULL;
+      cur = p ? p->value : 0;
+    } else {
+      long count = node->type == YAML_SEQUENCE_NODE
+                       ? (long)(node->data.sequence.items.top - node->data.sequence.items.start)
+                       : 0;
+      cur = steps[s].index < count ? node->data.sequence.items.start[steps[s].index] : 0;
+    }
+  }
+  *out = cur ? yaml_document_get_node(doc, cur) : NULL;
+  return 0;
+}
+
+/**
+ * The text of the value that scenario @p path gives at key path @p key (scenario.h), e.g.
+ * "0.1" for tortuosity. The scenario is read and validated first.
+ * @return KARST_SUCCESS with the text in @p out; KARST_ENOTFOUND when the file does not give
+ *         the key (the default applies) or gives a map or a list there; KARST_EINVAL for a
+ *         malformed key path; the codes of karst_scenario_load.
+ * Time complexity: that of karst_scenario_load plus O(file size).
+ */
+karst_error_t karst_scenario_value_text(karst_ctx_t *ctx, const char *path, const char *key,
+                                        char *out, size_t size) {
+  karst_scenario_t sc;
+  yaml_document_t doc;
+  unsigned char *text = NULL;
+  size_t len = 0;
+  karst_scenario_init(&sc);
+  if (size) out[0] = '\0';
+  karst_error_t err = karst_i_scenario_load(ctx, path, NULL, &sc, &doc, &text, &len);
+  karst_scenario_destroy(&sc);
+  if (err) return err;
+  yaml_node_t *n = NULL;
+  if (lookup(&doc, key, &n) < 0)
+    err = karst_set_error(ctx, KARST_EINVAL, "'%s' is not a key path (e.g. skeleton.gamma)", key);
+  else if (!n || n->type != YAML_SCALAR_NODE)
+    err = karst_set_error(ctx, KARST_ENOTFOUND, "%s gives no value at %s", path, key);
+  else
+    snprintf(out, size, "%s", (const char *)n->data.scalar.value);
+  yaml_document_delete(&doc);
+  free(text);
   return err;
 }
 
 /* The scalar at "terrain.heightfield" of @p doc, or NULL. */
 static yaml_node_t *heightfield_node(yaml_document_t *doc) {
-  yaml_node_t *root = yaml_document_get_root_node(doc);
-  if (!root || root->type != YAML_MAPPING_NODE) return NULL;
-  int rid = (int)(root - doc->nodes.start) + 1;
-  yaml_node_pair_t *t = find_pair(doc, rid, "terrain", 7);
-  if (!t || yaml_document_get_node(doc, t->value)->type != YAML_MAPPING_NODE) return NULL;
-  yaml_node_pair_t *h = find_pair(doc, t->value, "heightfield", 11);
-  yaml_node_t *v = h ? yaml_document_get_node(doc, h->value) : NULL;
+  yaml_node_t *v = NULL;
+  lookup(doc, "terrain.heightfield", &v);
   return v && v->type == YAML_SCALAR_NODE ? v : NULL;
 }
 

@@ -321,11 +321,37 @@ static void test_write_emitted_and_rebased(void **state) {
   rmdir(dir);
 }
 
+/* The file's own text of a key (branchwork.yaml: tortuosity 0.1, skeleton.gamma 2.0,
+ * fractures[0].dip 85, domain.max[1] 600); a key the file leaves out is KARST_ENOTFOUND. */
+static void test_value_text(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  char v[64];
+  assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "tortuosity", v, sizeof v), 0);
+  assert_string_equal(v, "0.1");
+  assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "skeleton.gamma", v, sizeof v), 0);
+  assert_string_equal(v, "2.0");
+  assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "fractures[0].dip", v, sizeof v), 0);
+  assert_string_equal(v, "85");
+  assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "domain.max[1]", v, sizeof v), 0);
+  assert_string_equal(v, "600");
+  assert_int_equal(
+      karst_scenario_value_text(&ctx, GOOD "minimal.yaml", "skeleton.gamma", v, sizeof v),
+      KARST_ENOTFOUND);
+  assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "skeleton", v, sizeof v),
+                   KARST_ENOTFOUND);
+  assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "fractures[7].dip", v, sizeof v),
+                   KARST_ENOTFOUND);
+  assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "a..b", v, sizeof v), KARST_EINVAL);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_replace_values), cmocka_unit_test(test_add_missing_key),
       cmocka_unit_test(test_refused),        cmocka_unit_test(test_refused_lists),
       cmocka_unit_test(test_write_in_place), cmocka_unit_test(test_write_emitted_and_rebased),
+      cmocka_unit_test(test_value_text),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
