@@ -373,40 +373,14 @@ static char *key_text(const run_t *r) {
 }
 
 static karst_error_t check_or_write_key(karst_ctx_t *ctx, const run_t *r) {
-  karst_error_t err = KARST_SUCCESS;
   char *want = key_text(r), *path = karst_i_path_join(r->dir, "calibration.key");
-  char *have = NULL;
-  size_t cap = 0;
-  FILE *fp = NULL;
-  if (!want || !path) {
-    err = no_memory(ctx);
-    goto cleanup;
-  }
-  fp = fopen(path, "rb");
-  if (fp) {
-    have = calloc(strlen(want) + 2, 1);
-    if (!have) {
-      err = no_memory(ctx);
-      goto cleanup;
-    }
-    cap = fread(have, 1, strlen(want) + 1, fp);
-    have[cap] = '\0';
-    if (strcmp(have, want) != 0)
-      err = karst_set_error(ctx, KARST_EINVAL,
-                            "%s: this directory holds a calibration of another scenario, survey, "
-                            "seed, particle count, alpha, metric set or prior; use another "
-                            "output directory, or the same settings to continue it",
-                            path);
-    goto cleanup;
-  }
-  karst_atomic_file_t f;
-  err = karst_atomic_open(ctx, &f, path, "wb");
-  if (err) goto cleanup;
-  fputs(want, f.fp);
-  err = karst_atomic_commit(ctx, &f);
-cleanup:
-  if (fp) fclose(fp);
-  free(have);
+  karst_error_t err = !want || !path
+                          ? no_memory(ctx)
+                          : karst_i_key_file(ctx, path, want,
+                                             "a calibration of another scenario, survey, "
+                                             "seed, particle count, alpha, metric set or "
+                                             "prior",
+                                             "the same settings to continue it");
   free(want);
   free(path);
   return err;

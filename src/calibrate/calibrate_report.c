@@ -11,7 +11,6 @@
 
 #include "calibrate/calibrate_internal.h"
 #include "karst/compare.h"
-#include "karst/io.h"
 #include "karst/report.h"
 #include "report/svg_internal.h"
 
@@ -548,17 +547,7 @@ karst_error_t karst_i_calibrate_report(karst_ctx_t *ctx, const char *path,
     karst_i_buf_puts(&b, ".</p>\n");
   }
   karst_i_buf_puts(&b, "</body></html>\n");
-  if (b.failed) {
-    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory while building the report");
-    goto cleanup;
-  }
-  {
-    karst_atomic_file_t f;
-    err = karst_atomic_open(ctx, &f, path, "wb");
-    if (err) goto cleanup;
-    fwrite(b.s, 1, b.len, f.fp);
-    err = karst_atomic_commit(ctx, &f);
-  }
+  err = karst_i_buf_write_file(ctx, &b, path);
 cleanup:
   karst_compare_result_destroy(&cmp);
   karst_published_destroy(&pub);

@@ -1,53 +1,16 @@
 /* karst calibrate: fit scenario parameters to a survey by ABC-SMC (src/calibrate/). */
 #include <inttypes.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "cli.h"
 
-/* What the progress display remembers between calls. */
+/* What the per-generation lines need (the bar itself is cli_ctx_init's terminal display). */
 typedef struct {
   int tty, quiet;
-  double t0, last;
-  char stage[48];
 } cal_progress_t;
-
-static double now_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-/* On a terminal: a redrawn bar per generation with members done, rate and time left. */
-static void show_progress(void *user, const char *stage, double done, double total) {
-  cal_progress_t *ps = user;
-  double t = now_s();
-  if (strcmp(ps->stage, stage) != 0) {
-    snprintf(ps->stage, sizeof ps->stage, "%s", stage);
-    ps->t0 = t;
-    ps->last = 0;
-  }
-  int finished = done >= total;
-  if (!finished && t - ps->last < 0.1) return;
-  ps->last = t;
-  double el = t - ps->t0, rate = el > 0 ? done / el : 0;
-  double left = rate > 0 ? (total - done) / rate : NAN;
-  char bar[31], eta[32];
-  int filled = (int)((total > 0 ? done / total : 1) * 30);
-  for (int i = 0; i < 30; i++)
-    bar[i] = i < filled ? '#' : '.';
-  bar[30] = '\0';
-  if (isfinite(left))
-    snprintf(eta, sizeof eta, "%.0f s left", left);
-  else
-    snprintf(eta, sizeof eta, "time left unknown");
-  fprintf(stderr, "\r%-14s [%s] %.0f/%.0f  %.2f/s  %-18s", stage, bar, done, total, rate, eta);
-  fflush(stderr);
-}
 
 /* After each generation: one line (on a terminal it replaces the bar). */
 static void show_generation(void *user, const karst_calibrate_generation_t *g) {
@@ -182,14 +145,13 @@ static int run(int argc, char **argv) {
   int ranks = 1, rank = 0, mpi_init = 0;
   karst_scenario_t sc;
   karst_scenario_init(&sc);
-  cal_progress_t ps = {isatty(STDERR_FILENO), quiet, 0, 0, ""};
+  cal_progress_t ps = {isatty(STDERR_FILENO), quiet};
   karst_error_t err = karst_ensemble_mpi_start(&ctx, &ranks, &rank, &mpi_init);
   if (err) {
     status = cli_fail("calibrate", &ctx, err);
     goto cleanup;
   }
-  ctx.progress = (!quiet && rank == 0 && ps.tty) ? show_progress : NULL;
-  ctx.progress_user = &ps;
+  if (rank != 0) ctx.progress = NULL; /* the terminal bar of cli_ctx_init, on rank 0 only */
   /* A broken scenario is an error of the file (exit 1); a --vary key it does not have, or
    * that holds no number, is a usage error (exit 2). */
   err = karst_scenario_load(&ctx, scenario, &sc);

@@ -203,26 +203,33 @@ static void release_lock(int fd, char *path) {
 /* ------------------------------------------------------------------------ */
 /* The key file: a re-run into DIR must be the same scenario and seed.      */
 /* ------------------------------------------------------------------------ */
-static karst_error_t check_or_write_key(karst_ctx_t *ctx, const char *real_dir,
-                                        const karst_ensemble_options_t *opt) {
+/** Longest key file read back (a key is a few lines). */
+#define KEY_FILE_MAX 4096
+
+/**
+ * A directory's key file (ensemble_internal.h): @p path must hold exactly @p want, or is
+ * created with it (atomically). Time complexity: O(size of the key).
+ */
+karst_error_t karst_i_key_file(karst_ctx_t *ctx, const char *path, const char *want,
+                               const char *holds, const char *advice) {
   karst_error_t err = KARST_SUCCESS;
-  char *path = karst_i_path_join(real_dir, "ensemble.key");
-  char want[256], have[256];
-  FILE *fp = NULL;
-  if (!path) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
-  snprintf(want, sizeof want, "karst ensemble key 1\nscenario_hash %s\nseed %" PRIu64 "\n",
-           opt->scenario_hash ? opt->scenario_hash : "none", opt->seed);
-  fp = fopen(path, "rb");
+  char *have = NULL;
+  FILE *fp = fopen(path, "rb");
   if (fp) {
-    size_t got = fread(have, 1, sizeof have - 1, fp);
+    have = malloc(KEY_FILE_MAX);
+    if (!have) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+      goto cleanup;
+    }
+    size_t got = fread(have, 1, KEY_FILE_MAX - 1, fp);
     have[got] = '\0';
     if (strcmp(have, want) != 0) {
       for (char *c = have; *c; c++)
         if (*c == '\n' || *c == '\r') *c = ' ';
       err = karst_set_error(ctx, KARST_EINVAL,
-                            "%s: this directory holds an ensemble of another scenario or seed "
-                            "(key: %s); use another output directory or the same scenario and seed",
-                            path, have);
+                            "%s: this directory holds %s (key: %.1500s); use another output "
+                            "directory or %s",
+                            path, holds, have, advice);
     }
     goto cleanup;
   }
@@ -233,6 +240,19 @@ static karst_error_t check_or_write_key(karst_ctx_t *ctx, const char *real_dir,
   err = karst_atomic_commit(ctx, &f);
 cleanup:
   if (fp) fclose(fp);
+  free(have);
+  return err;
+}
+
+static karst_error_t check_or_write_key(karst_ctx_t *ctx, const char *real_dir,
+                                        const karst_ensemble_options_t *opt) {
+  char *path = karst_i_path_join(real_dir, "ensemble.key");
+  char want[256];
+  if (!path) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  snprintf(want, sizeof want, "karst ensemble key 1\nscenario_hash %s\nseed %" PRIu64 "\n",
+           opt->scenario_hash ? opt->scenario_hash : "none", opt->seed);
+  karst_error_t err = karst_i_key_file(ctx, path, want, "an ensemble of another scenario or seed",
+                                       "the same scenario and seed");
   free(path);
   return err;
 }

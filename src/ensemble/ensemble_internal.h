@@ -32,6 +32,13 @@ void karst_i_ensemble_unlock(int fd, char *path);
 int karst_i_ensemble_world(int use_mpi, int *rank);
 /** The worst (largest) error code over the @p ranks ranks; a collective call under MPI. */
 karst_error_t karst_i_ensemble_agree(int ranks, karst_error_t local);
+/**
+ * A directory's key file: @p path must hold exactly @p want (a re-run must be the same run),
+ * or is created with it. A different key is KARST_EINVAL: "PATH: this directory holds HOLDS
+ * (key: ...); use another output directory or ADVICE".
+ */
+karst_error_t karst_i_key_file(karst_ctx_t *ctx, const char *path, const char *want,
+                               const char *holds, const char *advice);
 /** Remove a file or a directory tree; 0 on success (a missing path is a success). */
 int karst_i_remove_tree(const char *path);
 /** Remove the hidden leftovers of a killed run in @p dir: names starting with '.' that contain
