@@ -4,14 +4,16 @@
  * 0-5), 200 particles per generation, 5 SMC generations after the prior sample, the real
  * pipeline for every particle, the best-fit ensemble left out. Prints the wall time (target
  * <= 10 minutes on the 2-core project machine), particles (simulations) per second, the
- * acceptance rate and tolerance of every generation, and the load average before and after,
- * so that a busy machine shows.
+ * acceptance rate and tolerance of every generation, the process's CPU time (on a busy machine
+ * wall time / threads is no measure; CPU time per simulation is) and the load average before
+ * and after, so that a busy machine shows.
  *   bench_calibrate [PARTICLES] [GENERATIONS] [THREADS]     (defaults 200, 5 and 2)
  */
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -96,9 +98,16 @@ int main(int argc, char **argv) {
   if (err) {
     fprintf(stderr, "bench_calibrate: %s\n", ctx.errmsg);
   } else {
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    double cpu = (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+                 (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
     printf("bench_calibrate: %" PRId64 " simulations in %.1f s wall: %.2f particles per second "
            "(target: the whole run <= 600 s); load average %.2f after; final tolerance %.4g\n",
            sum.simulations, wall, (double)sum.simulations / wall, load1[0], sum.tolerance);
+    printf("bench_calibrate: CPU time %.1f s (%.3f s per simulation; %d threads on an idle "
+           "machine: about %.0f s wall), peak RSS %.1f MiB\n",
+           cpu, cpu / (double)sum.simulations, threads, cpu / threads, ru.ru_maxrss / 1024.0);
     for (int k = 0; k < 3; k++)
       printf("bench_calibrate:   %s: median %.4g, 90 %% interval [%.4g, %.4g]\n", params[k].key,
              sum.median[k], sum.low[k], sum.high[k]);

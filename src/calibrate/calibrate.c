@@ -1157,9 +1157,17 @@ karst_error_t karst_calibrate_run(karst_ctx_t *ctx, const char *dir,
   karst_scenario_init(&r->base);
   r->opt = opt;
   r->dir = dir;
-  err = setup(ctx, r);
-  if (err) goto cleanup;
+  /* Every rank checks the settings; they agree before anything else (a rank that stopped
+   * here alone would leave the others waiting in a collective call). */
   r->ranks = karst_i_ensemble_world(opt->use_mpi, &r->rank);
+  err = setup(ctx, r);
+  {
+    karst_error_t all = karst_i_ensemble_agree(r->ranks, err);
+    if (all && !err)
+      err = karst_set_error(ctx, all, "another rank could not set up the calibration (%s)",
+                            karst_strerror(all));
+    if (err) goto cleanup;
+  }
   s.ranks = r->ranks;
   s.rank = r->rank;
   s.n_params = r->d;
@@ -1195,9 +1203,14 @@ karst_error_t karst_calibrate_run(karst_ctx_t *ctx, const char *dir,
   for (int g = 0; g <= opt->generations; g++) {
     karst_calibrate_generation_t info;
     err = run_generation(ctx, r, g, &info, &seeds[g], &prior);
-    if (err) goto cleanup;
-    n_seeds = g + 1;
-    err = history_push(ctx, r, &info, seeds);
+    if (!err) {
+      n_seeds = g + 1;
+      err = history_push(ctx, r, &info, seeds);
+    }
+    karst_error_t all = karst_i_ensemble_agree(r->ranks, err);
+    if (all && !err)
+      err = karst_set_error(ctx, all, "another rank failed in generation %d (%s)", g,
+                            karst_strerror(all));
     if (err) goto cleanup;
     if (r->rank == 0 && opt->on_generation) opt->on_generation(opt->on_generation_user, &info);
     s.generations = g;
