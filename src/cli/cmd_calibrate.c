@@ -161,7 +161,7 @@ static int run(int argc, char **argv) {
   }
   err = karst_calibrate_check_params(&ctx, scenario, n_params, params);
   if (err) {
-    status = cli_usage_error("calibrate", "--vary %s", ctx.errmsg);
+    status = cli_usage_error("calibrate", "%s", ctx.errmsg);
     goto cleanup;
   }
   opt.scenario_path = scenario;

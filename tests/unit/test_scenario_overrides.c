@@ -58,6 +58,30 @@ static void test_replace_values(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* Keys read by custom readers: a node of the permeability tree and the flat terrain
+ * (hillside.yaml: union[0] is a sphere of radius 30; its heightfield still resolves). */
+static void test_nested_readers(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  karst_override_type_t t;
+  assert_int_equal(load1(&ctx, KARST_SOURCE_DIR "/datasets/scenarios/hillside.yaml",
+                         "permeability.tree.union[0].sphere.radius", "40", &t, &sc),
+                   KARST_SUCCESS);
+  assert_int_equal(t, KARST_OVERRIDE_NUMBER);
+  assert_close(sc.permeability.root->children[0].radius, 40, 0);
+  assert_int_equal(sc.terrain.is_grid, 1);
+  assert_int_equal(load1(&ctx, KARST_SOURCE_DIR "/datasets/scenarios/hillside.yaml",
+                         "permeability.tree.union[0].sphere.center[2]", "75", &t, &sc),
+                   KARST_SUCCESS);
+  assert_close(sc.permeability.root->children[0].center[2], 75, 0);
+  assert_int_equal(load1(&ctx, BRANCHWORK, "terrain.elevation", "110", &t, &sc), KARST_SUCCESS);
+  assert_close(sc.terrain.elevation, 110, 0);
+  karst_scenario_destroy(&sc);
+}
+
 /* A key the file leaves out is added with the maps leading to it (minimal.yaml has no skeleton
  * and no amplification block); the default is replaced. */
 static void test_add_missing_key(void **state) {
@@ -351,7 +375,7 @@ int main(void) {
       cmocka_unit_test(test_replace_values), cmocka_unit_test(test_add_missing_key),
       cmocka_unit_test(test_refused),        cmocka_unit_test(test_refused_lists),
       cmocka_unit_test(test_write_in_place), cmocka_unit_test(test_write_emitted_and_rebased),
-      cmocka_unit_test(test_value_text),
+      cmocka_unit_test(test_value_text),     cmocka_unit_test(test_nested_readers),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
