@@ -122,6 +122,16 @@ for p in j["parameters"]:
     assert p["q05"] <= p["median"] <= p["q95"]
 PY
 
+# A scenario with a heightfield (hillside.yaml: terrain/hillside.asc, relative to the file):
+# best.yaml in a directory elsewhere still finds the grid, from any working directory.
+check 0 "calibrate hillside (4 particles, the prior sample only)" "$KARST" calibrate \
+  "$SRC/datasets/scenarios/hillside.yaml" --survey "$SURVEY" --vary tortuosity=0:1 --particles 4 \
+  --generations 0 --best-members 0 --quiet -o "$T/deep/er/hill"
+grep -q 'heightfield: "\.\./' "$T/deep/er/hill/best.yaml" && echo "ok: the heightfield is rebased" ||
+  { echo "FAIL: best.yaml heightfield"; grep heightfield "$T/deep/er/hill/best.yaml"; fail=1; }
+(cd / && "$KARST" validate "$T/deep/er/hill/best.yaml" >"$T/out" 2>&1) &&
+  echo "ok: karst validate DIR/best.yaml with a heightfield, from /" || { echo "FAIL: hillside best.yaml"; cat "$T/out"; fail=1; }
+
 same_outputs() { # A B: the calibration's files byte for byte (timings lines left out)
   local d=0 f
   for f in posterior.csv generations.csv best.yaml report.html calibration.key best/metrics.csv; do
