@@ -9,15 +9,15 @@
 # Tatra system. PAIRS=all calibrates every preset against every survey.
 #
 # Usage: analysis/calibrate_surveys.sh [KARST_BINARY]          (default build/karst)
-# Environment: PARTICLES (200), GENERATIONS (5), MEMBERS (20, of each before/after ensemble),
+# Environment: PARTICLES (100), GENERATIONS (4), MEMBERS (20, of each before/after ensemble),
 #   JOBS (threads, default all processors), OUT (out/calibrate_surveys), PAIRS.
 # Runs are kept in OUT under a name that includes the hash of the scenario file, so a re-run
 # continues them (nothing is recomputed) and a changed preset gets a fresh calibration.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 KARST=${1:-build/karst}
-PARTICLES=${PARTICLES:-200}
-GENERATIONS=${GENERATIONS:-5}
+PARTICLES=${PARTICLES:-100}
+GENERATIONS=${GENERATIONS:-4}
 MEMBERS=${MEMBERS:-20}
 JOBS=${JOBS:-$(nproc)}
 OUT=${OUT:-out/calibrate_surveys}

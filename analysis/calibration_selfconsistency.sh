@@ -7,13 +7,13 @@
 # credible intervals about 90 % of the time (Cook, Gelman & Rubin 2006; more for ABC with a
 # tolerance above 0). Writes paper/tables/calibration_selfconsistency.md.
 # Usage: analysis/calibration_selfconsistency.sh [KARST_BINARY]        (default build/karst)
-# Environment: REPLICATES (20), PARTICLES (150), GENERATIONS (4), JOBS (all processors),
+# Environment: REPLICATES (10), PARTICLES (100), GENERATIONS (4), JOBS (all processors),
 #   OUT (out/calibration_selfconsistency; kept, so a re-run continues).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 KARST=${1:-build/karst}
-REPLICATES=${REPLICATES:-20}
-PARTICLES=${PARTICLES:-150}
+REPLICATES=${REPLICATES:-10}
+PARTICLES=${PARTICLES:-100}
 GENERATIONS=${GENERATIONS:-4}
 JOBS=${JOBS:-$(nproc)}
 OUT=${OUT:-out/calibration_selfconsistency}
