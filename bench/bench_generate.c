@@ -19,13 +19,14 @@ static double to_skeleton(const karst_generate_stats_t *st) {
 }
 
 /* Stages of the fastest of @p runs runs (by sampling-to-skeleton time), and the median. */
-static void print_stats(const char *what, const karst_generate_stats_t *st, double wall,
-                        int runs, double median) {
+static void print_stats(const char *what, const karst_generate_stats_t *st, double wall, int runs,
+                        double median) {
   printf("%-22s samples %8lld  edges %9lld  keys %3lld  paths %5lld  nodes %6lld  length %8.0f m\n",
          what, (long long)st->n_samples, (long long)st->n_graph_edges, (long long)st->n_key_points,
          (long long)st->n_skeleton_paths, (long long)st->n_nodes, st->total_length);
   printf("%-22s", "");
-  /* The edge costs are computed with the kNN graph, so "graph" times both (there is no cost stage). */
+  /* The edge costs are computed with the kNN graph, so "graph" times both (there is no cost stage).
+   */
   for (int s = 0; s < KARST_STAGE_COUNT; s++)
     printf(" %s %.3f s", s == KARST_STAGE_GRAPH ? "graph+costs" : karst_stage_name(s),
            st->stage_seconds[s]);
@@ -140,8 +141,8 @@ static void run_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc, const cha
     }
     times[r] = to_skeleton(&st);
     if (r > 0 && (st.n_nodes != best.n_nodes || st.total_length != best.total_length))
-      printf("%-22s run %d gave another network (%lld nodes, %.3f m): not reproducible!\n", what,
-             r, (long long)st.n_nodes, st.total_length);
+      printf("%-22s run %d gave another network (%lld nodes, %.3f m): not reproducible!\n", what, r,
+             (long long)st.n_nodes, st.total_length);
     if (r == 0 || times[r] < to_skeleton(&best)) best = st, best_wall = wall;
   }
   qsort(times, (size_t)runs, sizeof times[0], cmp_double);
@@ -171,7 +172,7 @@ static void large_scenario(karst_scenario_t *sc) {
   sc->domain_max[0] = sc->domain_max[1] = LARGE_SIDE;
   sc->domain_max[2] = 300;
   sc->terrain.elevation = 300;
-  sc->water_table = 80;
+  sc->water_table.given = 1, sc->water_table.elevation = 80;
   sc->sampling.fill_radius = 5.2;
   sc->sampling.feature_radius = 5.2;
   sc->sampling.k = 100;

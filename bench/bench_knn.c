@@ -62,6 +62,11 @@ static void print_stage(const char *name, const marks_t *m, int a, int b) {
 /* Build the graph `repeat` times; print the stages of the fastest run. */
 static int run_graph(karst_ctx_t *ctx, const karst_scenario_t *sc, const karst_samples_t *s,
                      const char *label, int repeat) {
+  karst_geology_t *geo = NULL;
+  if (karst_geology_create(ctx, sc, 0, 0, &geo) != KARST_SUCCESS) {
+    fprintf(stderr, "%s\n", ctx->errmsg);
+    return 1;
+  }
   marks_t best;
   memset(&best, 0, sizeof best);
   best.wall[T_END] = 1e300;
@@ -73,7 +78,7 @@ static int run_graph(karst_ctx_t *ctx, const karst_scenario_t *sc, const karst_s
     karst_graph_t g;
     karst_graph_init(&g);
     mark(&m, T_START);
-    karst_error_t e = karst_graph_build(ctx, sc, s, &g);
+    karst_error_t e = karst_graph_build(ctx, geo, s, &g);
     mark(&m, T_END);
     ctx->progress = NULL;
     if (e != KARST_SUCCESS) {
@@ -90,17 +95,23 @@ static int run_graph(karst_ctx_t *ctx, const karst_scenario_t *sc, const karst_s
   print_stage("undirected (CSR)", &best, T_KNN, T_SYM);
   print_stage("edge costs", &best, T_SYM, T_END);
   print_stage("graph total", &best, T_START, T_END);
+  karst_geology_free(geo);
   return 0;
 }
 
 static int run_sampling(karst_ctx_t *ctx, const karst_scenario_t *sc, uint64_t seed,
                         karst_samples_t *s, const char *label, int repeat) {
+  karst_geology_t *geo = NULL;
+  if (karst_geology_create(ctx, sc, 0, 0, &geo) != KARST_SUCCESS) {
+    fprintf(stderr, "%s\n", ctx->errmsg);
+    return 1;
+  }
   double best = 1e300, best_cpu = 0;
   for (int r = 0; r < repeat; r++) {
     karst_rng_t rng;
     karst_rng_init(&rng, seed, 0);
     double t0 = now(), c0 = cpu_seconds();
-    if (karst_sampling_run(ctx, sc, &rng, s) != KARST_SUCCESS) {
+    if (karst_sampling_run(ctx, geo, &rng, s) != KARST_SUCCESS) {
       fprintf(stderr, "bench_knn: %s\n", ctx->errmsg);
       return 1;
     }
@@ -115,6 +126,7 @@ static int run_sampling(karst_ctx_t *ctx, const karst_scenario_t *sc, uint64_t s
          label, (long long)s->n, count[KARST_SAMPLE_HORIZON], count[KARST_SAMPLE_WATER_TABLE],
          count[KARST_SAMPLE_PERMEABILITY], count[KARST_SAMPLE_FILL], repeat);
   printf("  %-22s wall %7.3f s  CPU %7.3f s\n", "sampling", best, best_cpu);
+  karst_geology_free(geo);
   return 0;
 }
 
@@ -156,7 +168,6 @@ int main(int argc, char **argv) {
    * a 300 x 300 x 100 m box at fill radius 3.9 m. */
   sc.domain_max[0] = sc.domain_max[1] = 300;
   sc.sampling.fill_radius = 3.9;
-  sc.water_table = -100;
   karst_samples_init(&s);
   if (run_sampling(&ctx, &sc, 1, &s, "~100k sampled (fill only)", repeat)) return 1;
   if (run_graph(&ctx, &sc, &s, "~100k sampled", repeat)) return 1;
@@ -175,7 +186,13 @@ int main(int argc, char **argv) {
   sc.domain_max[0] = 2000, sc.domain_max[1] = 2000, sc.domain_max[2] = 250;
   sc.domain_min[2] = 0;
   sc.terrain.elevation = 200;
-  sc.water_table = 60;
+  sc.water_table.given = 1, sc.water_table.elevation = 60;
+  /* One spring, whose water table the feature samples follow. */
+  sc.n_key_points = 1;
+  sc.key_points = calloc(1, sizeof *sc.key_points);
+  sc.key_points[0].type = KARST_KEYPOINT_SPRING;
+  sc.key_points[0].p[0] = 1000, sc.key_points[0].p[1] = 1000, sc.key_points[0].p[2] = 60;
+  strcpy(sc.key_points[0].name, "spring");
   sc.sampling.fill_radius = 7.2, sc.sampling.feature_radius = 5, sc.sampling.feature_band = 1;
   sc.sampling.k = 100;
   sc.n_horizons = 1;

@@ -32,6 +32,11 @@ static void print_load(const char *when) {
 }
 
 static int run(karst_ctx_t *ctx, const karst_scenario_t *sc, const char *label, int repeat) {
+  karst_geology_t *geo = NULL;
+  if (karst_geology_create(ctx, sc, 0, 0, &geo) != KARST_SUCCESS) {
+    fprintf(stderr, "%s\n", ctx->errmsg);
+    return 1;
+  }
   double best = 1e300, best_cpu = 0;
   karst_samples_t s, s1;
   karst_samples_init(&s), karst_samples_init(&s1);
@@ -39,7 +44,7 @@ static int run(karst_ctx_t *ctx, const karst_scenario_t *sc, const char *label, 
     karst_rng_t rng;
     karst_rng_init(&rng, 7, 0);
     double t0 = now(), c0 = cpu_seconds();
-    if (karst_sampling_run(ctx, sc, &rng, &s) != KARST_SUCCESS) {
+    if (karst_sampling_run(ctx, geo, &rng, &s) != KARST_SUCCESS) {
       fprintf(stderr, "bench_sampling: %s\n", ctx->errmsg);
       return 1;
     }
@@ -51,7 +56,7 @@ static int run(karst_ctx_t *ctx, const karst_scenario_t *sc, const char *label, 
   one.nthreads = 1;
   karst_rng_t rng;
   karst_rng_init(&rng, 7, 0);
-  if (karst_sampling_run(&one, sc, &rng, &s1) != KARST_SUCCESS) return 1;
+  if (karst_sampling_run(&one, geo, &rng, &s1) != KARST_SUCCESS) return 1;
   int same = s.n == s1.n && memcmp(s.xyz, s1.xyz, sizeof(double) * 3 * (size_t)s.n) == 0;
   int count[KARST_SAMPLE_SOURCE_COUNT] = {0};
   for (karst_int_t i = 0; i < s.n; i++)
@@ -62,6 +67,7 @@ static int run(karst_ctx_t *ctx, const karst_scenario_t *sc, const char *label, 
   printf("  fastest of %d: wall %.3f s, CPU %.3f s; identical to 1 thread: %s\n", repeat, best,
          best_cpu, same ? "yes" : "NO");
   karst_samples_destroy(&s), karst_samples_destroy(&s1);
+  karst_geology_free(geo);
   return same ? 0 : 1;
 }
 
@@ -87,14 +93,19 @@ int main(int argc, char **argv) {
   sc.terrain.elevation = 1000;
   sc.domain_max[0] = sc.domain_max[1] = 300;
   sc.sampling.fill_radius = 3.9;
-  sc.water_table = -100;
   if (run(&ctx, &sc, "300 x 300 x 100 m, fill only", repeat)) return 1;
   karst_scenario_destroy(&sc);
   if (!small) {
     karst_scenario_init(&sc);
     sc.domain_max[0] = 2000, sc.domain_max[1] = 2000, sc.domain_max[2] = 250;
     sc.terrain.elevation = 200;
-    sc.water_table = 60;
+    sc.water_table.given = 1, sc.water_table.elevation = 60;
+    /* One spring, whose water table the feature samples follow. */
+    sc.n_key_points = 1;
+    sc.key_points = calloc(1, sizeof *sc.key_points);
+    sc.key_points[0].type = KARST_KEYPOINT_SPRING;
+    sc.key_points[0].p[0] = 1000, sc.key_points[0].p[1] = 1000, sc.key_points[0].p[2] = 60;
+    strcpy(sc.key_points[0].name, "spring");
     sc.sampling.fill_radius = 7.2, sc.sampling.feature_radius = 5, sc.sampling.feature_band = 1;
     sc.n_horizons = 1;
     sc.horizons = calloc(1, sizeof(karst_horizon_t));

@@ -19,6 +19,7 @@
 #include "karst/crs.h"
 #include "karst/ensemble.h"
 #include "karst/generate.h"
+#include "karst/geology.h"
 #include "karst/graph.h"
 #include "karst/implicit.h"
 #include "karst/io.h"
@@ -29,9 +30,11 @@
 #include "karst/paths.h"
 #include "karst/readers.h"
 #include "karst/report.h"
+#include "karst/routing.h"
 #include "karst/sampling.h"
 #include "karst/scenario.h"
 #include "karst/skeleton.h"
+#include "karst/surface.h"
 #include "karst/vtk.h"
 
 #endif

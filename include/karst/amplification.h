@@ -37,19 +37,19 @@ void karst_amplification_options_init(karst_amplification_options_t *opt);
 /** Maximum first-level midpoint displacement (m) for tortuosity θ ∈ [0, 1]. */
 double karst_amplification_max_displacement(const karst_amplification_options_t *opt, double theta);
 
-karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_t *sc,
-                                         const karst_graph_t *g, karst_rng_t *rng,
-                                         const karst_amplification_options_t *opt,
+karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t *geo,
+                                         const karst_graph_t *g, const karst_routing_plan_t *plan,
+                                         karst_rng_t *rng, const karst_amplification_options_t *opt,
                                          karst_skeleton_t *sk, karst_int_t *n_points,
                                          karst_int_t *n_paths);
 
-karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_scenario_t *sc,
+karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_geology_t *geo,
                                            double theta, karst_rng_t *rng,
                                            const karst_amplification_options_t *opt,
                                            const karst_network_t *in, karst_network_t *out);
 
-/** Non-zero when @p p is inside the domain box and strictly below the terrain. */
-int karst_amplification_in_bedrock(const karst_scenario_t *sc, const double p[3]);
+/** Non-zero when @p p is in the bedrock and strictly below the terrain. */
+int karst_amplification_in_bedrock(const karst_geology_t *g, const double p[3]);
 
 #ifdef __cplusplus
 }

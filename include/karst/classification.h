@@ -9,6 +9,7 @@
 #define KARST_CLASSIFICATION_H
 
 #include "karst/common.h"
+#include "karst/geology.h"
 #include "karst/network.h"
 #include "karst/scenario.h"
 
@@ -19,19 +20,10 @@ extern "C" {
 /** Number of random Fourier waves of the conduit-radius field (karst_classification_run). */
 #define KARST_CLASSIFICATION_RADIUS_WAVES 256
 
-/** Water-table zone of a point: above the band, within it, below it. */
-typedef enum {
-  KARST_ZONE_VADOSE = 0,
-  KARST_ZONE_WATER_TABLE = 1,
-  KARST_ZONE_PHREATIC = 2
-} karst_zone_t;
+karst_tunnel_type_t karst_classification_type(const karst_geology_t *geo, int spring,
+                                              const double a[3], const double b[3]);
 
-karst_zone_t karst_classification_zone(const karst_scenario_t *sc, double z);
-
-karst_tunnel_type_t karst_classification_type(const karst_scenario_t *sc, const double a[3],
-                                              const double b[3]);
-
-karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_scenario_t *sc,
+karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_geology_t *geo,
                                        karst_rng_t *rng, karst_network_t *net);
 
 #ifdef __cplusplus

@@ -9,6 +9,7 @@
 #define KARST_COST_H
 
 #include "karst/common.h"
+#include "karst/geology.h"
 #include "karst/scenario.h"
 
 #ifdef __cplusplus
@@ -38,14 +39,14 @@ extern "C" {
  */
 #define KARST_COST_LB_MARGIN 1e-9
 
-/** Non-zero when @p p is inside the domain box (closed) and strictly below the terrain. O(1). */
-int karst_cost_in_bedrock(const karst_scenario_t *sc, const double p[3]);
+/** Non-zero when @p p is in the bedrock (karst_geology_in_bedrock). */
+int karst_cost_in_bedrock(const karst_geology_t *g, const double p[3]);
 
 /** Non-zero when every point of the segment [a, b] is in the bedrock (exact test). */
-int karst_cost_segment_in_bedrock(const karst_scenario_t *sc, const double a[3], const double b[3]);
+int karst_cost_segment_in_bedrock(const karst_geology_t *g, const double a[3], const double b[3]);
 
 /** Horizon term cL(p) in [0, 1] (1 when the scenario has no horizon). */
-double karst_cost_horizon_term(const karst_scenario_t *sc, const double p[3]);
+double karst_cost_horizon_term(const karst_geology_t *g, const double p[3]);
 
 /**
  * Fracture term cF(d) = Σ w_k (n_k·d)² for the unit direction of @p dir (cheap
@@ -53,13 +54,13 @@ double karst_cost_horizon_term(const karst_scenario_t *sc, const double p[3]);
  * form of the paper's Σ w_k (1 − (n_k·d)²)); with cost.fracture_combine = min,
  * min_k [W − w_k (1 − (n_k·d)²)], W = max_k w_k (cheap along any one family).
  */
-double karst_cost_fracture_term(const karst_scenario_t *sc, const double dir[3]);
+double karst_cost_fracture_term(const karst_geology_t *g, const double dir[3]);
 
 /** Cost per metre c(p, d) at point @p p in direction @p dir (need not be unit). */
-double karst_cost_point(const karst_scenario_t *sc, const double p[3], const double dir[3]);
+double karst_cost_point(const karst_geology_t *g, const double p[3], const double dir[3]);
 
 /** Line integral of c along the segment [a, b]; INFINITY when the segment leaves the bedrock. */
-double karst_cost_edge(const karst_scenario_t *sc, const double a[3], const double b[3]);
+double karst_cost_edge(const karst_geology_t *g, const double a[3], const double b[3]);
 
 /** A proven lower bound of c(p, d) (times the prescribed-path factor) over all p and unit d. */
 double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc);

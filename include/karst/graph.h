@@ -8,6 +8,7 @@
 #define KARST_GRAPH_H
 
 #include "karst/common.h"
+#include "karst/geology.h"
 #include "karst/scenario.h"
 
 #ifdef __cplusplus
@@ -83,7 +84,7 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
  * edges leaving the bedrock removed. @p out must be initialised; it borrows
  * samples->xyz. Uses ctx->nthreads threads; identical for any thread count.
  */
-karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
+karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
                                 const karst_samples_t *samples, karst_graph_t *out);
 
 /** Number of undirected edges of @p g (n_arcs / 2). */

@@ -68,6 +68,13 @@ typedef struct karst_attr {
   double *data; /**< ncomp * (n_nodes or n_edges) values */
 } karst_attr_t;
 
+/** A named list of strings written as field data (e.g. "spring_names": what code i stands for). */
+typedef struct karst_strings {
+  char name[48];
+  int n;
+  char **values;
+} karst_strings_t;
+
 typedef struct karst_network {
   karst_int_t n_nodes, n_edges;
   karst_int_t node_cap, edge_cap;
@@ -79,6 +86,8 @@ typedef struct karst_network {
   char *crs;          /**< coordinate system description (e.g. Survex CS string) or NULL */
   char *title;        /**< dataset title or NULL */
   char **node_labels; /**< optional station names (NULL, or n_nodes entries, each may be NULL) */
+  int n_strings;
+  karst_strings_t *strings; /**< named string lists, written as field data */
 } karst_network_t;
 
 /** Initialise an empty network (caller-owned storage). O(1). */
@@ -107,6 +116,10 @@ karst_attr_t *karst_network_attr_find(const karst_network_t *net, karst_attr_dom
 karst_error_t karst_network_set_label(karst_network_t *net, karst_int_t i, const char *label);
 /** Set the coordinate-system description (copied; NULL clears it). */
 karst_error_t karst_network_set_crs(karst_network_t *net, const char *crs);
+
+/** Set (or replace) the string list @p name to @p n copies of @p values. */
+karst_error_t karst_network_set_strings(karst_network_t *net, const char *name, int n,
+                                        const char *const *values);
 
 /** Deep copy of @p src into @p dst (dst must be initialised or destroyed). */
 karst_error_t karst_network_copy(karst_network_t *dst, const karst_network_t *src);

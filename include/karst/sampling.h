@@ -9,6 +9,7 @@
 #define KARST_SAMPLING_H
 
 #include "karst/common.h"
+#include "karst/geology.h"
 #include "karst/graph.h"
 #include "karst/scenario.h"
 
@@ -34,11 +35,11 @@ extern "C" {
 #define KARST_SAMPLING_MAX_CELLS_PER_SAMPLE 32
 
 /**
- * Sample the bedrock of @p sc (see karst_sampling_run in sampling.c for the
+ * Sample the bedrock of the geology @p geo (see karst_sampling_run in sampling.c for the
  * order and the rules). @p out must be initialised (karst_samples_init); its
  * previous content is replaced on success and left untouched on failure.
  */
-karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_rng_t *rng,
+karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, karst_rng_t *rng,
                                  karst_samples_t *out);
 
 #ifdef __cplusplus

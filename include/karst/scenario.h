@@ -14,11 +14,13 @@
 extern "C" {
 #endif
 
-/** Deepest nesting of the permeability tree accepted from a file (guards against cycles made with YAML aliases). */
+/** Deepest nesting of the permeability tree accepted from a file (guards against cycles made with
+ * YAML aliases). */
 #define KARST_SCENARIO_PERM_MAX_DEPTH 64
 /** Most permeability-tree nodes accepted from a file (guards against alias blow-up). */
 #define KARST_SCENARIO_PERM_MAX_NODES 100000
-/** Deepest nesting of [ ] and { } accepted in a scenario file (libyaml slows down quadratically). */
+/** Deepest nesting of [ ] and { } accepted in a scenario file (libyaml slows down quadratically).
+ */
 #define KARST_SCENARIO_MAX_NESTING 256
 /** Largest scenario file read, in bytes (64 MiB): a scenario is a few kilobytes of YAML. */
 #define KARST_SCENARIO_MAX_BYTES (64LL << 20)
@@ -39,80 +41,206 @@ extern "C" {
  */
 #define KARST_SCENARIO_DEFAULT_REUSE 0.5
 
-typedef enum { KARST_KEYPOINT_SINK = 0, KARST_KEYPOINT_SPRING = 1, KARST_KEYPOINT_WAYPOINT = 2 } karst_keypoint_type_t;
+typedef enum {
+  KARST_KEYPOINT_SINK = 0,
+  KARST_KEYPOINT_SPRING = 1,
+  KARST_KEYPOINT_WAYPOINT = 2
+} karst_keypoint_type_t;
+
+/** Names a scenario gives to things (key points, strata, faults, exclusions) fit in this many
+ * bytes. */
+#define KARST_SCENARIO_NAME_MAX 64
+/** Most springs a sink may list in drains_to (and most springs of a scenario,
+ * KARST_SCENARIO_MAX_SPRINGS). */
+#define KARST_SCENARIO_MAX_SPRINGS 64
+
+struct karst_surface; /* include/karst/surface.h: a grid or triangulated surface read from a file */
+
+/**
+ * A geological surface z = f(x, y) as the scenario gives it (docs/scenario.md, "Surfaces"): a plane
+ * through (origin, elevation) that descends by tan(dip) per metre towards dip_direction, or a file:
+ * an ESRI ASCII grid (.asc) or a GOCAD TSurf (.ts), resolved relative to the scenario.
+ */
+typedef struct karst_surface_def {
+  int given;            /**< 0 when the file gave none (the default applies) */
+  double elevation;     /**< plane: elevation at origin (m) */
+  double dip;           /**< plane: degrees, [0, 90) */
+  double dip_direction; /**< plane: degrees clockwise from north, [0, 360) */
+  double origin[2];     /**< plane: (x, y) where the elevation is given; default: domain centre */
+  char *path;           /**< file surface as resolved, or NULL for a plane */
+  struct karst_surface *surface; /**< the file's surface once read, or NULL for a plane */
+  int line, column; /**< position of the entry in the file (1-based), 0 if built in code */
+} karst_surface_def_t;
 
 typedef struct karst_keypoint {
-  char name[64];               /**< unique; generated ("sink1", ...) when the file gives none */
+  char name[KARST_SCENARIO_NAME_MAX]; /**< unique; generated ("sink1", ...) when the file gives none
+                                       */
   karst_keypoint_type_t type;
   double p[3];
-  int line;                    /**< line of the entry in the scenario file (for messages), 0 if built in code */
-  int column;                  /**< column of the entry (1-based), 0 if built in code */
+  int line;   /**< line of the entry in the scenario file (for messages), 0 if built in code */
+  int column; /**< column of the entry (1-based), 0 if built in code */
+  /** Springs: this spring's own water table (its base level). When not given, the scenario's
+   *  water_table if the file has one, else the horizontal plane through the spring. */
+  karst_surface_def_t water_table;
+  /** Sinks: the springs this sink drains to (key-point indices, all required), from drains_to. */
+  int n_drains_to;
+  int drains_to[KARST_SCENARIO_MAX_SPRINGS];
+  int drains_line, drains_column; /**< position of drains_to in the file, 0 when not given */
 } karst_keypoint_t;
 
 /** Terrain: flat, or an ESRI ASCII grid heightfield (bilinear interpolation). */
 typedef struct karst_terrain {
-  int is_grid;                 /**< 0: flat at @c elevation; 1: heightfield */
-  double elevation;            /**< flat elevation (m) */
-  char *path;                  /**< heightfield file as resolved (relative to the scenario), or NULL */
+  int is_grid;      /**< 0: flat at @c elevation; 1: heightfield */
+  double elevation; /**< flat elevation (m) */
+  char *path;       /**< heightfield file as resolved (relative to the scenario), or NULL */
   karst_int_t ncols, nrows;
-  double xll, yll, cellsize;   /**< lower-left corner of the grid (cell centres, ESRI "xllcenter" convention after reading) */
-  double *z;                   /**< nrows*ncols elevations, row 0 = southernmost row */
-  double zmin, zmax;           /**< range of the heightfield */
-  double lipschitz;            /**< max slope |grad h| of the bilinear surface (for implicit terrain, Appendix A) */
+  double xll, yll, cellsize; /**< lower-left corner of the grid (cell centres, ESRI "xllcenter"
+                                convention after reading) */
+  double *z;                 /**< nrows*ncols elevations, row 0 = southernmost row */
+  double zmin, zmax;         /**< range of the heightfield */
+  struct karst_surface *surface; /**< a terrain read from a surface file (terrain.surface: a TSurf
+                                      or a grid), or NULL; is_grid is then 0 */
+  double lipschitz; /**< max slope |grad h| of the bilinear surface (for implicit terrain, Appendix
+                       A) */
 } karst_terrain_t;
 
-/** Inception horizon (§4.2): plane z = elevation at @c origin, tilted by dip towards dip_direction. */
+/**
+ * Inception horizon (§4.2): the plane z = elevation at @c origin, tilted by dip towards
+ * dip_direction, or, with @c path, any single-valued surface z = f(x, y) read from a grid or
+ * TSurf file (a folded horizon).
+ */
 typedef struct karst_horizon {
-  double elevation;            /**< elevation at origin (m) */
-  double dip;                  /**< degrees, [0, 90) */
-  double dip_direction;        /**< degrees clockwise from north, [0, 360) */
-  double origin[2];            /**< (x, y) where the elevation is given; default: domain centre */
-  double radius;               /**< influence radius r of the smooth step (m), > 0 */
+  char name[KARST_SCENARIO_NAME_MAX]; /**< optional, for messages and geology.vtp */
+  char *path; /**< surface file (grid or TSurf) as resolved, or NULL for a plane */
+  struct karst_surface *surface; /**< the file's surface once read, or NULL */
+  double elevation;              /**< elevation at origin (m) */
+  double dip;                    /**< degrees, [0, 90) */
+  double dip_direction;          /**< degrees clockwise from north, [0, 360) */
+  double origin[2];              /**< (x, y) where the elevation is given; default: domain centre */
+  double radius;                 /**< influence radius r of the smooth step (m), > 0 */
   int line;
-  int column;                  /**< position of the entry in the file (1-based), 0 if built in code */
+  int column; /**< position of the entry in the file (1-based), 0 if built in code */
 } karst_horizon_t;
 
-/** Fracture family (§4.2): plane orientation and weight w_k. */
+/**
+ * Fracture family (§4.2): mean plane orientation and weight w_k, optionally with a Fisher
+ * dispersion κ of the poles about the mean pole, and optionally realised as a discrete fracture
+ * network (DFN) of discs (docs/scenario.md, "Fractures").
+ */
 typedef struct karst_fracture {
-  double dip_direction;        /**< degrees clockwise from north, [0, 360) */
-  double dip;                  /**< degrees, [0, 90] */
-  double weight;               /**< w_k >= 0 */
+  double dip_direction; /**< degrees clockwise from north, [0, 360) */
+  double dip;           /**< degrees, [0, 90] */
+  double weight;        /**< w_k >= 0 */
+  double kappa;         /**< Fisher concentration κ > 0 of the poles; 0 (default): no dispersion */
+  int dfn;              /**< 1: realise the family as discs (the fields below) */
+  double p32;           /**< DFN: fracture area per unit volume (m²/m³), > 0 */
+  double size_exponent; /**< DFN: radii follow a power law p(r) ∝ r^-a on [r_min, r_max], a > 1 */
+  double r_min, r_max;  /**< DFN: disc radius range (m), 0 < r_min <= r_max */
+  double factor;        /**< DFN: cost factor along a disc, (0, 1] (1: the disc changes nothing) */
+  double influence; /**< DFN: an edge within this distance of a disc's plane (m) lies in it; default
+                         sampling.feature_radius */
   int line;
-  int column;                  /**< position of the entry in the file (1-based), 0 if built in code */
+  int column; /**< position of the entry in the file (1-based), 0 if built in code */
 } karst_fracture_t;
+
+/** Stratum (docs/scenario.md, "Strata"): the rock between two surfaces. */
+typedef struct karst_stratum {
+  char name[KARST_SCENARIO_NAME_MAX]; /**< unique among strata */
+  karst_surface_def_t top;            /**< upper surface; not given: the terrain */
+  karst_surface_def_t bottom;         /**< lower surface; not given: the domain bottom */
+  int soluble; /**< 0: insoluble (no sample, no edge crosses it), default 1 */
+  int line, column;
+} karst_stratum_t;
+
+/** Shape of an exclusion zone (docs/scenario.md, "Exclusions"). */
+typedef enum {
+  KARST_EXCLUSION_BOX = 0,
+  KARST_EXCLUSION_SPHERE = 1,
+  KARST_EXCLUSION_PRISM = 2
+} karst_exclusion_kind_t;
+
+/** Most vertices of an exclusion prism's polygon. */
+#define KARST_SCENARIO_PRISM_MAX_VERTICES 4096
+
+/** Exclusion zone: holds no sample and is crossed by no edge. */
+typedef struct karst_exclusion {
+  char name[KARST_SCENARIO_NAME_MAX]; /**< optional */
+  int kind;                           /**< karst_exclusion_kind_t */
+  double min[3], max[3];              /**< box corners (m) */
+  double center[3], radius;           /**< sphere */
+  int n_vertices;                     /**< prism: vertices of its x-y polygon (>= 3) */
+  double *polygon;                    /**< prism: 2 * n_vertices coordinates, in order */
+  double bottom, top;                 /**< prism: z range (m), bottom < top */
+  int line, column;
+} karst_exclusion_t;
+
+/** Fault (docs/scenario.md, "Faults"): a plane, or a disc of finite radius, with a damage zone. */
+typedef struct karst_fault {
+  char name[KARST_SCENARIO_NAME_MAX]; /**< optional */
+  double center[3];                   /**< a point of the fault plane (the disc centre) */
+  double dip_direction, dip;          /**< orientation (degrees) */
+  double radius;                      /**< disc radius (m); INFINITY: an unbounded plane */
+  double damage_zone;                 /**< width (m) of the damage zone centred on the plane, > 0 */
+  int barrier;          /**< 0: a conduit (cheaper along it), 1: a barrier (costly to cross) */
+  double factor;        /**< conduit: cost factor along the fault inside the damage zone, (0, 1] */
+  double crossing_cost; /**< barrier: cost added to an edge crossing the plane, >= 0 */
+  int line, column;
+} karst_fault_t;
+
+/** Sink–spring connectivity (docs/scenario.md, "Connectivity"), as KarstNSim's matrix. */
+typedef struct karst_connectivity {
+  int given;              /**< 0: every sink may drain to every spring (default) */
+  int n_sinks, n_springs; /**< rows and columns */
+  int *sinks, *springs;   /**< key-point index of each row / column */
+  unsigned char *matrix;  /**< n_sinks x n_springs: 0 never, 1 allowed, 2 required */
+  int line, column;
+} karst_connectivity_t;
+
+/**
+ * Two-stage routing (docs/generation.md, "Routing"): a vadose stage above a spring's water table,
+ * where travel costs vadose_factor times more and rising costs rise_cost per metre, then a
+ * phreatic stage below it, where the cost per metre grows by 1/phreatic_depth per metre of depth
+ * below the epiphreatic band, and from which a path may not rise back into the vadose zone.
+ */
+typedef struct karst_routing {
+  double vadose_factor;    /**< >= 1, default 2 */
+  double rise_cost;        /**< >= 0, cost per metre of rise in the vadose zone, default 4 */
+  double phreatic_depth;   /**< > 0 m, default 50 */
+  double water_table_band; /**< >= 0 m: half-thickness of the epiphreatic band, default 5 */
+} karst_routing_t;
 
 /** Permeability construction tree (§4.2): leaves are primitives, inner nodes combine children. */
 typedef enum {
-  KARST_PERM_SPHERE = 0,       /**< resistance inside a sphere, smooth falloff to the outside value */
-  KARST_PERM_STRATUM = 1,      /**< resistance between two elevations */
-  KARST_PERM_UNION = 2,        /**< min of children (most permeable wins) */
+  KARST_PERM_SPHERE = 0,  /**< resistance inside a sphere, smooth falloff to the outside value */
+  KARST_PERM_STRATUM = 1, /**< resistance between two elevations */
+  KARST_PERM_UNION = 2,   /**< min of children (most permeable wins) */
   KARST_PERM_INTERSECTION = 3, /**< max of children */
   KARST_PERM_BLEND = 4         /**< weighted mean of children (weights = child weight) */
 } karst_perm_kind_t;
 
 typedef struct karst_perm_node {
   karst_perm_kind_t kind;
-  double resistance;           /**< leaf value in [0, 1] */
-  double center[3], radius;    /**< sphere */
-  double falloff;              /**< sphere: width (m) of the smooth transition outside the radius (>= 0) */
-  double bottom, top;          /**< stratum elevations (m), bottom < top */
-  double weight;               /**< weight of this node inside a blend (> 0, default 1) */
+  double resistance;        /**< leaf value in [0, 1] */
+  double center[3], radius; /**< sphere */
+  double falloff;     /**< sphere: width (m) of the smooth transition outside the radius (>= 0) */
+  double bottom, top; /**< stratum elevations (m), bottom < top */
+  double weight;      /**< weight of this node inside a blend (> 0, default 1) */
   int n_children;
   struct karst_perm_node *children;
   int line;
-  int column;                  /**< position of the node in the file (1-based), 0 if built in code */
+  int column; /**< position of the node in the file (1-based), 0 if built in code */
 } karst_perm_node_t;
 
 typedef struct karst_permeability {
-  double background;           /**< resistance where no primitive applies, [0, 1], default 1 */
-  karst_perm_node_t *root;     /**< NULL: uniform background */
+  double background;       /**< resistance where no primitive applies, [0, 1], default 1 */
+  karst_perm_node_t *root; /**< NULL: uniform background */
 } karst_permeability_t;
 
 /** Prescribed path (§4.2): a pair of key points whose connecting edges get a low cost. */
 typedef struct karst_prescribed_path {
-  int a, b;                    /**< indices into key_points */
+  int a, b; /**< indices into key_points */
   int line;
-  int column;                  /**< position of the pair in the file (1-based), 0 if built in code */
+  int column; /**< position of the pair in the file (1-based), 0 if built in code */
 } karst_prescribed_path_t;
 
 /** A position in the scenario file (1-based line and column; 0 when not read from a file). */
@@ -137,28 +265,29 @@ typedef enum { KARST_KNN_GRID = 0, KARST_KNN_FLANN = 1 } karst_knn_method_t;
 
 /** Cost weights of c(p, d) = w0 + wL cL(p) + wF cF(d) + wπ cπ(p) (§4.2). */
 typedef struct karst_cost_weights {
-  double w0;                   /**< base cost per metre, > 0 (keeps A* admissible and paths finite) */
-  double horizon;              /**< wL >= 0 */
-  double fracture;             /**< wF >= 0 */
-  double permeability;         /**< wπ >= 0 */
-  double prescribed;           /**< cost per metre multiplier on prescribed paths, in (0, 1] */
-  int fracture_combine;        /**< karst_fracture_combine_t, default KARST_FRACTURE_SUM */
+  double w0;            /**< base cost per metre, > 0 (keeps A* admissible and paths finite) */
+  double horizon;       /**< wL >= 0 */
+  double fracture;      /**< wF >= 0 */
+  double permeability;  /**< wπ >= 0 */
+  double prescribed;    /**< cost per metre multiplier on prescribed paths, in (0, 1] */
+  int fracture_combine; /**< karst_fracture_combine_t, default KARST_FRACTURE_SUM */
 } karst_cost_weights_t;
 
 typedef struct karst_sampling {
-  double fill_radius;          /**< Poisson radius of the fill samples (m), > 0 */
-  double feature_radius;       /**< Poisson radius on horizons, water table, permeable zones (m), > 0 */
-  double permeable_threshold;  /**< resistance below which space is sampled at feature radius, [0,1] */
-  double feature_band;         /**< half-thickness of the sampled layer around horizons/water table (m) */
-  int k;                       /**< neighbours in the kNN graph, >= 1, default 40 */
-  int knn;                     /**< karst_knn_method_t: grid (default) or flann */
-  karst_int_t max_samples;     /**< safety cap, default 5e6 */
+  double fill_radius;    /**< Poisson radius of the fill samples (m), > 0 */
+  double feature_radius; /**< Poisson radius on horizons, water table, permeable zones (m), > 0 */
+  double
+      permeable_threshold; /**< resistance below which space is sampled at feature radius, [0,1] */
+  double feature_band; /**< half-thickness of the sampled layer around horizons/water table (m) */
+  int k;               /**< neighbours in the kNN graph, >= 1, default 40 */
+  int knn;             /**< karst_knn_method_t: grid (default) or flann */
+  karst_int_t max_samples; /**< safety cap, default 5e6 */
 } karst_sampling_t;
 
 typedef struct karst_amplification {
-  int steps;                   /**< >= 0 */
-  int points;                  /**< new points per step, >= 0 */
-  double dead_end_fraction;    /**< [0, 1] */
+  int steps;                /**< >= 0 */
+  int points;               /**< new points per step, >= 0 */
+  double dead_end_fraction; /**< [0, 1] */
 } karst_amplification_t;
 
 /** Radius range per tunnel type (uniform draw in [min, max]). */
@@ -167,51 +296,61 @@ typedef struct karst_radius_range {
 } karst_radius_range_t;
 
 typedef struct karst_classification {
-  double vertical_angle;       /**< segments steeper than this (degrees) are vertical, default 60 */
-  double water_table_band;     /**< |z - water table| below this (m) counts as "at the water table", default 5 */
-  double epikarst_depth;       /**< depth below terrain (m) of the epikarst zone, default 10 */
-  double chamber_resistance;   /**< resistance below this makes a chamber, default 0.05 */
-  double radius_correlation;   /**< correlation length (m) of the radius field along and across
-                                    conduits, default 100 (Frantz et al. 2021: 50-200 m); 0 draws
-                                    every segment independently */
+  double vertical_angle;     /**< segments steeper than this (degrees) are vertical, default 60 */
+  double epikarst_depth;     /**< depth below terrain (m) of the epikarst zone, default 10 */
+  double chamber_resistance; /**< resistance below this makes a chamber, default 0.05 */
+  double radius_correlation; /**< correlation length (m) of the radius field along and across
+                                  conduits, default 100 (Frantz et al. 2021: 50-200 m); 0 draws
+                                  every segment independently */
   karst_radius_range_t radius[KARST_TUNNEL_TYPE_COUNT]; /**< indexed by karst_tunnel_type_t */
 } karst_classification_t;
 
 typedef struct karst_scenario {
-  char *path;                  /**< file the scenario was read from (NULL if built in code) */
+  char *path; /**< file the scenario was read from (NULL if built in code) */
   char *name;
   double domain_min[3], domain_max[3];
   karst_terrain_t terrain;
-  double water_table;          /**< elevation (m); a file without water_table gets the domain bottom */
+  /** The water table of springs that give none of their own (water_table:); not given: each
+   *  spring's water table is the horizontal plane through it. */
+  karst_surface_def_t water_table;
   int n_horizons;
   karst_horizon_t *horizons;
   int n_fractures;
   karst_fracture_t *fractures;
   karst_permeability_t permeability;
+  int n_strata;
+  karst_stratum_t *strata;
+  int n_exclusions;
+  karst_exclusion_t *exclusions;
+  int n_faults;
+  karst_fault_t *faults;
+  karst_connectivity_t connectivity;
+  karst_routing_t routing;
   int n_key_points;
   karst_keypoint_t *key_points;
   int n_prescribed;
   karst_prescribed_path_t *prescribed;
   karst_cost_weights_t cost;
   karst_sampling_t sampling;
-  double gamma;                /**< γ-skeleton parameter, > 0 (§5.1) */
-  double reuse;                /**< skeleton.reuse: cost factor of graph edges already in the
-                                    network while later paths are laid, (0, 1], default
-                                    KARST_SCENARIO_DEFAULT_REUSE (1 = plain union of paths) */
+  double gamma; /**< γ-skeleton parameter, > 0 (§5.1) */
+  double reuse; /**< skeleton.reuse: cost factor of graph edges already in the
+                     network while later paths are laid, (0, 1], default
+                     KARST_SCENARIO_DEFAULT_REUSE (1 = plain union of paths) */
   karst_amplification_t amplification;
-  double tortuosity;           /**< θ in [0, 1] (§5.2) */
+  double tortuosity; /**< θ in [0, 1] (§5.2) */
   karst_classification_t classification;
   uint64_t seed;
-  int realisations;            /**< >= 1 */
+  int realisations; /**< >= 1 */
   /* Where blocks named by cross-field messages were given (0 when defaulted or built in code). */
   karst_srcpos_t pos_domain;      /**< the domain map */
   karst_srcpos_t pos_terrain;     /**< terrain.elevation or terrain.heightfield value */
-  karst_srcpos_t pos_water_table; /**< water_table.elevation value */
+  karst_srcpos_t pos_water_table; /**< the water_table map */
   karst_srcpos_t pos_key_points;  /**< the key_points list */
   karst_srcpos_t pos_sampling;    /**< the sampling map */
 } karst_scenario_t;
 
-/** Fill @p sc with every documented default (docs/scenario.md): no key points, flat terrain at 100 m. */
+/** Fill @p sc with every documented default (docs/scenario.md): no key points, flat terrain at 100
+ * m. */
 void karst_scenario_init(karst_scenario_t *sc);
 /** Release what a scenario holds. */
 void karst_scenario_destroy(karst_scenario_t *sc);
@@ -261,7 +400,8 @@ karst_error_t karst_scenario_load_with_overrides(karst_ctx_t *ctx, const char *p
  * Write the scenario @p path with the @p n overrides applied to @p out (atomically), as a
  * file that loads on its own: the file's text with the overridden values replaced (its
  * comments kept) when every override replaces a value the file gives, else the whole
- * document re-emitted by libyaml; a relative terrain.heightfield is rewritten to resolve from
+ * document re-emitted by libyaml; every relative file path it reads (terrain.heightfield,
+ * surfaces of the terrain, the water table, horizons, strata ...) is rewritten to resolve from
  * @p out's directory. @p header (NULL or "# ..." lines) is written first. The result is
  * loaded back before it replaces @p out.
  */
@@ -276,23 +416,15 @@ karst_error_t karst_scenario_write_with_overrides(karst_ctx_t *ctx, const char *
 karst_error_t karst_scenario_value_text(karst_ctx_t *ctx, const char *path, const char *key,
                                         char *out, size_t size);
 
-/** Check the cross-field rules (key points inside the domain and below the terrain, a spring present ...). */
+/** Check the cross-field rules (key points inside the domain and below the terrain, a spring
+ * present ...). */
 karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc);
-
-/** Terrain elevation at (x, y) (bilinear on the grid, clamped at its border). */
-double karst_terrain_height(const karst_terrain_t *t, double x, double y);
 
 /** Read an ESRI ASCII grid (.asc) into @p t; errors name the file, line and field. */
 karst_error_t karst_terrain_load_grid(karst_ctx_t *ctx, const char *path, karst_terrain_t *t);
 
-/** Elevation of horizon @p h at (x, y). */
-double karst_horizon_elevation(const karst_horizon_t *h, double x, double y);
-
-/** Unit normal (x east, y north, z up) of a plane given by dip direction and dip (degrees). */
-void karst_plane_normal(double dip_direction, double dip, double n[3]);
-
-/** Resistance π(p) in [0, 1] from the permeability tree (§4.2). */
-double karst_permeability_eval(const karst_permeability_t *perm, const double p[3]);
+/* The geological fields of a scenario (terrain height, horizons, permeability, water tables,
+ * bedrock membership) are evaluated by the geology module: include/karst/geology.h. */
 
 /** Stable hash (FNV-1a 64) of a file's bytes, as 16 hex digits in @p out (17 bytes). */
 karst_error_t karst_file_hash(karst_ctx_t *ctx, const char *path, char out[17]);

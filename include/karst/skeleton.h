@@ -13,6 +13,7 @@
 #include "karst/graph.h"
 #include "karst/network.h"
 #include "karst/paths.h"
+#include "karst/routing.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -22,8 +23,10 @@ extern "C" {
  * A network growing on a sample graph: each node is a graph vertex, each
  * edge a graph edge, added path by path (skeleton, then amplification).
  * The network carries node attribute "kind" and edge attributes "cost",
- * "branch_id" (index of the path that first laid the edge) and
- * "amplification_step" (0 for the skeleton, s for amplification step s).
+ * "branch_id" (index of the path that first laid the edge),
+ * "amplification_step" (0 for the skeleton, s for amplification step s) and "spring"
+ * (node and edge: the index among the springs of the spring the first route laying it drains
+ * to, -1 unknown).
  */
 typedef struct karst_skeleton {
   karst_network_t net;
@@ -46,6 +49,10 @@ karst_error_t karst_skeleton_add_path(karst_ctx_t *ctx, karst_skeleton_t *sk,
                                       const karst_graph_t *g, const karst_path_t *path,
                                       int amplification_step);
 
+karst_error_t karst_skeleton_add_route(karst_ctx_t *ctx, karst_skeleton_t *sk,
+                                       const karst_graph_t *g, const karst_path_t *path,
+                                       int amplification_step, int spring);
+
 karst_error_t karst_skeleton_mark_node(karst_ctx_t *ctx, karst_skeleton_t *sk,
                                        const karst_graph_t *g, karst_int_t vertex,
                                        karst_node_kind_t kind);
@@ -56,6 +63,11 @@ karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, kar
                                    const karst_int_t *keys, const double *dist, const int32_t *pred,
                                    const float *bound, double gamma, double reuse,
                                    double lb_per_metre, karst_skeleton_t *sk, karst_int_t *n_kept);
+
+karst_error_t karst_skeleton_build_routes(karst_ctx_t *ctx, const karst_graph_t *g,
+                                          const karst_routing_plan_t *plan, double reuse,
+                                          double lb_per_metre, karst_skeleton_t *sk,
+                                          karst_int_t *n_kept);
 
 #ifdef __cplusplus
 }

@@ -56,6 +56,24 @@ typedef struct karst_mesh {
 /** Write a triangle mesh as .vtp polygons. */
 karst_error_t karst_vtk_write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m);
 
+/** Polygons with integer cell arrays and field-data string lists (karst_vtk_write_polydata). */
+typedef struct karst_polydata {
+  karst_int_t n_points;
+  const double *xyz;          /**< 3 * n_points */
+  karst_int_t n_polys;
+  const karst_int_t *offsets; /**< n_polys + 1: polygon c is conn[offsets[c] .. offsets[c + 1]) */
+  const karst_int_t *conn;
+  int n_cell_arrays;
+  const char *const *cell_array_names;
+  const int *const *cell_arrays; /**< n_cell_arrays arrays of n_polys values */
+  int n_strings;
+  const karst_strings_t *strings; /**< field-data string lists (e.g. "feature_names") */
+} karst_polydata_t;
+
+/** Write polygons as .vtp (inline binary), atomically. */
+karst_error_t karst_vtk_write_polydata(karst_ctx_t *ctx, const char *path,
+                                       const karst_polydata_t *pd);
+
 /**
  * Write a scalar field on a regular grid as .vti image data: dims[3] points,
  * origin and spacing in metres, values x fastest, named @p name.

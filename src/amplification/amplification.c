@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "karst/paths.h"
+#include "karst/routing.h"
 
 /** Fill @p opt with the documented defaults (see the field comments). O(1). */
 void karst_amplification_options_init(karst_amplification_options_t *opt) {
@@ -33,13 +34,11 @@ double karst_amplification_max_displacement(const karst_amplification_options_t 
 }
 
 /**
- * Inside the bedrock: within the domain box and strictly below the terrain
- * (the same definition the sampling stage uses). O(1).
+ * Inside the bedrock (karst_geology_in_bedrock: the domain box, outside every exclusion zone and
+ * insoluble stratum) and strictly below the terrain (as the sampling stage draws). O(exclusions).
  */
-int karst_amplification_in_bedrock(const karst_scenario_t *sc, const double p[3]) {
-  for (int k = 0; k < 3; k++)
-    if (!(p[k] >= sc->domain_min[k] && p[k] <= sc->domain_max[k])) return 0;
-  return p[2] < karst_terrain_height(&sc->terrain, p[0], p[1]);
+int karst_amplification_in_bedrock(const karst_geology_t *g, const double p[3]) {
+  return karst_geology_in_bedrock(g, p) && p[2] < karst_geology_terrain(g, p[0], p[1]);
 }
 
 static double dist3(const double *a, const double *b) {
@@ -66,8 +65,11 @@ static double dist3(const double *a, const double *b) {
  * dead end). Points connect in order, each to the network grown so far.
  * New edges get amplification_step = s (1-based) and a new branch id.
  *
- * @param sc       bedrock (domain, terrain) and amplification parameters.
+ * @param geo      the geology (bedrock, and its scenario's amplification parameters).
  * @param g        the sample graph the network lives on.
+ * @param plan     the routing plan whose routed costs the new paths follow (each point's
+ *                 paths on the route of the spring its nearest network node drains to), or
+ *                 NULL for the base costs.
  * @param rng      the amplification stream.
  * @param opt      constants (NULL: defaults).
  * @param sk       the network to grow.
@@ -76,11 +78,12 @@ static double dist3(const double *a, const double *b) {
  * @return KARST_SUCCESS, KARST_EINVAL (bad parameters), KARST_ENOMEM, KARST_EINTERRUPTED.
  * Time complexity: O(steps × points × (n + local Dijkstra)).
  */
-karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_t *sc,
-                                         const karst_graph_t *g, karst_rng_t *rng,
-                                         const karst_amplification_options_t *opt,
+karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t *geo,
+                                         const karst_graph_t *g, const karst_routing_plan_t *plan,
+                                         karst_rng_t *rng, const karst_amplification_options_t *opt,
                                          karst_skeleton_t *sk, karst_int_t *n_points,
                                          karst_int_t *n_paths) {
+  const karst_scenario_t *sc = karst_geology_scenario(geo);
   karst_amplification_options_t defaults;
   if (!opt) karst_amplification_options_init(&defaults), opt = &defaults;
   const karst_amplification_t *am = &sc->amplification;
@@ -140,7 +143,7 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
         for (int k = 0; k < 3; k++)
           p[k] = karst_rng_uniform_range(rng, lo[k], hi[k] > lo[k] ? hi[k] : lo[k]);
         if (hi[2] <= lo[2]) p[2] = lo[2];
-        if (karst_amplification_in_bedrock(sc, p)) {
+        if (karst_amplification_in_bedrock(geo, p)) {
           memcpy(&pts[3 * n_pts], p, sizeof p);
           n_pts++;
           break;
@@ -165,7 +168,20 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
       karst_int_t pv = snap[i];
       if (pv < 0 || in_net[pv]) continue; /* no free vertex, or taken by an earlier point */
       karst_int_t v1 = -1, v2 = -1;
-      if ((err = karst_paths_dijkstra(ctx, s, 1, &pv, NULL, in_net, 1, &v1))) goto cleanup;
+      /* The point drains where its nearest network node drains (the first such node). */
+      int spring = -1;
+      const karst_route_t *route = NULL;
+      if (plan) {
+        const double *nsp = karst_network_attr_find(&sk->net, KARST_ATTR_NODE, "spring")->data;
+        double best = INFINITY;
+        for (karst_int_t u = 0; u < sk->net.n_nodes; u++) {
+          double d = dist3(&sk->net.xyz[3 * u], &g->xyz[3 * pv]);
+          if (d < best) best = d, spring = (int)nsp[u];
+        }
+        route = karst_routing_route(plan, spring);
+      }
+      if ((err = karst_paths_dijkstra_routed(ctx, s, route, 1, &pv, NULL, in_net, 1, &v1)))
+        goto cleanup;
       if (v1 < 0) {
         karst_log(ctx, KARST_LOG_DEBUG,
                   "amplification: point at vertex %lld cannot reach the network", (long long)pv);
@@ -191,7 +207,7 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
           }
         for (karst_int_t k = 1; k < p1.n; k++)
           blocked[p1.v[k]] = 1;
-        err = karst_paths_dijkstra(ctx, s, 1, &pv, blocked, in_net, 1, &v2);
+        err = karst_paths_dijkstra_routed(ctx, s, route, 1, &pv, blocked, in_net, 1, &v2);
         for (karst_int_t k = 1; k < p1.n; k++)
           blocked[p1.v[k]] = 0;
         for (karst_int_t k = 0; k < n_cleared; k++)
@@ -199,10 +215,10 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_scenario_
         if (err) goto cleanup;
         if (v2 >= 0 && (err = karst_search_path_to(ctx, s, v2, &p2))) goto cleanup;
       }
-      if ((err = karst_skeleton_add_path(ctx, sk, g, &p1, step))) goto cleanup;
+      if ((err = karst_skeleton_add_route(ctx, sk, g, &p1, step, spring))) goto cleanup;
       added_paths++;
       if (p2.n > 0) {
-        if ((err = karst_skeleton_add_path(ctx, sk, g, &p2, step))) goto cleanup;
+        if ((err = karst_skeleton_add_route(ctx, sk, g, &p2, step, spring))) goto cleanup;
         added_paths++;
       }
       if ((err = karst_skeleton_mark_node(ctx, sk, g, pv, KARST_NODE_AMPLIFICATION))) goto cleanup;
@@ -245,7 +261,7 @@ static void random_orthogonal(karst_rng_t *rng, const double t[3], double u[3]) 
 }
 
 typedef struct {
-  const karst_scenario_t *sc;
+  const karst_geology_t *geo;
   const karst_amplification_options_t *opt;
   karst_rng_t *rng;
   double *pts; /* growing list of intermediate points of the current edge */
@@ -278,7 +294,7 @@ static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double 
     random_orthogonal(sd->rng, t, u);
     double r = A * karst_rng_uniform(sd->rng);
     double c[3] = {m[0] + r * u[0], m[1] + r * u[1], m[2] + r * u[2]};
-    if (karst_amplification_in_bedrock(sd->sc, c)) {
+    if (karst_amplification_in_bedrock(sd->geo, c)) {
       memcpy(q, c, sizeof q);
       break;
     }
@@ -299,8 +315,9 @@ static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double 
  * above the terrain is rejected and redrawn (max_tries times; then the
  * midpoint stays on the segment), so no node leaves the bedrock. Original
  * nodes keep their position and attributes; new nodes get zero attributes
- * (kind interior); each piece copies its edge's attributes, except "cost",
- * which is shared among the pieces in proportion to their length.
+ * (kind interior) but their edge's "spring"; each piece copies its edge's
+ * attributes, except "cost", which is shared among the pieces in proportion to
+ * their length.
  * Edges are processed in index order with @p rng, so the output is
  * deterministic.
  *
@@ -309,7 +326,7 @@ static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double 
  * @return KARST_SUCCESS, KARST_EINVAL (θ outside [0, 1]), KARST_ENOMEM.
  * Time complexity: O(edges × 2^max_levels).
  */
-karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_scenario_t *sc,
+karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_geology_t *geo,
                                            double theta, karst_rng_t *rng,
                                            const karst_amplification_options_t *opt,
                                            const karst_network_t *in, karst_network_t *out) {
@@ -318,7 +335,7 @@ karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_scenari
   if (!(theta >= 0 && theta <= 1))
     return karst_set_error(ctx, KARST_EINVAL, "tortuosity must be within [0, 1], got %g", theta);
   karst_error_t err = KARST_SUCCESS;
-  subdiv_t sd = {sc, opt, rng, NULL, 0, 0};
+  subdiv_t sd = {geo, opt, rng, NULL, 0, 0};
   const double amp = karst_amplification_max_displacement(opt, theta);
   karst_network_t tmp;
   karst_network_init(&tmp);
@@ -359,7 +376,12 @@ karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_scenari
     for (karst_int_t k = 0; k <= sd.n; k++) {
       karst_int_t nn = w;
       const double *next = k < sd.n ? &sd.pts[3 * k] : b;
-      if (k < sd.n && karst_network_add_node(&tmp, next[0], next[1], next[2], &nn)) goto nomem;
+      if (k < sd.n) {
+        if (karst_network_add_node(&tmp, next[0], next[1], next[2], &nn)) goto nomem;
+        karst_attr_t *ns = karst_network_attr_find(&tmp, KARST_ATTR_NODE, "spring");
+        const karst_attr_t *es = karst_network_attr_find(in, KARST_ATTR_EDGE, "spring");
+        if (ns && es) ns->data[nn] = es->data[e];
+      }
       karst_int_t ne;
       if (karst_network_add_edge(&tmp, pn, nn, &ne)) goto nomem;
       double share = total > 0 ? dist3(prev, next) / total : 1.0 / (double)(sd.n + 1);

@@ -1,66 +1,61 @@
 /* Tunnel types and radii (Paris et al. 2021, §5.3, Fig. 11). */
 #include "karst/classification.h"
 
+#include "karst/geology.h"
+
 #include <math.h>
 #include <stdlib.h>
 
 /**
- * Zone of elevation @p z: within classification.water_table_band of the
- * water table (|z − W| ≤ band) → water table; above → vadose; below →
- * phreatic (Paris et al. 2021, §3 and Fig. 11). O(1).
- */
-karst_zone_t karst_classification_zone(const karst_scenario_t *sc, double z) {
-  double dz = z - sc->water_table;
-  if (fabs(dz) <= sc->classification.water_table_band) return KARST_ZONE_WATER_TABLE;
-  return dz > 0 ? KARST_ZONE_VADOSE : KARST_ZONE_PHREATIC;
-}
-
-/**
- * Tunnel type of segment a–b, our reading of Paris et al. 2021, Fig. 11 (the
- * paper fixes the inputs — verticality, distance to the water table, the
- * epikarst and the ghost-rock chambers — but gives no thresholds; ours are
- * the classification.* scenario keys). Evaluated at the segment midpoint m,
- * first rule that applies:
+ * Tunnel type of segment a–b draining to spring @p spring: our reading of Paris et al. 2021,
+ * §5.3 and Fig. 11, which fix the inputs — verticality, position relative to the water table, the
+ * epikarst and the ghost-rock chambers — but give no thresholds (ours are the classification.*
+ * and routing.water_table_band keys), with the speleogenetic forms of Palmer (2007, "Cave
+ * Geology", ch. 6–7) and Ford & Williams (2007, §7) for each zone. Evaluated at the segment
+ * midpoint m against the spring's own water table W, first rule that applies:
  *
  *   1. resistance π(m) < chamber_resistance               → chamber
  *      (breakout chambers in ghost-rock zones where c_π ≈ 0, §5.3)
- *   2. steep (angle to horizontal ≥ vertical_angle), vadose and depth below
- *      terrain < epikarst_depth                            → epikarst ("narrow vertical
- *      conduits that start from the surface", §5.3: a gentle segment near the
- *      surface is not epikarst but falls through to rule 4)
- *   3. steep:
- *        vadose or at the water table                      → tube (circular shafts, §5.3)
- *        phreatic                                          → passage (phreatic lifts)
- *   4. gentle:
- *        vadose                                            → canyon (vadose entrenchment)
- *        at the water table                                → keyhole (tube entrenched by a
- *                                                             canyon as the table falls)
- *        phreatic                                          → bed (soluble bed conduits, §5.3)
+ *   2. vadose (above the epiphreatic band):
+ *        steep (angle to horizontal ≥ vertical_angle) and depth below terrain < epikarst_depth
+ *                                                          → epikarst (§5.3: "narrow vertical
+ *                                                             conduits that start from the
+ * surface") steep                                             → tube (circular shafts, §5.3) gentle
+ * → canyon (vadose entrenchment)
+ *   3. epiphreatic (|z − W| ≤ band):
+ *        steep                                             → tube
+ *        gentle, above W                                   → keyhole (a tube entrenched by a
+ *                                                             vadose canyon as the table falls)
+ *        gentle, at or below W                             → passage (epiphreatic passages at the
+ *                                                             water table)
+ *   4. phreatic (below the band):
+ *        within an inception horizon's radius (cL(m) < 1)  → bed (soluble bed conduits, §5.3)
+ *        otherwise                                         → tube (phreatic tubes and lifts)
  *
- * A zero-length segment counts as gentle. O(size of the permeability tree).
+ * A zero-length segment counts as gentle. O(horizons + size of the permeability tree).
  */
-karst_tunnel_type_t karst_classification_type(const karst_scenario_t *sc, const double a[3],
-                                              const double b[3]) {
-  const karst_classification_t *cl = &sc->classification;
+karst_tunnel_type_t karst_classification_type(const karst_geology_t *geo, int spring,
+                                              const double a[3], const double b[3]) {
+  const karst_classification_t *cl = &karst_geology_scenario(geo)->classification;
   double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-  if (karst_permeability_eval(&sc->permeability, m) < cl->chamber_resistance)
-    return KARST_TUNNEL_CHAMBER;
-  karst_zone_t zone = karst_classification_zone(sc, m[2]);
+  if (karst_geology_permeability(geo, m) < cl->chamber_resistance) return KARST_TUNNEL_CHAMBER;
+  karst_zone_t zone = karst_geology_zone(geo, spring, m);
   double dx = b[0] - a[0], dy = b[1] - a[1], dz = b[2] - a[2];
   double angle = atan2(fabs(dz), sqrt(dx * dx + dy * dy)) * (180.0 / M_PI);
   int steep = (dx != 0 || dy != 0 || dz != 0) && angle >= cl->vertical_angle;
-  if (steep) {
-    double depth = karst_terrain_height(&sc->terrain, m[0], m[1]) - m[2];
-    if (zone == KARST_ZONE_VADOSE && depth < cl->epikarst_depth) return KARST_TUNNEL_EPIKARST;
-    return zone == KARST_ZONE_PHREATIC ? KARST_TUNNEL_PASSAGE : KARST_TUNNEL_TUBE;
-  }
   switch (zone) {
   case KARST_ZONE_VADOSE:
+    if (steep) {
+      double depth = karst_geology_terrain(geo, m[0], m[1]) - m[2];
+      return depth < cl->epikarst_depth ? KARST_TUNNEL_EPIKARST : KARST_TUNNEL_TUBE;
+    }
     return KARST_TUNNEL_CANYON;
-  case KARST_ZONE_WATER_TABLE:
-    return KARST_TUNNEL_KEYHOLE;
+  case KARST_ZONE_EPIPHREATIC:
+    if (steep) return KARST_TUNNEL_TUBE;
+    return m[2] > karst_geology_water_table(geo, spring, m[0], m[1]) ? KARST_TUNNEL_KEYHOLE
+                                                                     : KARST_TUNNEL_PASSAGE;
   default:
-    return KARST_TUNNEL_BED;
+    return karst_geology_horizon_term(geo, m) < 1.0 ? KARST_TUNNEL_BED : KARST_TUNNEL_TUBE;
   }
 }
 
@@ -78,7 +73,8 @@ typedef struct {
  * (Rahimi & Recht 2007; the spectral method of geostatistics). */
 static void radius_field_draw(radius_field_t *f, double L, karst_rng_t *rng) {
   for (int m = 0; m < RADIUS_FIELD_WAVES; m++) {
-    for (int a = 0; a < 3; a++) f->w[m][a] = karst_rng_gaussian(rng) / L;
+    for (int a = 0; a < 3; a++)
+      f->w[m][a] = karst_rng_gaussian(rng) / L;
     f->phase[m] = 2 * M_PI * karst_rng_uniform(rng);
   }
 }
@@ -94,24 +90,26 @@ static double radius_field_uniform(const radius_field_t *f, const double p[3]) {
 
 /**
  * Label every edge of @p net (Paris et al. 2021, §5.3): edge attributes
- * "tunnel_type" (karst_tunnel_type_t, karst_classification_type), "radius"
+ * "tunnel_type" (karst_tunnel_type_t, karst_classification_type against the water table of the
+ * edge's "spring" — an edge without one is judged against the first spring), "zone"
+ * (karst_zone_t of its midpoint), "vadose" (1 when the zone is vadose), "radius"
  * (m, uniform in classification.radius[type] — by default 0.5 m for
  * epikarst and [0.5, 4] m otherwise, as in §5.3 — and spatially correlated
  * over classification.radius_correlation metres, as Frantz et al. 2021
  * observe on real networks (semi-variogram ranges 50–200 m): the radius is
  * min + Φ(g(midpoint)) (max − min) for a Gaussian random field g drawn from
  * @p rng; a correlation length of 0 draws each edge independently, in edge
- * order) and "vadose" (1 when the midpoint is above the water table), and node
- * attribute "water_table_distance" (z − W, positive above).
+ * order), and node attribute "water_table_distance" (z − W of the node's spring, m, positive
+ * above).
  *
  * @return KARST_SUCCESS; KARST_EINVAL when vertical_angle is outside [0, 90]
  *         or a radius range is not 0 ≤ min ≤ max (the message names the type);
  *         KARST_ENOMEM.
  * Time complexity: O(nodes + edges × (size of the permeability tree + 256)).
  */
-karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_scenario_t *sc,
+karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_geology_t *geo,
                                        karst_rng_t *rng, karst_network_t *net) {
-  const karst_classification_t *cl = &sc->classification;
+  const karst_classification_t *cl = &karst_geology_scenario(geo)->classification;
   if (!(cl->vertical_angle >= 0 && cl->vertical_angle <= 90))
     return karst_set_error(ctx, KARST_EINVAL,
                            "classification.vertical_angle must be within [0, 90] degrees, got %g",
@@ -122,14 +120,22 @@ karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_scenario_t 
       return karst_set_error(
           ctx, KARST_EINVAL, "classification radius of %s: need 0 <= min <= max, got [%g, %g]",
           karst_tunnel_type_name((karst_tunnel_type_t)t), cl->radius[t].min, cl->radius[t].max);
-  double *type, *radius, *vadose, *wtd;
+  double *type, *radius, *vadose, *zone, *wtd;
   if (karst_network_attr_add(net, KARST_ATTR_EDGE, "tunnel_type", 1, 1, &type) ||
       karst_network_attr_add(net, KARST_ATTR_EDGE, "radius", 1, 0, &radius) ||
+      karst_network_attr_add(net, KARST_ATTR_EDGE, "zone", 1, 1, &zone) ||
       karst_network_attr_add(net, KARST_ATTR_EDGE, "vadose", 1, 1, &vadose) ||
       karst_network_attr_add(net, KARST_ATTR_NODE, "water_table_distance", 1, 0, &wtd))
     return karst_set_error(ctx, KARST_ENOMEM, "classification: out of memory");
-  for (karst_int_t v = 0; v < net->n_nodes; v++)
-    wtd[v] = net->xyz[3 * v + 2] - sc->water_table;
+  const karst_attr_t *nsp = karst_network_attr_find(net, KARST_ATTR_NODE, "spring");
+  const karst_attr_t *esp = karst_network_attr_find(net, KARST_ATTR_EDGE, "spring");
+  const int n_springs = karst_geology_n_springs(geo);
+#define SPRING_OF(attr, i)                                                                         \
+  ((attr) && (attr)->data[i] >= 0 && (attr)->data[i] < n_springs ? (int)(attr)->data[i] : 0)
+  for (karst_int_t v = 0; v < net->n_nodes; v++) {
+    const double *p = &net->xyz[3 * v];
+    wtd[v] = p[2] - karst_geology_water_table(geo, SPRING_OF(nsp, v), p[0], p[1]);
+  }
   radius_field_t *field = NULL;
   if (cl->radius_correlation > 0) {
     if (!(field = malloc(sizeof *field)))
@@ -138,13 +144,16 @@ karst_error_t karst_classification_run(karst_ctx_t *ctx, const karst_scenario_t 
   }
   for (karst_int_t e = 0; e < net->n_edges; e++) {
     const double *a = &net->xyz[3 * net->edges[2 * e]], *b = &net->xyz[3 * net->edges[2 * e + 1]];
-    karst_tunnel_type_t t = karst_classification_type(sc, a, b);
+    int spring = SPRING_OF(esp, e);
+    karst_tunnel_type_t t = karst_classification_type(geo, spring, a, b);
     type[e] = t;
     double mid[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
     double u = field ? radius_field_uniform(field, mid) : karst_rng_uniform(rng);
     radius[e] = cl->radius[t].min + u * (cl->radius[t].max - cl->radius[t].min);
-    vadose[e] = 0.5 * (a[2] + b[2]) > sc->water_table;
+    zone[e] = karst_geology_zone(geo, spring, mid);
+    vadose[e] = zone[e] == KARST_ZONE_VADOSE;
   }
+#undef SPRING_OF
   free(field);
   return KARST_SUCCESS;
 }

@@ -65,6 +65,7 @@ static int run(int argc, char **argv) {
   karst_generate_stats_t stats;
   karst_fileset_t files;
   karst_fileset_init(&files);
+  karst_geology_t *geo = NULL;
   char *path = NULL, *prefix = NULL;
   char writing[4096] = "";
   int status = CLI_OK;
@@ -109,6 +110,13 @@ static int run(int argc, char **argv) {
     goto fail;
   }
   free(path);
+  /* The geology that made the network (the same realisation's fracture discs). */
+  if (!(path = join(outdir, "geology.vtp"))) goto nomem;
+  if ((err = karst_geology_create(&ctx, &sc, seed, 0, &geo))) goto fail;
+  if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
+  snprintf(writing, sizeof writing, "%s", path);
+  if ((err = karst_geology_write_vtp(&ctx, geo, tmp))) goto fail_write;
+  free(path);
   if (!(path = join(outdir, "run.json"))) goto nomem;
   if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
   snprintf(writing, sizeof writing, "%s", path);
@@ -134,6 +142,7 @@ cleanup:
   free(prefix);
   karst_samples_destroy(&samples);
   karst_network_destroy(&net);
+  karst_geology_free(geo);
   karst_scenario_destroy(&sc);
   return status;
 }
@@ -146,8 +155,12 @@ const cli_command_t cli_cmd_generate = {
     "(all to temporary names first, then renamed into place, run.json last; a failed run\n"
     "leaves none of them, and a previous set in DIR as it was):\n"
     "  DIR/network.vtp                    the network for ParaView (point data: kind,\n"
-    "                                     water_table_distance; cell data: tunnel_type, radius,\n"
-    "                                     cost, vadose, branch_id, amplification_step)\n"
+    "                                     water_table_distance, spring; cell data: tunnel_type,\n"
+    "                                     radius, zone, vadose, spring, cost, branch_id,\n"
+    "                                     amplification_step)\n"
+    "  DIR/geology.vtp                    the geology: terrain, horizons, water tables, strata,\n"
+    "                                     faults, fracture discs, exclusion zones (cell data:\n"
+    "                                     feature, feature_id)\n"
     "  DIR/network_nodes.dat, _links.dat  the network in Karstnet's format\n"
     "  DIR/samples.vtp                    the sample cloud tagged by source (with --samples)\n"
     "  DIR/run.json                       scenario path and hash, seed, every effective\n"

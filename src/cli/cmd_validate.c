@@ -20,6 +20,11 @@ static int run(int argc, char **argv) {
     karst_scenario_t sc;
     karst_scenario_init(&sc);
     karst_error_t err = karst_scenario_load(&ctx, argv[i], &sc);
+    if (!err) { /* what only the geology can say: key points in exclusion zones, surfaces ... */
+      karst_geology_t *geo = NULL;
+      err = karst_geology_create(&ctx, &sc, sc.seed, 0, &geo);
+      karst_geology_free(geo);
+    }
     if (err) {
       fprintf(stderr, "%s\n", ctx.errmsg[0] ? ctx.errmsg : karst_strerror(err));
       status = CLI_ERROR;
@@ -49,6 +54,7 @@ const cli_command_t cli_cmd_validate = {
     "validate", run, "check a scenario file without running it",
     "usage: karst validate SCENARIO.yaml...\n\n"
     "Reads each scenario, checks every field and every cross-field rule (key points inside\n"
-    "the domain and below the terrain, a spring present, ...) and prints a one-line summary.\n"
+    "the domain, below the terrain and outside every exclusion zone, a spring present,\n"
+    "surfaces covering the domain, ...) and prints a one-line summary.\n"
     "Errors are printed as FILE:LINE:COLUMN: message. Exit code 1 when any file fails.\n"
     "The scenario format is documented in docs/scenario.md.\n"};

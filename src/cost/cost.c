@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "cost/cost_internal.h"
+#include "geology/geology_internal.h"
 
 /* Candidate break points of one edge kept on the stack. Horizons: with A
  * active horizons an exact integral needs A^2 + 2A of them, so at most
@@ -20,204 +21,38 @@ static double clampd(double x, double a, double b) {
   return x < a ? a : (x > b ? b : x);
 }
 
-/* Smooth step g(x) = 3x^2 - 2x^3 on [0, 1], 1 beyond (Paris et al. 2021, §4.2). */
-static double smoothstep1(double x) {
-  if (x >= 1.0) return 1.0;
-  if (x <= 0.0) return 0.0;
-  return x * x * (3.0 - 2.0 * x);
-}
-
 static double dot3(const double a[3], const double b[3]) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-static int finite3(const double p[3]) {
-  return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
-}
-
 /* ------------------------------------------------------------------------ */
-/* Bedrock membership                                                        */
+/* Bedrock membership: the geology's (include/karst/geology.h)               */
 /* ------------------------------------------------------------------------ */
 
-static int in_box(const karst_scenario_t *sc, const double p[3]) {
-  for (int i = 0; i < 3; i++)
-    if (!(p[i] >= sc->domain_min[i] && p[i] <= sc->domain_max[i])) return 0;
-  return 1;
+/** karst_geology_in_bedrock: the domain box, at or below the terrain, outside every exclusion. */
+int karst_cost_in_bedrock(const karst_geology_t *g, const double p[3]) {
+  return karst_geology_in_bedrock(g, p);
 }
 
-/**
- * Whether @p p lies in the bedrock: inside the closed domain box and at or
- * below the terrain, z <= h(x, y) (Paris et al. 2021, §4: the bedrock H).
- * The ground itself belongs to the bedrock so that a key point placed exactly
- * on it (a swallow hole, a spring) is accepted by karst_scenario_check and by
- * generation alike; random samples are still drawn strictly below it.
- * @param sc the scenario; @param p the point.
- * @return 1 inside, 0 outside (also for non-finite coordinates).
- * Time complexity: O(1).
- */
-int karst_cost_in_bedrock(const karst_scenario_t *sc, const double p[3]) {
-  return finite3(p) && in_box(sc, p) && p[2] <= karst_terrain_height(&sc->terrain, p[0], p[1]);
-}
-
-/* Iterator over the parameters s in (0, 1) where a segment coordinate
- * a + s d crosses the grid lines origin + i * step, i in [0, count). */
-typedef struct line_iter {
-  double s_next, a, d, origin, step;
-  karst_int_t i, end, inc;
-} line_iter_t;
-
-static void line_iter_set(line_iter_t *it) {
-  it->s_next = (it->origin + (double)it->i * it->step - it->a) / it->d;
-}
-
-static void line_iter_init(line_iter_t *it, double a, double d, double origin, double step,
-                           karst_int_t count) {
-  it->a = a, it->d = d, it->origin = origin, it->step = step;
-  it->s_next = INFINITY;
-  if (d == 0.0 || count < 1) return;
-  double lo = fmin(a, a + d), hi = fmax(a, a + d);
-  double flo = ceil((lo - origin) / step), fhi = floor((hi - origin) / step);
-  flo = fmax(flo, 0.0), fhi = fmin(fhi, (double)(count - 1));
-  if (flo > fhi) return;
-  karst_int_t ilo = (karst_int_t)flo, ihi = (karst_int_t)fhi;
-  it->i = d > 0 ? ilo : ihi;
-  it->end = d > 0 ? ihi : ilo;
-  it->inc = d > 0 ? 1 : -1;
-  line_iter_set(it);
-}
-
-static void line_iter_next(line_iter_t *it) {
-  if (it->i == it->end) {
-    it->s_next = INFINITY;
-    return;
-  }
-  it->i += it->inc;
-  line_iter_set(it);
-}
-
-/*
- * Whether the quadratic through (0, q0), (1/2, qm), (1, q1) is negative at
- * every t of the open interval (0, 1). The end values may be 0 (an end point
- * on the ground): inside, a non-constant quadratic stays strictly below
- * max(q0, q1) unless its vertex is inside (0, 1), where it is checked.
- */
-static int quadratic_negative_inside(double q0, double qm, double q1) {
-  double A = 2 * q0 - 4 * qm + 2 * q1, B = -3 * q0 + 4 * qm - q1;
-  if (A == 0 && B == 0) return q0 < 0; /* constant, e.g. along the ground */
-  if (fmax(q0, q1) > 0) return 0;
-  if (A < 0) {
-    double t = -B / (2 * A);
-    if (t > 0 && t < 1 && q0 + B * t + A * t * t >= 0) return 0;
-  }
-  return 1;
-}
-
-/**
- * Whether the whole segment [a, b] lies in the bedrock. The box is convex,
- * so its test is on the end points. A flat terrain bounds a half-space (end
- * points suffice); on a grid the bilinear surface restricted to the segment
- * is a quadratic in the segment parameter between two crossings of grid
- * lines (the clamped border included), so the sign of z(s) - h(s) is decided
- * exactly piece by piece: no sampling step, no tolerance. The end points may
- * lie on the ground (z = h); every point between them must be strictly below
- * it, so a segment may leave a key point on the surface but not run along it.
- * @param sc the scenario; @param a, b the end points.
- * @return 1 when every point is in the bedrock, else 0.
- * Time complexity: O(1 + grid lines crossed).
- */
-int karst_cost_segment_in_bedrock(const karst_scenario_t *sc, const double a[3],
-                                  const double b[3]) {
-  if (!karst_cost_in_bedrock(sc, a) || !karst_cost_in_bedrock(sc, b)) return 0;
-  return karst_i_segment_interior_in_bedrock(sc, a, b);
-}
-
-int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double a[3],
-                                        const double b[3]) {
-  const karst_terrain_t *t = &sc->terrain;
-  if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) {
-    /* A flat ground: with both ends at or below it, the points between them are strictly below
-     * unless both ends lie on it (the segment would run along the surface). */
-    double h = t->elevation;
-    return !(a[2] >= h && b[2] >= h);
-  }
-  double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-  line_iter_t ix, iy;
-  line_iter_init(&ix, a[0], d[0], t->xll, t->cellsize, t->ncols);
-  line_iter_init(&iy, a[1], d[1], t->yll, t->cellsize, t->nrows);
-#define Q_AT(s) (a[2] + (s)*d[2] - karst_terrain_height(t, a[0] + (s)*d[0], a[1] + (s)*d[1]))
-  double s0 = 0.0, q0 = Q_AT(0.0);
-  while (s0 < 1.0) {
-    double s1 = fmin(1.0, fmin(ix.s_next, iy.s_next));
-    while (ix.s_next <= s1)
-      line_iter_next(&ix);
-    while (iy.s_next <= s1)
-      line_iter_next(&iy);
-    if (!(s1 > s0)) continue;
-    double qm = Q_AT(0.5 * (s0 + s1)), q1 = Q_AT(s1);
-    if (!quadratic_negative_inside(q0, qm, q1)) return 0;
-    if (s1 < 1.0 && !(q1 < 0.0)) return 0; /* a grid-line crossing is inside the segment */
-    s0 = s1, q0 = q1;
-  }
-#undef Q_AT
-  return 1;
-}
-
-/**
- * Largest terrain elevation over an axis-aligned rectangle. On each grid cell
- * the bilinear surface is linear along x and along y, so its maximum over a
- * rectangle is at a corner of the rectangle cut by the grid lines: the
- * rectangle's corners, the grid nodes inside and the crossings of its edges
- * with grid lines. O(1 + grid nodes inside the rectangle).
- */
-double karst_i_terrain_max_rect(const karst_terrain_t *t, double x0, double x1, double y0,
-                                double y1) {
-  double m = fmax(fmax(karst_terrain_height(t, x0, y0), karst_terrain_height(t, x1, y0)),
-                  fmax(karst_terrain_height(t, x0, y1), karst_terrain_height(t, x1, y1)));
-  if (!t->is_grid || !t->z || t->ncols < 1 || t->nrows < 1) return m;
-  double cs = t->cellsize;
-  double ilo = fmax(0.0, ceil((x0 - t->xll) / cs)),
-         ihi = fmin(t->ncols - 1.0, floor((x1 - t->xll) / cs));
-  double jlo = fmax(0.0, ceil((y0 - t->yll) / cs)),
-         jhi = fmin(t->nrows - 1.0, floor((y1 - t->yll) / cs));
-  for (double i = ilo; i <= ihi; i++) {
-    double x = t->xll + i * cs;
-    m = fmax(m, fmax(karst_terrain_height(t, x, y0), karst_terrain_height(t, x, y1)));
-    for (double j = jlo; j <= jhi; j++)
-      m = fmax(m, t->z[(karst_int_t)j * t->ncols + (karst_int_t)i]);
-  }
-  for (double j = jlo; j <= jhi; j++) {
-    double y = t->yll + j * cs;
-    m = fmax(m, fmax(karst_terrain_height(t, x0, y), karst_terrain_height(t, x1, y)));
-  }
-  return m;
+/** karst_geology_segment_in_bedrock: exact, see there. */
+int karst_cost_segment_in_bedrock(const karst_geology_t *g, const double a[3], const double b[3]) {
+  return karst_geology_segment_in_bedrock(g, a, b);
 }
 
 /* ------------------------------------------------------------------------ */
 /* Pointwise terms                                                           */
 /* ------------------------------------------------------------------------ */
 
-/**
- * Horizon term cL(p) = g(d(p, L) / r) (Paris et al. 2021, §4.2) with d the
- * vertical distance to a horizon and r its radius. With several horizons of
- * different radii we take min_h g(d_h / r_h): the horizon whose influence is
- * strongest at p, which is the paper's "nearest horizon" when radii are
- * equal and, unlike the nearest one by distance, is continuous in p. Without
- * horizons cL = 1, the value far from every horizon, so that adding a
- * horizon only ever lowers costs near it.
- * @return cL in [0, 1]. Time complexity: O(number of horizons).
- */
-double karst_cost_horizon_term(const karst_scenario_t *sc, const double p[3]) {
-  double c = 1.0;
-  for (int h = 0; h < sc->n_horizons; h++) {
-    const karst_horizon_t *H = &sc->horizons[h];
-    double x = fabs(p[2] - karst_horizon_elevation(H, p[0], p[1])) / H->radius;
-    c = fmin(c, smoothstep1(x));
-  }
-  return c;
+/** Horizon term cL(p) (karst_geology_horizon_term: min_h g(d_h / r_h), 1 without horizons). */
+double karst_cost_horizon_term(const karst_geology_t *g, const double p[3]) {
+  return karst_geology_horizon_term(g, p);
 }
 
-static double fracture_term(const karst_scenario_t *sc, const double *normals, const double d[3]) {
-  double len = sqrt(dot3(d, d)), inv = len > 0 ? 1.0 / len : 0.0, c = 0.0, wmax = 0.0;
+/* Σ-or-min combination of the families' quadratic forms dᵀ T_k d, T_k = E[n nᵀ] of the family's
+ * Fisher distribution (n nᵀ without dispersion). */
+static double fracture_term(const karst_geology_t *g, const double d[3]) {
+  const karst_scenario_t *sc = g->sc;
+  double len2 = dot3(d, d), c = 0.0, wmax = 0.0;
   const int use_min = sc->cost.fracture_combine == KARST_FRACTURE_MIN;
   if (use_min) {
     for (int k = 0; k < sc->n_fractures; k++)
@@ -225,61 +60,64 @@ static double fracture_term(const karst_scenario_t *sc, const double *normals, c
     c = wmax;
   }
   for (int k = 0; k < sc->n_fractures; k++) {
-    double n[3], w = sc->fractures[k].weight;
-    if (normals) {
-      n[0] = normals[3 * k], n[1] = normals[3 * k + 1], n[2] = normals[3 * k + 2];
+    const double *T = g->fracture_tensor + 9 * k, w = sc->fractures[k].weight;
+    double q; /* E[(n·d̂)²] */
+    if (len2 > 0) {
+      q = 0;
+      for (int a = 0; a < 3; a++)
+        q += d[a] * (T[3 * a] * d[0] + T[3 * a + 1] * d[1] + T[3 * a + 2] * d[2]);
+      q /= len2;
     } else {
-      karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, n);
+      q = 1.0;
     }
-    double nd = len > 0 ? dot3(n, d) * inv : 1.0;
     if (use_min)
-      c = fmin(c, wmax - w * (1.0 - nd * nd));
+      c = fmin(c, wmax - w * (1.0 - q));
     else
-      c += w * nd * nd;
+      c += w * q;
   }
   return c;
 }
 
 /**
- * Fracture term cF(d) = Σ_k w_k (n_k·d̂)² with n_k the unit normal of family
- * k (karst_plane_normal) and d̂ = d/|d| (Paris et al. 2021, §4.2, as its text
- * and Fig. 7 intend: "edges with a direction parallel to a fracture plane have
- * a smaller cost value than orthogonal ones"). The paper prints
- * Σ w_k (1 − (n_k·d̂)²), which with n_k the plane normal is the squared
- * in-plane component and would make paths cross the planes; that formula is
- * the right one for a vector lying in the fracture (its 2-D trace), and its
- * 3-D form for a plane of normal n_k is the squared normal component used
- * here: 0 along strike and dip, w_k across the plane.
+ * Fracture term cF(d) = Σ_k w_k E[(n_k·d̂)²] with n_k the unit pole of family
+ * k and d̂ = d/|d| (Paris et al. 2021, §4.2, as its text and Fig. 7 intend:
+ * "edges with a direction parallel to a fracture plane have a smaller cost
+ * value than orthogonal ones"). Without dispersion the expectation is
+ * (μ_k·d̂)² for the mean pole μ_k (karst_plane_normal); with a Fisher
+ * concentration κ it is d̂ᵀ T_k d̂, T_k = E[n nᵀ] = c μμᵀ + (1 − c)/2 (I − μμᵀ),
+ * c = E[cos² θ] = 1 − 2 A(κ)/κ (karst_i_fisher_tensor), so a dispersed family
+ * attracts less sharply. The paper prints Σ w_k (1 − (n_k·d̂)²), which with
+ * n_k the plane normal is the squared in-plane component and would make paths
+ * cross the planes; that formula is the right one for a vector lying in the
+ * fracture (its 2-D trace), and its 3-D form for a plane of normal n_k is the
+ * squared normal component used here: 0 along strike and dip, w_k across.
  *
- * With cost.fracture_combine = min: cF(d) = min_k [W − w_k (1 − (n_k·d̂)²)],
+ * With cost.fracture_combine = min: cF(d) = min_k [W − w_k (1 − E[(n_k·d̂)²])],
  * W = max_k w_k. Any sum is a quadratic form dᵀMd, whose minimum directions
  * form one eigenspace: two vertical families (N–S and E–W planes) would make
  * every horizontal direction cost the same, so a sum cannot favour both axes
  * over the diagonal (the rectilinear mazes of Fig. 15). The min is cheap
- * wherever d follows ANY one family: 0 in the planes of the heaviest family,
- * W − w_k in those of family k (a lighter family attracts less), W along a
- * direction normal to every plane. With one family both forms give
- * w (n·d̂)². A zero direction gives Σ w_k (sum) or W (min), the most
- * expensive values.
+ * wherever d follows ANY one family. A zero direction gives Σ w_k (sum) or W
+ * (min), the most expensive values.
  * Time complexity: O(number of fracture families).
  */
-double karst_cost_fracture_term(const karst_scenario_t *sc, const double dir[3]) {
-  return fracture_term(sc, NULL, dir);
+double karst_cost_fracture_term(const karst_geology_t *g, const double dir[3]) {
+  return fracture_term(g, dir);
 }
 
 /**
  * Cost per metre c(p, d) = w0 + wL cL(p) + wF cF(d) + wπ π(p) (Paris et al.
  * 2021, §4.2, with the base cost w0 > 0 that keeps every path finite and
- * the A* heuristic meaningful). The prescribed-path factor applies to edges,
- * not to points (see karst_cost_edge).
- * @param sc the scenario; @param p the point; @param dir the direction (any length).
+ * the A* heuristic meaningful). The factors of fractures (discs), faults and
+ * prescribed paths apply to edges, not to points (see karst_cost_edge).
+ * @param g the geology; @param p the point; @param dir the direction (any length).
  * @return the cost per metre. Time complexity: O(horizons + fractures + tree size).
  */
-double karst_cost_point(const karst_scenario_t *sc, const double p[3], const double dir[3]) {
-  const karst_cost_weights_t *w = &sc->cost;
-  return w->w0 + w->horizon * karst_cost_horizon_term(sc, p) +
-         w->fracture * karst_cost_fracture_term(sc, dir) +
-         w->permeability * karst_permeability_eval(&sc->permeability, p);
+double karst_cost_point(const karst_geology_t *g, const double p[3], const double dir[3]) {
+  const karst_cost_weights_t *w = &g->sc->cost;
+  return w->w0 + w->horizon * karst_geology_horizon_term(g, p) +
+         w->fracture * karst_cost_fracture_term(g, dir) +
+         w->permeability * karst_geology_permeability(g, p);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -319,20 +157,40 @@ static const double GL2_X[2] = {0.21132486540518711775, 0.78867513459481288225};
 static const double GL3_X[3] = {0.11270166537925831148, 0.5, 0.88729833462074168852};
 static const double GL3_W[3] = {5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0};
 
-/* karst_horizon_elevation of horizon h with the model's precomputed
- * trigonometry (same operations on the same values). */
+/* Elevation of horizon h (its surface in the geology). */
 static double plane_elevation(const karst_i_cost_model_t *m, int h, double x, double y) {
-  if (!m->horizon_plane) return karst_horizon_elevation(&m->sc->horizons[h], x, y);
-  const double *P = m->horizon_plane + 6 * h;
-  if (m->sc->horizons[h].dip == 0.0) return P[0];
-  double along = (x - P[1]) * P[3] + (y - P[2]) * P[4];
-  return P[0] - along * P[5];
+  return karst_i_surf_z(&m->geo->horizon[h], x, y);
 }
 
 /* ∫_0^1 cL(a + s(b − a)) ds. */
 static double horizon_integral(const karst_i_cost_model_t *m, const double a[3], const double b[3],
                                double len) {
   const karst_scenario_t *sc = m->sc;
+  if (!m->horizons_planar) { /* folded horizons: the offset is not linear along the edge */
+    /* An edge that stays farther than every horizon's radius from it has cL = 1 all along: the
+     * horizon's exact range over the edge's x-y box decides (most edges are far from any). */
+    double zlo_e = fmin(a[2], b[2]), zhi_e = fmax(a[2], b[2]);
+    double x0 = fmin(a[0], b[0]), x1 = fmax(a[0], b[0]), y0 = fmin(a[1], b[1]),
+           y1 = fmax(a[1], b[1]);
+    int near = 0;
+    for (int h = 0; h < sc->n_horizons && !near; h++) {
+      double lo, hi, r = sc->horizons[h].radius;
+      karst_i_surf_range_bound(&m->geo->horizon[h], x0, x1, y0, y1, &lo, &hi);
+      near = !(zlo_e >= hi + r || zhi_e <= lo - r); /* NAN (undefined there): near, to be safe */
+    }
+    if (!near) return 1.0;
+    double n = ceil(len / (KARST_COST_STEP_FRACTION * m->horizon_rmin));
+    n = clampd(n, 1.0, KARST_COST_MAX_SUBINTERVALS);
+    double sum = 0.0, h = 1.0 / n;
+    for (double i = 0; i < n; i++)
+      for (int q = 0; q < 3; q++) {
+        double s = (i + GL3_X[q]) * h, p[3];
+        for (int k = 0; k < 3; k++)
+          p[k] = a[k] + s * (b[k] - a[k]);
+        sum += GL3_W[q] * h * karst_geology_horizon_term(m->geo, p);
+      }
+    return sum;
+  }
   double al[MAX_EXACT_HORIZONS], be[MAX_EXACT_HORIZONS], r[MAX_EXACT_HORIZONS];
   int n_active = 0;
   double rmin = INFINITY;
@@ -363,7 +221,7 @@ static double horizon_integral(const karst_i_cost_model_t *m, const double a[3],
         double s = (i + GL2_X[q]) * h, p[3];
         for (int k = 0; k < 3; k++)
           p[k] = a[k] + s * (b[k] - a[k]);
-        sum += 0.5 * h * karst_cost_horizon_term(sc, p);
+        sum += 0.5 * h * karst_geology_horizon_term(m->geo, p);
       }
     return sum;
   }
@@ -596,15 +454,22 @@ unknown:
 }
 
 karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
-                                      const karst_scenario_t *sc) {
-  karst_error_t err = KARST_SUCCESS;
+                                      const karst_geology_t *geo) {
+  const karst_scenario_t *sc = geo->sc;
+  m->geo = geo;
   m->sc = sc;
-  m->n_fractures = sc->n_fractures;
-  m->normals = NULL;
-  m->horizon_plane = NULL;
   m->perm_boxes = NULL;
   m->n_perm_boxes = -1;
   m->prescribed_cos = cos(KARST_COST_PRESCRIBED_MAX_ANGLE * M_PI / 180.0);
+  m->horizons_planar = 1;
+  m->horizon_rmin = INFINITY;
+  for (int h = 0; h < sc->n_horizons; h++) {
+    m->horizons_planar &= geo->horizon[h].kind == KARST_I_SURF_PLANE;
+    m->horizon_rmin = fmin(m->horizon_rmin, sc->horizons[h].radius);
+  }
+  m->n_dfn = 0;
+  for (int k = 0; k < sc->n_fractures; k++)
+    m->n_dfn += sc->fractures[k].dfn;
   /* Smallest permeability feature, for the quadrature step. */
   double fmin_size = INFINITY;
   const karst_perm_node_t *stack[64];
@@ -628,66 +493,128 @@ karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
   }
   m->perm_step = KARST_COST_STEP_FRACTION * fmin_size;
   if (!(m->perm_step > 0)) m->perm_step = INFINITY;
-  /* What follows only saves time: on failure the model stays usable (the
-   * NULL tables are computed on the fly). */
-  if (sc->n_horizons > 0) {
-    m->horizon_plane = malloc(sizeof(double) * 6 * (size_t)sc->n_horizons);
-    if (!m->horizon_plane) {
-      err = karst_set_error(ctx, KARST_ENOMEM, "no memory for %d horizons", sc->n_horizons);
-      goto cleanup;
-    }
-    const double d2r = M_PI / 180.0; /* as karst_horizon_elevation */
-    for (int h = 0; h < sc->n_horizons; h++) {
-      const karst_horizon_t *H = &sc->horizons[h];
-      double *P = m->horizon_plane + 6 * h, az = H->dip_direction * d2r;
-      P[0] = H->elevation, P[1] = H->origin[0], P[2] = H->origin[1];
-      P[3] = sin(az), P[4] = cos(az), P[5] = tan(H->dip * d2r);
-    }
-  }
-  if (sc->n_fractures > 0) {
-    m->normals = malloc(sizeof(double) * 3 * (size_t)sc->n_fractures);
-    if (!m->normals) {
-      err =
-          karst_set_error(ctx, KARST_ENOMEM, "no memory for %d fracture normals", sc->n_fractures);
-      goto cleanup;
-    }
-    for (int k = 0; k < sc->n_fractures; k++)
-      karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, m->normals + 3 * k);
-  }
-  err = perm_support_boxes(ctx, m);
-cleanup:
+  karst_error_t err = perm_support_boxes(ctx, m);
   if (err != KARST_SUCCESS) karst_i_cost_model_destroy(m);
   return err;
 }
 
 void karst_i_cost_model_destroy(karst_i_cost_model_t *m) {
-  free(m->normals);
-  free(m->horizon_plane);
   free(m->perm_boxes);
-  m->normals = NULL;
-  m->horizon_plane = NULL;
   m->perm_boxes = NULL;
   m->n_perm_boxes = -1;
 }
 
 double karst_i_cost_edge(const karst_i_cost_model_t *m, const double a[3], const double b[3]) {
-  if (!karst_cost_in_bedrock(m->sc, a) || !karst_cost_in_bedrock(m->sc, b)) return INFINITY;
+  if (!karst_geology_in_bedrock(m->geo, a) || !karst_geology_in_bedrock(m->geo, b)) return INFINITY;
   return karst_i_cost_edge_inside(m, a, b);
+}
+
+/* The factor a plane of unit normal n gives an edge of direction d (|d| = len) that runs in it:
+ * f along the plane, 1 across it, f + (1 − f)(n·d̂)² between (the form of the fracture term). */
+static double plane_factor(double f, const double n[3], const double d[3], double len) {
+  double nd = dot3(n, d) / len;
+  return f + (1.0 - f) * nd * nd;
+}
+
+typedef struct {
+  const karst_scenario_t *sc;
+  const double *a, *b, *d;
+  double len, best;
+} disc_query_t;
+
+/* An edge lies in a disc of a fracture network when both its ends are within the family's
+ * influence distance of the disc's plane and its midpoint projects inside the disc. */
+static int disc_visit(const karst_disc_t *dc, void *arg) {
+  disc_query_t *q = arg;
+  const karst_fracture_t *fr = &q->sc->fractures[dc->family];
+  double ea = 0, eb = 0, m[3];
+  for (int k = 0; k < 3; k++) {
+    ea += dc->n[k] * (q->a[k] - dc->c[k]);
+    eb += dc->n[k] * (q->b[k] - dc->c[k]);
+    m[k] = 0.5 * (q->a[k] + q->b[k]) - dc->c[k];
+  }
+  if (!(fabs(ea) <= fr->influence && fabs(eb) <= fr->influence)) return 0;
+  double h = dot3(dc->n, m), r2 = dot3(m, m) - h * h;
+  if (!(r2 <= dc->r * dc->r)) return 0;
+  double f = plane_factor(fr->factor, dc->n, q->d, q->len);
+  if (f < q->best) q->best = f;
+  return 0;
+}
+
+/* The cost factor of the faults on edge [a, b] (conduits), and the crossing costs added
+ * (barriers). A conduit fault's damage zone is the slab |n·(p − c)| <= w/2 within the disc
+ * radius (measured at the middle of the edge's part inside the slab): the part of the edge inside
+ * it, a fraction φ, costs plane_factor times its cost, so the edge's factor is 1 − φ (1 − f).
+ * A barrier adds crossing_cost when the edge crosses the plane (its ends on opposite sides, or
+ * one on it) within the radius. */
+static void fault_terms(const karst_i_cost_model_t *m, const double a[3], const double b[3],
+                        const double d[3], double len, double *factor, double *added) {
+  const karst_scenario_t *sc = m->sc;
+  *factor = 1.0, *added = 0.0;
+  for (int i = 0; i < sc->n_faults; i++) {
+    const karst_fault_t *F = &sc->faults[i];
+    const double *n = m->geo->fault_normal + 3 * i;
+    double ea = 0, eb = 0;
+    for (int k = 0; k < 3; k++)
+      ea += n[k] * (a[k] - F->center[k]), eb += n[k] * (b[k] - F->center[k]);
+    if (F->barrier) {
+      if ((ea > 0 && eb > 0) || (ea < 0 && eb < 0) || (ea == 0 && eb == 0)) continue;
+      double t = ea == eb ? 0.0 : ea / (ea - eb), x[3];
+      for (int k = 0; k < 3; k++)
+        x[k] = a[k] + t * d[k] - F->center[k];
+      if (isfinite(F->radius) && !(dot3(x, x) <= F->radius * F->radius)) continue;
+      *added += F->crossing_cost;
+      continue;
+    }
+    double hw = 0.5 * F->damage_zone, t0 = 0.0, t1 = 1.0;
+    if (ea == eb) {
+      if (fabs(ea) > hw) continue;
+    } else {
+      double u = (-hw - ea) / (eb - ea), v = (hw - ea) / (eb - ea);
+      if (u > v) {
+        double w = u;
+        u = v, v = w;
+      }
+      t0 = fmax(t0, u), t1 = fmin(t1, v);
+      if (!(t1 > t0)) continue;
+    }
+    if (isfinite(F->radius)) {
+      double tm = 0.5 * (t0 + t1), x[3];
+      for (int k = 0; k < 3; k++)
+        x[k] = a[k] + tm * d[k] - F->center[k];
+      double h = dot3(n, x);
+      if (!(dot3(x, x) - h * h <= F->radius * F->radius)) continue;
+    }
+    double f = plane_factor(F->factor, n, d, len);
+    *factor = fmin(*factor, 1.0 - (t1 - t0) * (1.0 - f));
+  }
 }
 
 double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3],
                                 const double b[3]) {
   const karst_scenario_t *sc = m->sc;
-  if (!karst_i_segment_interior_in_bedrock(sc, a, b)) return INFINITY;
+  if (!karst_geology_segment_in_bedrock(m->geo, a, b)) return INFINITY;
   double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   double len = sqrt(dot3(d, d));
   if (len == 0.0) return 0.0;
   const karst_cost_weights_t *w = &sc->cost;
   double per_metre = w->w0;
-  if (w->fracture != 0) per_metre += w->fracture * fracture_term(sc, m->normals, d);
+  if (w->fracture != 0) per_metre += w->fracture * fracture_term(m->geo, d);
   if (w->horizon != 0) per_metre += w->horizon * horizon_integral(m, a, b, len);
   if (w->permeability != 0) per_metre += w->permeability * perm_integral(m, a, b, len);
-  double c = len * per_metre;
+  double c = len * per_metre, factor = 1.0, added = 0.0;
+  if (m->n_dfn > 0) {
+    double mid[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+    disc_query_t q = {sc, a, b, d, len, 1.0};
+    karst_i_geology_discs_at(m->geo, mid, disc_visit, &q);
+    factor = q.best;
+  }
+  if (sc->n_faults > 0) {
+    double f;
+    fault_terms(m, a, b, d, len, &f, &added);
+    factor = fmin(factor, f); /* the smallest factor applies (see the lower bound) */
+  }
+  c = c * factor + added;
   if (sc->n_prescribed > 0 && on_prescribed_path(m, a, b, len)) c *= w->prescribed;
   return c;
 }
@@ -695,23 +622,28 @@ double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3]
 /**
  * Cost of the straight edge [a, b]: the line integral ∫ c(p(t), d) dt of the
  * cost per metre along the segment (Paris et al. 2021, §4, the functional χ
- * restricted to one segment), times cost.prescribed when the edge lies on a
- * prescribed path (both ends within sampling.feature_radius of the key-point
- * pair's segment and at most KARST_COST_PRESCRIBED_MAX_ANGLE degrees from
- * it). The fracture term depends on the direction only and is exact. The
- * horizon term is integrated exactly (piecewise closed form of the smooth
- * step, see horizon_integral). The permeability term is exact where π is
- * constant along the edge and otherwise uses composite Gauss–Legendre with
- * sub-intervals of at most KARST_COST_STEP_FRACTION times the smallest
- * permeability feature, split at the primitives' kinks (see perm_integral).
- * @param sc the scenario; @param a, b the end points.
+ * restricted to one segment); times the factor of the fracture disc it lies in
+ * (the smallest, docs/generation.md) and of the conduit faults whose damage
+ * zone it runs through, plus the crossing cost of the barrier faults it
+ * crosses; times cost.prescribed when the edge lies on a prescribed path (both
+ * ends within sampling.feature_radius of the key-point pair's segment and at
+ * most KARST_COST_PRESCRIBED_MAX_ANGLE degrees from it). The fracture term
+ * depends on the direction only and is exact. The horizon term is integrated
+ * exactly for planar horizons (piecewise closed form of the smooth step, see
+ * horizon_integral) and by composite 3-point Gauss–Legendre for folded ones.
+ * The permeability term is exact where π is constant along the edge and
+ * otherwise uses composite Gauss–Legendre with sub-intervals of at most
+ * KARST_COST_STEP_FRACTION times the smallest permeability feature, split at
+ * the primitives' kinks (see perm_integral).
+ * @param g the geology; @param a, b the end points.
  * @return the cost (>= 0), INFINITY when the segment leaves the bedrock or a
  *         coordinate is not finite.
- * Time complexity: O(horizons^2 + fractures + tree size × quadrature points).
+ * Time complexity: O(horizons^2 + fractures + faults + discs near the edge +
+ * tree size × quadrature points).
  */
-double karst_cost_edge(const karst_scenario_t *sc, const double a[3], const double b[3]) {
+double karst_cost_edge(const karst_geology_t *g, const double a[3], const double b[3]) {
   karst_i_cost_model_t m;
-  (void)karst_i_cost_model_init(NULL, &m, sc); /* on failure, still usable: tables on the fly */
+  if (karst_i_cost_model_init(NULL, &m, g) != KARST_SUCCESS) return NAN;
   double c = karst_i_cost_edge(&m, a, b);
   karst_i_cost_model_destroy(&m);
   return c;
@@ -754,41 +686,54 @@ static double sym3_min_eigenvalue(double A[3][3]) {
  *
  * Proof. c(p, d) = w0 + wL cL(p) + wF cF(d) + wπ π(p) with all weights >= 0.
  * (i) cL = g(·) >= 0 since g >= 0 on [0, 1] and g = 1 beyond; without horizons
- * cL = 1. (ii) For unit d, cF(d) = Σ w_k (n_k·d)² = dᵀ M d with
- * M = Σ w_k n_k n_kᵀ (because (n·d)² = dᵀ n nᵀ d), and dᵀ M d >= λmin(M) by
- * the Rayleigh quotient, attained by the eigenvector of λmin (with the
- * paper's printed form Σ w_k (1 − (n_k·d)²) = Σ w_k − dᵀ M d the same
- * argument gives Σ w_k − λmax(M)). With cost.fracture_combine = min,
- * cF(d) = min_k [W − w_k + w_k (n_k·d)²] >= min_k (W − w_k) = 0 (W = max w_k,
- * each term >= 0), with equality in the plane of the heaviest family: the
- * bound is 0.
+ * cL = 1. (ii) For unit d, cF(d) = Σ w_k dᵀ T_k d = dᵀ M d with
+ * M = Σ w_k T_k (T_k = E[n nᵀ] of family k, n_k n_kᵀ without dispersion), and
+ * dᵀ M d >= λmin(M) by the Rayleigh quotient, attained by the eigenvector of
+ * λmin. With cost.fracture_combine = min, cF(d) = min_k [W − w_k + w_k dᵀT_k d]
+ * >= min_k [W − w_k + w_k λmin(T_k)] >= 0 (W = max w_k), where T_k has the
+ * eigenvalues c_k along its pole and (1 − c_k)/2 across it
+ * (karst_i_fisher_tensor), so λmin(T_k) = min(c_k, (1 − c_k)/2): 0 without
+ * dispersion, which makes the bound 0 in the plane of the heaviest family.
  * (iii) π is clamped to [0, 1]; every node returns a leaf resistance, the
  * background, a smooth-step mix of the two, their min, max or a weighted
  * mean, so π >= πmin = min(background, leaf resistances). Hence c(p, d) >=
- * w0 + wL·[no horizon] + wF λmin(M) + wπ πmin. An edge's cost is a
+ * w0 + wL·[no horizon] + wF cFmin + wπ πmin. An edge's cost is a
  * quadrature of c with positive weights summing to its length (or exact),
- * so it is >= length × that bound; a prescribed edge multiplies by
+ * so it is >= length × that bound. (iv) The edge factors: a fracture disc's
+ * f + (1 − f)(n·d̂)² >= f, a conduit fault's 1 − φ (1 − f_eff) >= f_eff >= f
+ * (φ in [0, 1]), a barrier only adds; the factors of several faults are not
+ * multiplied (the smallest applies), so the edge is >= length × bound × fmin,
+ * fmin the smallest disc or fault factor. A prescribed edge multiplies by
  * cost.prescribed, hence the factor min(1, prescribed) when prescribed paths
- * exist. The result is reduced by the relative KARST_COST_LB_MARGIN so that
- * rounding (Jacobi error ~1e-15 ‖M‖, summation of edge costs) cannot break it.
+ * exist. The routing factors of the vadose and phreatic stages are >= 1
+ * (docs/generation.md), so the bound holds for them too. The result is
+ * reduced by the relative KARST_COST_LB_MARGIN so that rounding (Jacobi error
+ * ~1e-15 ‖M‖, summation of edge costs) cannot break it.
  * @param sc the scenario.
  * @return the bound (>= 0).
- * Time complexity: O(fractures + tree size).
+ * Time complexity: O(fractures + faults + tree size).
  */
 double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
   const karst_cost_weights_t *w = &sc->cost;
-  double M[3][3] = {{0}};
+  double M[3][3] = {{0}}, W = 0.0;
+  for (int k = 0; k < sc->n_fractures; k++)
+    W = fmax(W, sc->fractures[k].weight);
+  double cf_min = sc->n_fractures > 0 ? W : 0.0;
   for (int k = 0; k < sc->n_fractures; k++) {
-    double n[3], wk = sc->fractures[k].weight;
+    double n[3], T[9], wk = sc->fractures[k].weight;
     karst_plane_normal(sc->fractures[k].dip_direction, sc->fractures[k].dip, n);
+    karst_i_fisher_tensor(n, sc->fractures[k].kappa, T);
     for (int i = 0; i < 3; i++)
       for (int j = 0; j < 3; j++)
-        M[i][j] += wk * n[i] * n[j];
+        M[i][j] += wk * T[3 * i + j];
+    double c = T[0] * n[0] * n[0] + T[4] * n[1] * n[1] + T[8] * n[2] * n[2] +
+               2 * (T[1] * n[0] * n[1] + T[2] * n[0] * n[2] + T[5] * n[1] * n[2]);
+    double lam = fmax(0.0, fmin(c, 0.5 * (1.0 - c)));
+    cf_min = fmin(cf_min, W - wk + wk * lam);
   }
-  double cf_min = sc->n_fractures > 0 ? fmax(0.0, sym3_min_eigenvalue(M)) : 0.0;
-  /* min combination: each candidate W − w_k (1 − (n_k·d)²) >= W − w_k >= 0, and the heaviest
-   * family's candidate is 0 for d in its plane, so the minimum over unit d is exactly 0. */
-  if (sc->cost.fracture_combine == KARST_FRACTURE_MIN) cf_min = 0.0;
+  if (sc->cost.fracture_combine != KARST_FRACTURE_MIN)
+    cf_min = sc->n_fractures > 0 ? fmax(0.0, sym3_min_eigenvalue(M)) : 0.0;
+  cf_min = fmax(0.0, cf_min);
   double pi_min = sc->permeability.background;
   const karst_perm_node_t *stack[64];
   int top = 0;
@@ -807,6 +752,12 @@ double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
   pi_min = clampd(pi_min, 0.0, 1.0);
   double lb = w->w0 + w->horizon * (sc->n_horizons == 0 ? 1.0 : 0.0) + w->fracture * cf_min +
               w->permeability * pi_min;
+  double fmin_edge = 1.0;
+  for (int k = 0; k < sc->n_fractures; k++)
+    if (sc->fractures[k].dfn) fmin_edge = fmin(fmin_edge, sc->fractures[k].factor);
+  for (int i = 0; i < sc->n_faults; i++)
+    if (!sc->faults[i].barrier) fmin_edge = fmin(fmin_edge, sc->faults[i].factor);
+  lb *= clampd(fmin_edge, 0.0, 1.0);
   if (sc->n_prescribed > 0 && w->prescribed < 1.0) lb *= w->prescribed;
   lb *= 1.0 - KARST_COST_LB_MARGIN;
   return lb > 0 ? lb : 0.0;

@@ -5,16 +5,16 @@
 #define KARST_COST_INTERNAL_H
 
 #include "karst/cost.h"
+#include "karst/geology.h"
 
 typedef struct karst_i_cost_model {
-  const karst_scenario_t *sc;
-  int n_fractures;
-  double *normals;       /**< 3 * n_fractures unit normals, or NULL (computed on the fly) */
+  const karst_geology_t *geo;
+  const karst_scenario_t *sc; /**< the geology's */
   double perm_step;      /**< max quadrature sub-interval for cπ (m), INFINITY if π is constant */
   double prescribed_cos; /**< cos(KARST_COST_PRESCRIBED_MAX_ANGLE) */
-  /** Per horizon: elevation, origin x, y, sin and cos of the dip direction,
-   * tan of the dip (karst_horizon_elevation without its trigonometry), or NULL. */
-  double *horizon_plane;
+  int horizons_planar;   /**< every horizon a plane: the horizon integral is exact */
+  double horizon_rmin;   /**< smallest horizon radius (quadrature step of folded horizons) */
+  int n_dfn;             /**< fracture families realised as discs */
   /** Closed boxes (lo[3], hi[3]) outside which every permeability primitive
    * returns the background, so that the tree is constant along an edge
    * missing all of them; n_perm_boxes < 0 when not known (then no shortcut). */
@@ -25,7 +25,7 @@ typedef struct karst_i_cost_model {
 
 /** Precompute what the scenario's edges share. Allocates the normals; ENOMEM on failure. */
 karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
-                                      const karst_scenario_t *sc);
+                                      const karst_geology_t *geo);
 void karst_i_cost_model_destroy(karst_i_cost_model_t *m);
 
 /** karst_cost_edge with a precomputed model; thread-safe (reads only). */
@@ -34,14 +34,5 @@ double karst_i_cost_edge(const karst_i_cost_model_t *m, const double a[3], const
 /** karst_i_cost_edge for end points already known to be in the bedrock. */
 double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3],
                                 const double b[3]);
-
-/** Whether [a, b] stays in the bedrock, given that both end points are in it. */
-int karst_i_segment_interior_in_bedrock(const karst_scenario_t *sc, const double a[3],
-                                        const double b[3]);
-
-/** Largest terrain elevation over the rectangle [x0, x1] x [y0, y1] (exact for the bilinear grid).
- */
-double karst_i_terrain_max_rect(const karst_terrain_t *t, double x0, double x1, double y0,
-                                double y1);
 
 #endif

@@ -12,6 +12,8 @@
 #include "karst/amplification.h"
 #include "karst/classification.h"
 #include "karst/cost.h"
+#include "karst/geology.h"
+#include "karst/routing.h"
 #include "karst/sampling.h"
 #include "karst/skeleton.h"
 
@@ -92,55 +94,16 @@ static int count_pieces(const karst_graph_t *g, karst_int_t n_keys, karst_int_t 
   return 0;
 }
 
-/*
- * Every key point must be joined to the others. Key points are grouped by
- * finite distance (connected components of the distance matrix); the main
- * group is the one holding the first spring (or key point 0 without a
- * spring). The first key point outside it is named in the error, at its
- * FILE:LINE:COLUMN in the scenario, with the number of connected pieces of
- * the graph and what to change.
- */
-static karst_error_t check_connected(karst_ctx_t *ctx, const karst_scenario_t *sc,
-                                     const karst_graph_t *g, karst_int_t n, const double *dist) {
-  karst_int_t ref = 0;
-  for (karst_int_t i = 0; i < n; i++)
-    if (sc->key_points[i].type == KARST_KEYPOINT_SPRING) {
-      ref = i;
-      break;
-    }
-  for (karst_int_t i = 0; i < n; i++) {
-    if (dist[ref * n + i] < INFINITY) continue;
-    const karst_keypoint_t *k = &sc->key_points[i], *r = &sc->key_points[ref];
-    /* When the reference itself is the isolated one, name it instead. */
-    karst_int_t reach_ref = 0, reach_i = 0;
-    for (karst_int_t j = 0; j < n; j++) {
-      reach_ref += dist[ref * n + j] < INFINITY;
-      reach_i += dist[i * n + j] < INFINITY;
-    }
-    if (reach_ref < reach_i) k = r, r = &sc->key_points[i];
-    char where[KARST_ERRMSG_MAX / 4] = "", rline[32] = "", pieces_text[256] = "";
-    if (sc->path && k->line > 0)
-      snprintf(where, sizeof where, "%s:%d:%d: ", sc->path, k->line, k->column > 0 ? k->column : 1);
-    if (r->line > 0) snprintf(rline, sizeof rline, " (line %d)", r->line);
-    karst_int_t pieces = 0, key_pieces = 0;
-    if (count_pieces(g, n, &pieces, &key_pieces) == 0)
-      snprintf(pieces_text, sizeof pieces_text,
-               "the k-nearest-neighbour graph of %lld samples falls into %lld connected "
-               "piece%s, and the %lld key points lie in %lld of them",
-               (long long)g->n, (long long)pieces, pieces == 1 ? "" : "s", (long long)n,
-               (long long)key_pieces);
-    else
-      snprintf(pieces_text, sizeof pieces_text, "the k-nearest-neighbour graph is disconnected");
-    return karst_set_error(
-        ctx, KARST_EUNREACHABLE,
-        "%skey point '%s' at (%.2f, %.2f, %.2f) cannot be connected to '%s'%s: no path through "
-        "the bedrock joins them; %s. Raise sampling.k (now %d) or lower sampling.fill_radius "
-        "(now %g m) so that the samples join up, and check that the terrain or the domain box "
-        "does not cut the key point off",
-        where, k->name, k->p[0], k->p[1], k->p[2], r->name, rline, pieces_text, sc->sampling.k,
-        sc->sampling.fill_radius);
-  }
-  return KARST_SUCCESS;
+/* Append to ctx->errmsg how the graph falls apart, when a key point cannot be reached. */
+static void explain_pieces(karst_ctx_t *ctx, const karst_graph_t *g, karst_int_t n_keys) {
+  karst_int_t pieces = 0, key_pieces = 0;
+  if (!ctx || count_pieces(g, n_keys, &pieces, &key_pieces) != 0) return;
+  size_t len = strlen(ctx->errmsg);
+  snprintf(ctx->errmsg + len, KARST_ERRMSG_MAX - len,
+           " (the k-nearest-neighbour graph of %lld samples falls into %lld connected piece%s, "
+           "and the %lld key points lie in %lld of them)",
+           (long long)g->n, (long long)pieces, pieces == 1 ? "" : "s", (long long)n_keys,
+           (long long)key_pieces);
 }
 
 static double total_length(const karst_network_t *net) {
@@ -151,20 +114,19 @@ static double total_length(const karst_network_t *net) {
 }
 
 /*
- * Everything after the graph: key-point distances, γ-skeleton, amplification
- * (ramification + midpoint displacement), classification. Samples 0 ..
+ * Everything after the graph: routing (two-stage paths between the key points), skeleton,
+ * amplification (ramification + midpoint displacement), classification. Samples 0 ..
  * n_key_points-1 of the graph are the scenario's key points.
  */
-karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario_t *sc,
+karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_t *geo,
                                           uint64_t seed, uint64_t realisation,
                                           const karst_graph_t *g, double lb_per_metre,
                                           karst_network_t *net, karst_generate_stats_t *stats) {
   karst_error_t err = KARST_SUCCESS;
+  const karst_scenario_t *sc = karst_geology_scenario(geo);
   const karst_int_t n = sc->n_key_points;
-  karst_int_t *keys = NULL;
-  double *dist = NULL;
-  int32_t *pred = NULL;
-  float *bound = NULL;
+  karst_routing_plan_t plan;
+  karst_routing_plan_init(&plan);
   karst_skeleton_t sk;
   int sk_ready = 0;
   karst_network_t out;
@@ -180,38 +142,14 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
   if (!(sc->tortuosity >= 0 && sc->tortuosity <= 1))
     return karst_set_error(ctx, KARST_EINVAL, "tortuosity must be within [0, 1], got %g",
                            sc->tortuosity);
-  keys = malloc((size_t)n * sizeof *keys);
-  dist = malloc((size_t)(n * n) * sizeof *dist);
-  if (!keys || !dist) {
-    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory for %lld key points", (long long)n);
-    goto cleanup;
-  }
-  for (karst_int_t i = 0; i < n; i++)
-    keys[i] = i;
 
-  karst_progress(ctx, "paths", 0, 1);
   t = karst_i_now();
-  /* One Dijkstra per key point gives the distances and, per key point, what the skeleton
-   * needs to lay its paths (see karst_paths_keypoint_distances for why rows beat A* pairs):
-   * with plain union (reuse = 1) the shortest-path trees it reads the paths from; with path
-   * sharing the distance rows that make its A* heuristic tight (karst_paths_astar_reuse). */
-  const int sharing = sc->reuse < 1.0;
-  if (n > 1 && (size_t)(n - 1) * (size_t)g->n <= KARST_I_TREE_BUDGET / sizeof(int32_t)) {
-    if (sharing)
-      bound = malloc((size_t)(n - 1) * (size_t)g->n * sizeof *bound);
-    else
-      pred = malloc((size_t)(n - 1) * (size_t)g->n * sizeof *pred);
-    if (!pred && !bound) {
-      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory for the key-point trees");
-      goto cleanup;
-    }
-  }
-  err = pred    ? karst_paths_keypoint_trees(ctx, g, n, keys, dist, pred)
-        : bound ? karst_paths_keypoint_bounds(ctx, g, n, keys, dist, bound)
-                : karst_paths_keypoint_distances(ctx, g, n, keys, lb_per_metre,
-                                                 KARST_I_KEYPOINT_METHOD, dist);
+  /* One backward search per spring and per waypoint gives the routed costs and what the skeleton
+   * needs to lay its paths: with plain union (reuse = 1) the successor rows it reads the paths
+   * from; with path sharing the rows that make its A* heuristic tight. */
+  err = karst_routing_plan(ctx, geo, g, sc->reuse >= 1.0, &plan);
+  if (err == KARST_EUNREACHABLE) explain_pieces(ctx, g, n);
   if (err) goto cleanup;
-  if ((err = check_connected(ctx, sc, g, n, dist))) goto cleanup;
   if (stats) stats->stage_seconds[KARST_STAGE_PATHS] = karst_i_now() - t;
 
   karst_progress(ctx, "skeleton", 0, 1);
@@ -219,17 +157,19 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
   if ((err = karst_skeleton_init(ctx, &sk, g))) goto cleanup;
   sk_ready = 1;
   karst_int_t kept = 0;
-  if ((err = karst_skeleton_build(ctx, g, n, keys, dist, pred, bound, sc->gamma, sc->reuse,
-                                  lb_per_metre, &sk, &kept)))
+  if ((err = karst_skeleton_build_routes(ctx, g, &plan, sc->reuse, lb_per_metre, &sk, &kept)))
     goto cleanup;
   if (stats) {
     stats->n_skeleton_nodes = sk.net.n_nodes;
     stats->skeleton_length = total_length(&sk.net);
   }
+  double *nspring = karst_network_attr_find(&sk.net, KARST_ATTR_NODE, "spring")->data;
   for (karst_int_t i = 0; i < n; i++) {
-    if ((err = karst_skeleton_mark_node(ctx, &sk, g, keys[i], key_kind(sc->key_points[i].type))))
+    if ((err = karst_skeleton_mark_node(ctx, &sk, g, i, key_kind(sc->key_points[i].type))))
       goto cleanup;
-    if (karst_network_set_label(&sk.net, sk.node_of_vertex[keys[i]], sc->key_points[i].name)) {
+    karst_int_t node = sk.node_of_vertex[i];
+    nspring[node] = plan.key_spring[i];
+    if (karst_network_set_label(&sk.net, node, sc->key_points[i].name)) {
       err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
       goto cleanup;
     }
@@ -242,16 +182,33 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
   karst_progress(ctx, "amplification", 0, 1);
   t = karst_i_now();
   karst_rng_derive(&r_amp, seed, realisation, KARST_I_STREAM_AMPLIFICATION);
-  if ((err = karst_amplification_ramify(ctx, sc, g, &r_amp, NULL, &sk, NULL, NULL))) goto cleanup;
+  if ((err = karst_amplification_ramify(ctx, geo, g, &plan, &r_amp, NULL, &sk, NULL, NULL)))
+    goto cleanup;
   karst_skeleton_mark_junctions(&sk);
-  if ((err = karst_amplification_displace(ctx, sc, sc->tortuosity, &r_amp, NULL, &sk.net, &out)))
+  if ((err = karst_amplification_displace(ctx, geo, sc->tortuosity, &r_amp, NULL, &sk.net, &out)))
     goto cleanup;
   if (stats) stats->stage_seconds[KARST_STAGE_AMPLIFICATION] = karst_i_now() - t;
 
   karst_progress(ctx, "classification", 0, 1);
   t = karst_i_now();
   karst_rng_derive(&r_class, seed, realisation, KARST_I_STREAM_CLASSIFICATION);
-  if ((err = karst_classification_run(ctx, sc, &r_class, &out))) goto cleanup;
+  if ((err = karst_classification_run(ctx, geo, &r_class, &out))) goto cleanup;
+  {
+    /* What the integer codes of "zone" and "spring" stand for, as field data of network.vtp. */
+    const char *zones[KARST_ZONE_COUNT], *springs[KARST_SCENARIO_MAX_SPRINGS];
+    int ns = karst_geology_n_springs(geo);
+    for (int z = 0; z < KARST_ZONE_COUNT; z++)
+      zones[z] = karst_zone_name(z);
+    for (int i = 0; i < ns && i < KARST_SCENARIO_MAX_SPRINGS; i++)
+      springs[i] = sc->key_points[karst_geology_spring_key(geo, i)].name;
+    if (karst_network_set_strings(&out, "zone_names", KARST_ZONE_COUNT, zones) ||
+        karst_network_set_strings(&out, "spring_names",
+                                  ns < KARST_SCENARIO_MAX_SPRINGS ? ns : KARST_SCENARIO_MAX_SPRINGS,
+                                  springs)) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+      goto cleanup;
+    }
+  }
   if (sc->name && !out.title) {
     out.title = strdup(sc->name);
     if (!out.title) {
@@ -273,10 +230,7 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
 cleanup:
   if (sk_ready) karst_skeleton_destroy(&sk);
   karst_network_destroy(&out);
-  free(keys);
-  free(dist);
-  free(pred);
-  free(bound);
+  karst_routing_plan_destroy(&plan);
   return err;
 }
 
@@ -307,6 +261,7 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
   karst_samples_t *smp = samples ? samples : &own;
   karst_graph_t g;
   karst_rng_t r;
+  karst_geology_t *geo = NULL;
   karst_samples_init(&own);
   karst_graph_init(&g);
   if (stats) memset(stats, 0, sizeof *stats);
@@ -320,14 +275,15 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
 
   karst_progress(ctx, "sampling", 0, 1);
   double t = karst_i_now();
+  if ((err = karst_geology_create(ctx, sc, seed, realisation, &geo))) goto cleanup;
   karst_rng_derive(&r, seed, realisation, KARST_I_STREAM_SAMPLING);
-  if ((err = karst_sampling_run(ctx, sc, &r, smp))) goto cleanup;
+  if ((err = karst_sampling_run(ctx, geo, &r, smp))) goto cleanup;
   if (stats) stats->stage_seconds[KARST_STAGE_SAMPLING] = karst_i_now() - t;
 
   karst_progress(ctx, "graph", 0, 1);
   t = karst_i_now();
   /* karst_graph_build computes the kNN graph and the edge costs together: one stage, "graph". */
-  if ((err = karst_graph_build(ctx, sc, smp, &g))) goto cleanup;
+  if ((err = karst_graph_build(ctx, geo, smp, &g))) goto cleanup;
   if (stats) {
     stats->stage_seconds[KARST_STAGE_GRAPH] = karst_i_now() - t;
     stats->n_samples = smp->n;
@@ -341,11 +297,12 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
     goto cleanup;
   }
   double lb = karst_cost_lower_bound_per_metre(sc);
-  if ((err = karst_i_generate_from_graph(ctx, sc, seed, realisation, &g, lb, net, stats)))
+  if ((err = karst_i_generate_from_graph(ctx, geo, seed, realisation, &g, lb, net, stats)))
     goto cleanup;
   if (stats) stats->peak_bytes = karst_i_peak_bytes();
 cleanup:
   karst_graph_destroy(&g);
+  karst_geology_free(geo);
   karst_samples_destroy(&own);
   if (err && samples) {
     karst_samples_destroy(samples);

@@ -5,6 +5,7 @@
 #define KARST_GENERATE_INTERNAL_H
 
 #include "karst/generate.h"
+#include "karst/geology.h"
 #include "karst/paths.h"
 
 /* Key-point distance matrix method used by the pipeline (see paths.c for the measurement). */
@@ -14,7 +15,7 @@
  * path is found again with A*. 1 GiB. */
 #define KARST_I_TREE_BUDGET ((size_t)1 << 30)
 
-karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario_t *sc,
+karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_t *geo,
                                           uint64_t seed, uint64_t realisation,
                                           const karst_graph_t *g, double lb_per_metre,
                                           karst_network_t *net, karst_generate_stats_t *stats);
@@ -25,6 +26,8 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_scenario
 #define KARST_I_STREAM_SAMPLING 0
 #define KARST_I_STREAM_AMPLIFICATION 5
 #define KARST_I_STREAM_CLASSIFICATION 6
+/* The geology's draws (discrete fracture networks): src/geology/geology.c's GEOLOGY_STREAM. */
+#define KARST_I_STREAM_GEOLOGY 7
 
 /* Seconds on a monotonic clock. */
 double karst_i_now(void);

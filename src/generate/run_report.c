@@ -9,7 +9,6 @@
 #include "karst/generate.h"
 #include "karst/io.h"
 
-
 /* A JSON number (shortest round-trip form), or null for NaN / infinities. */
 static void json_num(FILE *fp, double v) {
   if (!isfinite(v)) {
@@ -69,6 +68,39 @@ static void perm_json(FILE *fp, const karst_perm_node_t *n) {
   fputc('}', fp);
 }
 
+/* A file named in the parameters, with its FNV-1a hash so run.json says which file was used. */
+static void file_json(FILE *fp, const char *key, const char *path) {
+  char hash[17] = "";
+  karst_ctx_t hctx;
+  karst_ctx_init(&hctx);
+  fprintf(fp, "\"%s\": ", key);
+  karst_json_string(fp, path);
+  fprintf(fp, ", \"%s_hash\": ", key);
+  if (path && karst_file_hash(&hctx, path, hash) == KARST_SUCCESS)
+    karst_json_string(fp, hash);
+  else
+    fputs("null", fp);
+}
+
+/* A surface definition: null when not given, its file, or its plane. */
+static void surface_json(FILE *fp, const karst_surface_def_t *d) {
+  if (!d->given) {
+    fputs("null", fp);
+    return;
+  }
+  fputc('{', fp);
+  if (d->path) {
+    file_json(fp, "surface", d->path);
+  } else {
+    fputs("\"elevation\": ", fp), json_num(fp, d->elevation);
+    fputs(", \"dip\": ", fp), json_num(fp, d->dip);
+    fputs(", \"dip_direction\": ", fp), json_num(fp, d->dip_direction);
+    fputs(", \"origin\": [", fp), json_num(fp, d->origin[0]), fputs(", ", fp),
+        json_num(fp, d->origin[1]), fputc(']', fp);
+  }
+  fputc('}', fp);
+}
+
 static const char *keypoint_type(karst_keypoint_type_t t) {
   return t == KARST_KEYPOINT_SINK ? "sink" : (t == KARST_KEYPOINT_SPRING ? "spring" : "waypoint");
 }
@@ -111,12 +143,14 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
     fputs("\"elevation\": ", fp), json_num(fp, sc->terrain.elevation);
   }
   fputs("},\n", fp);
-  kv_num(fp, I, "water_table", sc->water_table, 0);
+  fputs("    \"water_table\": ", fp), surface_json(fp, &sc->water_table), fputs(",\n", fp);
   fputs("    \"horizons\": [", fp);
   for (int i = 0; i < sc->n_horizons; i++) {
     const karst_horizon_t *h = &sc->horizons[i];
     fputs(i ? ", {" : "{", fp);
-    fputs("\"elevation\": ", fp), json_num(fp, h->elevation);
+    fputs("\"name\": ", fp), karst_json_string(fp, h->name);
+    if (h->path) fputs(", ", fp), file_json(fp, "surface", h->path);
+    fputs(", \"elevation\": ", fp), json_num(fp, h->elevation);
     fputs(", \"dip\": ", fp), json_num(fp, h->dip);
     fputs(", \"dip_direction\": ", fp), json_num(fp, h->dip_direction);
     fputs(", \"origin\": [", fp), json_num(fp, h->origin[0]), fputs(", ", fp),
@@ -131,6 +165,64 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
     fputs("\"dip_direction\": ", fp), json_num(fp, fr->dip_direction);
     fputs(", \"dip\": ", fp), json_num(fp, fr->dip);
     fputs(", \"weight\": ", fp), json_num(fp, fr->weight);
+    fputs(", \"fisher_kappa\": ", fp), json_num(fp, fr->kappa > 0 ? fr->kappa : NAN);
+    if (fr->dfn) {
+      fputs(", \"dfn\": {\"p32\": ", fp), json_num(fp, fr->p32);
+      fputs(", \"size_exponent\": ", fp), json_num(fp, fr->size_exponent);
+      fputs(", \"r_min\": ", fp), json_num(fp, fr->r_min);
+      fputs(", \"r_max\": ", fp), json_num(fp, fr->r_max);
+      fputs(", \"factor\": ", fp), json_num(fp, fr->factor);
+      fputs(", \"influence\": ", fp), json_num(fp, fr->influence);
+      fputc('}', fp);
+    } else {
+      fputs(", \"dfn\": null", fp);
+    }
+    fputc('}', fp);
+  }
+  fputs("],\n    \"strata\": [", fp);
+  for (int i = 0; i < sc->n_strata; i++) {
+    const karst_stratum_t *st = &sc->strata[i];
+    fputs(i ? ", {\"name\": " : "{\"name\": ", fp);
+    karst_json_string(fp, st->name);
+    fputs(", \"top\": ", fp), surface_json(fp, &st->top);
+    fputs(", \"bottom\": ", fp), surface_json(fp, &st->bottom);
+    fprintf(fp, ", \"soluble\": %s}", st->soluble ? "true" : "false");
+  }
+  fputs("],\n    \"exclusions\": [", fp);
+  for (int i = 0; i < sc->n_exclusions; i++) {
+    const karst_exclusion_t *e = &sc->exclusions[i];
+    fputs(i ? ", {\"name\": " : "{\"name\": ", fp);
+    karst_json_string(fp, e->name);
+    if (e->kind == KARST_EXCLUSION_BOX) {
+      fputs(", \"box\": {\"min\": ", fp), vec3(fp, e->min);
+      fputs(", \"max\": ", fp), vec3(fp, e->max), fputc('}', fp);
+    } else if (e->kind == KARST_EXCLUSION_SPHERE) {
+      fputs(", \"sphere\": {\"center\": ", fp), vec3(fp, e->center);
+      fputs(", \"radius\": ", fp), json_num(fp, e->radius), fputc('}', fp);
+    } else {
+      fputs(", \"prism\": {\"polygon\": [", fp);
+      for (int v = 0; v < e->n_vertices; v++) {
+        fputs(v ? ", [" : "[", fp), json_num(fp, e->polygon[2 * v]), fputs(", ", fp);
+        json_num(fp, e->polygon[2 * v + 1]), fputc(']', fp);
+      }
+      fputs("], \"bottom\": ", fp), json_num(fp, e->bottom);
+      fputs(", \"top\": ", fp), json_num(fp, e->top), fputc('}', fp);
+    }
+    fputc('}', fp);
+  }
+  fputs("],\n    \"faults\": [", fp);
+  for (int i = 0; i < sc->n_faults; i++) {
+    const karst_fault_t *f = &sc->faults[i];
+    fputs(i ? ", {\"name\": " : "{\"name\": ", fp);
+    karst_json_string(fp, f->name);
+    fputs(", \"center\": ", fp), vec3(fp, f->center);
+    fputs(", \"dip_direction\": ", fp), json_num(fp, f->dip_direction);
+    fputs(", \"dip\": ", fp), json_num(fp, f->dip);
+    fputs(", \"radius\": ", fp), json_num(fp, f->radius);
+    fputs(", \"damage_zone\": ", fp), json_num(fp, f->damage_zone);
+    fprintf(fp, ", \"kind\": \"%s\"", f->barrier ? "barrier" : "conduit");
+    fputs(", \"factor\": ", fp), json_num(fp, f->factor);
+    fputs(", \"crossing_cost\": ", fp), json_num(fp, f->crossing_cost);
     fputc('}', fp);
   }
   fputs("],\n    \"permeability\": {\"background\": ", fp);
@@ -147,6 +239,15 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
     karst_json_string(fp, k->name);
     fprintf(fp, ", \"type\": \"%s\", \"position\": ", keypoint_type(k->type));
     vec3(fp, k->p);
+    /* Every key point has both members (null / [] when they do not apply), so the report shows
+     * the key points as one table. */
+    fputs(", \"water_table\": ", fp), surface_json(fp, &k->water_table);
+    fputs(", \"drains_to\": [", fp);
+    for (int j = 0; j < k->n_drains_to; j++) {
+      if (j) fputs(", ", fp);
+      karst_json_string(fp, sc->key_points[k->drains_to[j]].name);
+    }
+    fputc(']', fp);
     fputc('}', fp);
   }
   fputs("],\n    \"prescribed_paths\": [", fp);
@@ -157,7 +258,36 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
     karst_json_string(fp, sc->key_points[sc->prescribed[i].b].name);
     fputc(']', fp);
   }
-  fputs("],\n    \"cost\": {\"w0\": ", fp);
+  fputs("],\n    \"connectivity\": ", fp);
+  if (sc->connectivity.given) {
+    const karst_connectivity_t *c = &sc->connectivity;
+    fputs("{\"sinks\": [", fp);
+    for (int i = 0; i < c->n_sinks; i++) {
+      if (i) fputs(", ", fp);
+      karst_json_string(fp, sc->key_points[c->sinks[i]].name);
+    }
+    fputs("], \"springs\": [", fp);
+    for (int j = 0; j < c->n_springs; j++) {
+      if (j) fputs(", ", fp);
+      karst_json_string(fp, sc->key_points[c->springs[j]].name);
+    }
+    fputs("], \"matrix\": [", fp);
+    for (int i = 0; i < c->n_sinks; i++) {
+      fputs(i ? ", [" : "[", fp);
+      for (int j = 0; j < c->n_springs; j++)
+        fprintf(fp, "%s%d", j ? ", " : "", c->matrix[i * c->n_springs + j]);
+      fputc(']', fp);
+    }
+    fputs("]}", fp);
+  } else {
+    fputs("null", fp);
+  }
+  fputs(",\n    \"routing\": {\"vadose_factor\": ", fp);
+  json_num(fp, sc->routing.vadose_factor);
+  fputs(", \"rise_cost\": ", fp), json_num(fp, sc->routing.rise_cost);
+  fputs(", \"phreatic_depth\": ", fp), json_num(fp, sc->routing.phreatic_depth);
+  fputs(", \"water_table_band\": ", fp), json_num(fp, sc->routing.water_table_band);
+  fputs("},\n    \"cost\": {\"w0\": ", fp);
   json_num(fp, sc->cost.w0);
   fputs(", \"horizon\": ", fp), json_num(fp, sc->cost.horizon);
   fputs(", \"fracture\": ", fp), json_num(fp, sc->cost.fracture);
@@ -192,7 +322,6 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   json_num(fp, ao.loop_separation);
   fputs("},\n    \"classification\": {\"vertical_angle\": ", fp);
   json_num(fp, sc->classification.vertical_angle);
-  fputs(", \"water_table_band\": ", fp), json_num(fp, sc->classification.water_table_band);
   fputs(", \"epikarst_depth\": ", fp), json_num(fp, sc->classification.epikarst_depth);
   fputs(", \"chamber_resistance\": ", fp), json_num(fp, sc->classification.chamber_resistance);
   fputs(", \"radius_correlation\": ", fp), json_num(fp, sc->classification.radius_correlation);

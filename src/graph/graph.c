@@ -202,7 +202,7 @@ static void task_count(void *p, int tid, int nth) {
   for (int c = tid; c < B->nchunks; c += nth) {
     int32_t *cnt = B->cnt + (size_t)c * (size_t)B->n;
     for (karst_int_t u = CHUNK_BEGIN(B, c); u < CHUNK_BEGIN(B, c + 1); u++) {
-      B->inside[u] = (unsigned char)karst_cost_in_bedrock(B->model->sc, B->g->xyz + 3 * u);
+      B->inside[u] = (unsigned char)karst_geology_in_bedrock(B->model->geo, B->g->xyz + 3 * u);
       int32_t *row = B->nbr + (size_t)u * k, own = 0;
       for (int j = 0; j < k; j++) {
         int32_t w = row[j];
@@ -330,7 +330,7 @@ cleanup:
  * Every stage uses ctx->nthreads threads; the result is identical for any
  * thread count.
  * @param ctx context (threads, errors, progress, interrupt).
- * @param sc the scenario (k and the cost weights).
+ * @param geo the geology (with its scenario: k and the cost weights).
  * @param samples the vertices; the graph borrows samples->xyz.
  * @param out initialised graph, replaced on success, unchanged on failure.
  * @return KARST_SUCCESS, KARST_EINVAL (k < 1, non-finite sample, more than
@@ -339,7 +339,7 @@ cleanup:
  * knn.c), O(n k) to symmetrise, O(n k q) for the costs with q quadrature
  * points per edge.
  */
-karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
+karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
                                 const karst_samples_t *samples, karst_graph_t *out) {
   karst_graph_t g;
   karst_graph_init(&g);
@@ -351,6 +351,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
   karst_error_t err = KARST_SUCCESS;
   karst_int_t n = samples->n;
   int nth = ctx && ctx->nthreads > 0 ? ctx->nthreads : 1;
+  const karst_scenario_t *sc = karst_geology_scenario(geo);
   if (sc->sampling.k < 1)
     return karst_set_error(ctx, KARST_EINVAL, "sampling.k must be >= 1, got %d", sc->sampling.k);
   if (n < 0 || n >= INT32_MAX)
@@ -360,7 +361,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_scenario_t *sc,
     if (!isfinite(samples->xyz[i]))
       return karst_set_error(ctx, KARST_EINVAL, "graph: sample %lld has a non-finite coordinate %g",
                              (long long)(i / 3), samples->xyz[i]);
-  if ((err = karst_i_cost_model_init(ctx, &model, sc)) != KARST_SUCCESS) return err;
+  if ((err = karst_i_cost_model_init(ctx, &model, geo)) != KARST_SUCCESS) return err;
   g.n = n;
   g.xyz = samples->xyz;
   g.offsets = calloc((size_t)n + 1, sizeof(karst_int_t));

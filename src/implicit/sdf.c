@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "implicit/implicit_internal.h"
+#include "karst/geology.h"
 
 /* min / max without the NaN rules of fmin / fmax, which the compiler cannot
  * inline (the fields never see NaN: inputs are checked when nodes are made). */

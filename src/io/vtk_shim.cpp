@@ -468,6 +468,9 @@ karst_error_t write_network(karst_ctx_t *ctx, const char *path, const karst_netw
   }
   vtkFieldData *fd = pd->GetFieldData();
   if (net->crs) fd->AddArray(string_array("crs", 1, &net->crs));
+  for (int i = 0; i < net->n_strings; i++)
+    fd->AddArray(string_array(net->strings[i].name, net->strings[i].n,
+                              (const char *const *)net->strings[i].values));
   if (net->title) fd->AddArray(string_array("title", 1, &net->title));
   add_lookup_tables(fd);
 
@@ -542,6 +545,47 @@ karst_error_t write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t 
     pd->GetCellData()->SetActiveScalars(name);
     if (std::strcmp(name, "tunnel_type") == 0) add_lookup_tables(pd->GetFieldData());
   }
+  vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
+  return write_atomically(ctx, path, writer.GetPointer(), pd);
+}
+
+karst_error_t write_polydata(karst_ctx_t *ctx, const char *path, const karst_polydata_t *m) {
+  karst_error_t err;
+  if ((err = check_path(ctx, path))) return err;
+  if (!m || m->n_points < 0 || m->n_polys < 0 || (m->n_polys > 0 && (!m->offsets || !m->conn)))
+    return karst_set_error(ctx, KARST_EINVAL, "%s: no polygons given", path);
+  auto pd = vtkSmartPointer<vtkPolyData>::New();
+  vtkSmartPointer<vtkPoints> pts;
+  if ((err = make_points(ctx, path, "point", m->n_points, m->xyz, pts))) return err;
+  pd->SetPoints(pts);
+  auto polys = vtkSmartPointer<vtkCellArray>::New();
+  for (karst_int_t c = 0; c < m->n_polys; c++) {
+    karst_int_t b = m->offsets[c], e = m->offsets[c + 1];
+    if (b < 0 || e < b + 3)
+      return karst_set_error(ctx, KARST_EINVAL, "%s: polygon %" PRId64 " has fewer than 3 points",
+                             path, c);
+    polys->InsertNextCell((vtkIdType)(e - b));
+    for (karst_int_t i = b; i < e; i++) {
+      if (m->conn[i] < 0 || m->conn[i] >= m->n_points)
+        return karst_set_error(ctx, KARST_EINVAL,
+                               "%s: polygon %" PRId64 " refers to point %" PRId64 " of %" PRId64,
+                               path, c, m->conn[i], m->n_points);
+      polys->InsertCellPoint((vtkIdType)m->conn[i]);
+    }
+  }
+  pd->SetPolys(polys);
+  for (int a = 0; a < m->n_cell_arrays; a++) {
+    auto arr = vtkSmartPointer<vtkIntArray>::New();
+    arr->SetName(m->cell_array_names[a]);
+    arr->SetNumberOfValues(m->n_polys);
+    for (karst_int_t c = 0; c < m->n_polys; c++)
+      arr->SetValue(c, m->cell_arrays[a][c]);
+    pd->GetCellData()->AddArray(arr);
+    if (a == 0) pd->GetCellData()->SetActiveScalars(m->cell_array_names[a]);
+  }
+  for (int i = 0; i < m->n_strings; i++)
+    pd->GetFieldData()->AddArray(string_array(m->strings[i].name, m->strings[i].n,
+                                              (const char *const *)m->strings[i].values));
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
@@ -955,6 +999,18 @@ extern "C" karst_error_t karst_vtk_write_samples(karst_ctx_t *ctx, const char *p
 extern "C" karst_error_t karst_vtk_write_mesh(karst_ctx_t *ctx, const char *path,
                                               const karst_mesh_t *m) {
   return guarded(ctx, path, [&] { return write_mesh(ctx, path, m); });
+}
+
+/**
+ * Write polygons (any number of points each) as VTK XML PolyData (.vtp), inline binary, with
+ * integer cell arrays (the first is the active scalars) and field-data string lists, atomically.
+ * @return KARST_SUCCESS, KARST_EINVAL (a polygon of fewer than 3 points or referring to a point
+ *         that does not exist, non-finite coordinates) or KARST_EIO.
+ * Time complexity: O(points + polygon vertices + arrays x polygons).
+ */
+extern "C" karst_error_t karst_vtk_write_polydata(karst_ctx_t *ctx, const char *path,
+                                                  const karst_polydata_t *m) {
+  return guarded(ctx, path, [&] { return write_polydata(ctx, path, m); });
 }
 
 /**

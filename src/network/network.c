@@ -30,10 +30,13 @@ int karst_tunnel_type_from_name(const char *name) {
   return -1;
 }
 
-void karst_network_init(karst_network_t *net) { memset(net, 0, sizeof *net); }
+void karst_network_init(karst_network_t *net) {
+  memset(net, 0, sizeof *net);
+}
 
 static void free_attrs(karst_attr_t *a, int n) {
-  for (int i = 0; i < n; i++) free(a[i].data);
+  for (int i = 0; i < n; i++)
+    free(a[i].data);
   free(a);
 }
 
@@ -43,11 +46,18 @@ void karst_network_destroy(karst_network_t *net) {
   free_attrs(net->node_attrs, net->n_node_attrs);
   free_attrs(net->edge_attrs, net->n_edge_attrs);
   if (net->node_labels) {
-    for (karst_int_t i = 0; i < net->node_cap; i++) free(net->node_labels[i]);
+    for (karst_int_t i = 0; i < net->node_cap; i++)
+      free(net->node_labels[i]);
     free(net->node_labels);
   }
   free(net->crs);
   free(net->title);
+  for (int i = 0; i < net->n_strings; i++) {
+    for (int j = 0; j < net->strings[i].n; j++)
+      free(net->strings[i].values[j]);
+    free(net->strings[i].values);
+  }
+  free(net->strings);
   memset(net, 0, sizeof *net);
 }
 
@@ -180,6 +190,43 @@ karst_error_t karst_network_set_crs(karst_network_t *net, const char *crs) {
   return KARST_SUCCESS;
 }
 
+/** Set (or replace) the string list @p name (at most 47 bytes) to copies of @p values. O(n). */
+karst_error_t karst_network_set_strings(karst_network_t *net, const char *name, int n,
+                                        const char *const *values) {
+  if (!name || strlen(name) >= sizeof net->strings[0].name || n < 0) return KARST_EINVAL;
+  char **v = calloc((size_t)(n > 0 ? n : 1), sizeof *v);
+  if (!v) return KARST_ENOMEM;
+  for (int j = 0; j < n; j++)
+    if (!(v[j] = dupstr(values[j] ? values[j] : ""))) {
+      for (int k = 0; k < j; k++)
+        free(v[k]);
+      free(v);
+      return KARST_ENOMEM;
+    }
+  int i = 0;
+  while (i < net->n_strings && strcmp(net->strings[i].name, name) != 0)
+    i++;
+  if (i == net->n_strings) {
+    karst_strings_t *ns = realloc(net->strings, (size_t)(i + 1) * sizeof *ns);
+    if (!ns) {
+      for (int k = 0; k < n; k++)
+        free(v[k]);
+      free(v);
+      return KARST_ENOMEM;
+    }
+    net->strings = ns;
+    memset(&ns[i], 0, sizeof ns[i]);
+    strcpy(ns[i].name, name);
+    net->n_strings++;
+  }
+  for (int k = 0; k < net->strings[i].n; k++)
+    free(net->strings[i].values[k]);
+  free(net->strings[i].values);
+  net->strings[i].values = v;
+  net->strings[i].n = n;
+  return KARST_SUCCESS;
+}
+
 karst_error_t karst_network_copy(karst_network_t *dst, const karst_network_t *src) {
   karst_network_t n;
   karst_network_init(&n);
@@ -207,6 +254,10 @@ karst_error_t karst_network_copy(karst_network_t *dst, const karst_network_t *sr
       if (src->node_labels[i] && (err = karst_network_set_label(&n, i, src->node_labels[i])))
         goto fail;
   if ((err = karst_network_set_crs(&n, src->crs))) goto fail;
+  for (int i = 0; i < src->n_strings; i++)
+    if ((err = karst_network_set_strings(&n, src->strings[i].name, src->strings[i].n,
+                                         (const char *const *)src->strings[i].values)))
+      goto fail;
   if (src->title && !(n.title = dupstr(src->title))) {
     err = KARST_ENOMEM;
     goto fail;

@@ -249,6 +249,48 @@ static float float_below(double x) {
   return f;
 }
 
+/* The routed cost of arc u → w (karst_route_t). */
+static inline double route_cost(const karst_route_t *r, double base, karst_int_t u, karst_int_t w) {
+  const float du = r->dz[2 * u], dw = r->dz[2 * w], band = r->band;
+  if (dw < -band) {                     /* w in the vadose zone */
+    if (!(du < -band)) return INFINITY; /* no rising back into the vadose zone */
+  } else if (!(du < -band)) {
+    /* Phreatic stage: the mean over the arc of max(0, depth − band), the depth linear in the arc
+     * parameter: the mean of the ends when both are below the band, else the triangle of the
+     * part below it, hi² / (2 |Δ|). */
+    double eu = (double)du - band, ew = (double)dw - band, mean;
+    if (eu <= 0 && ew <= 0)
+      mean = 0.0;
+    else if (eu >= 0 && ew >= 0)
+      mean = 0.5 * (eu + ew);
+    else {
+      double hi = eu > ew ? eu : ew;
+      mean = 0.5 * hi * hi / fabs(eu - ew);
+    }
+    return base * (1.0 + r->inv_phreatic_depth * mean);
+  }
+  double rise = (double)r->dz[2 * w + 1] - (double)r->dz[2 * u + 1];
+  return base * r->vadose_factor + (rise > 0 ? r->rise_cost * rise : 0.0);
+}
+
+double karst_route_arc_cost(const karst_route_t *r, double base, karst_int_t u, karst_int_t w) {
+  return r ? route_cost(r, base, u, w) : base;
+}
+
+/* What a search run needs besides its sources (run_search). */
+typedef struct {
+  karst_int_t target;             /* A* target, or -1 */
+  double lb;                      /* A* bound per metre, 0: Dijkstra */
+  const unsigned char *blocked;   /* may not be entered */
+  const unsigned char *noexpand;  /* may be settled but not expanded (unless it is the start) */
+  const unsigned char *is_target; /* counted targets */
+  karst_int_t stop_after;         /* stop once this many targets are settled (<= 0: never) */
+  karst_int_t *last_target;
+  int want_pred;
+  int backward;               /* relax arcs w → v (least cost TO the sources) */
+  const karst_route_t *route; /* routed costs, or NULL */
+} search_opts_t;
+
 /*
  * The one search loop behind A* and Dijkstra. Priority = g(v) + h(v) with
  * h(v) = lb · |v − target| (A*; h = 0 when target < 0 or lb = 0), computed
@@ -271,19 +313,22 @@ static inline void prefetch_arcs(const karst_int_t *off, const karst_int_t *adj,
 }
 
 static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
-                                const karst_int_t *sources, karst_int_t target, double lb,
-                                const unsigned char *blocked, const unsigned char *is_target,
-                                karst_int_t stop_after, karst_int_t *last_target, int want_pred) {
+                                const karst_int_t *sources, const search_opts_t *o) {
   const karst_graph_t *g = s->g;
+  const karst_int_t target = o->target;
+  const double lb = o->lb;
   const int astar = target >= 0 && lb > 0 && g->xyz;
   const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
   const double *restrict cost = g->cost;
+  const unsigned char *blocked = o->blocked, *noexpand = o->noexpand, *is_target = o->is_target;
+  const karst_route_t *route = o->route;
+  const int backward = o->backward, want_pred = o->want_pred;
   node_t *restrict node = s->node;
   double *restrict hh = s->h;
   int32_t *restrict pred = s->pred;
   uint32_t *restrict settled = s->settled;
   karst_int_t found = 0;
-  if (last_target) *last_target = -1;
+  if (o->last_target) *o->last_target = -1;
   search_begin(s);
   for (karst_int_t i = 0; i < n_sources; i++) {
     karst_int_t v = sources[i];
@@ -305,18 +350,20 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
       s->n_settled++;
     }
     if (v == target) {
-      if (last_target) *last_target = v;
+      if (o->last_target) *o->last_target = v;
       break;
     }
     if (is_target && is_target[v]) {
-      if (last_target) *last_target = v;
-      if (stop_after > 0 && ++found >= stop_after) break;
+      if (o->last_target) *o->last_target = v;
+      if (o->stop_after > 0 && ++found >= o->stop_after) break;
     }
+    if (noexpand && noexpand[v] && gv > 0.0) continue; /* a start (cost 0) is expanded */
     if (s->hn > 0) prefetch_arcs(off, adj, cost, s->heap[0].v);
     for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
       karst_int_t w = adj[a];
       double c = cost[a];
       if (!(c < INFINITY) || (blocked && blocked[w])) continue;
+      if (route) c = backward ? route_cost(route, c, w, v) : route_cost(route, c, v, w);
       double nd = gv + c;
       node_t *nw = &node[w];
       if (nw->stamp != s->cur) { /* first reached: g was ∞ */
@@ -367,7 +414,8 @@ karst_error_t karst_paths_astar(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
     return karst_set_error(ctx, KARST_EINVAL,
                            "A*: the cost lower bound per metre must be finite and >= 0, got %g",
                            lb_per_metre);
-  karst_error_t err = run_search(ctx, s, 1, &source, target, lb_per_metre, NULL, NULL, 0, NULL, 1);
+  const search_opts_t o = {target, lb_per_metre, NULL, NULL, NULL, 0, NULL, 1, 0, NULL};
+  karst_error_t err = run_search(ctx, s, 1, &source, &o);
   if (err) return err;
   if (!is_settled(s, target))
     return karst_set_error(ctx, KARST_EUNREACHABLE,
@@ -394,10 +442,20 @@ karst_error_t karst_paths_dijkstra(karst_ctx_t *ctx, karst_search_t *s, karst_in
                                    const karst_int_t *sources, const unsigned char *blocked,
                                    const unsigned char *is_target, karst_int_t stop_after,
                                    karst_int_t *last_target) {
+  return karst_paths_dijkstra_routed(ctx, s, NULL, n_sources, sources, blocked, is_target,
+                                     stop_after, last_target);
+}
+
+/** karst_paths_dijkstra on the routed costs of @p route (karst_route_t). Same complexity. */
+karst_error_t karst_paths_dijkstra_routed(karst_ctx_t *ctx, karst_search_t *s,
+                                          const karst_route_t *route, karst_int_t n_sources,
+                                          const karst_int_t *sources, const unsigned char *blocked,
+                                          const unsigned char *is_target, karst_int_t stop_after,
+                                          karst_int_t *last_target) {
   if (n_sources < 1 || !sources)
     return karst_set_error(ctx, KARST_EINVAL, "Dijkstra: no source given");
-  return run_search(ctx, s, n_sources, sources, -1, 0.0, blocked, is_target, stop_after,
-                    last_target, 1);
+  const search_opts_t o = {-1, 0.0, blocked, NULL, is_target, stop_after, last_target, 1, 0, route};
+  return run_search(ctx, s, n_sources, sources, &o);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -490,7 +548,8 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
     return karst_set_error(ctx, KARST_EINVAL, "A*: the reuse factor must be within (0, 1], got %g",
                            reuse ? reuse->factor : NAN);
   const double r = reuse->factor, rlb = g->xyz ? r * lb_per_metre : 0.0;
-  const unsigned char *flag = reuse->reused;
+  const unsigned char *flag = reuse->reused, *closed = reuse->closed, tag = reuse->tag;
+  const karst_route_t *route = reuse->route;
   const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
   const double *restrict cost = g->cost;
   node_t *restrict node = s->node;
@@ -517,8 +576,9 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
     for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
       karst_int_t w = adj[a];
       double c = cost[a];
-      if (!(c < INFINITY)) continue;
-      if (flag && flag[a]) c *= r;
+      if (!(c < INFINITY) || (closed && closed[w] && w != target)) continue;
+      if (route) c = route_cost(route, c, v, w);
+      if (flag && flag[a] && (!tag || flag[a] == tag)) c *= r;
       double nd = gv + c;
       node_t *nw = &node[w];
       if (nw->stamp != s->cur) { /* first reached: g was ∞ */
@@ -630,7 +690,8 @@ static void *rows_worker(void *arg) {
       for (karst_int_t j = i + 1; j < t->n_keys; j++)
         if (!mask[t->keys[j]]) mask[t->keys[j]] = 1, want++;
       /* The bound rows need no predecessors. */
-      t->err = run_search(&t->ctx, s, 1, &ki, -1, 0.0, NULL, mask, want, NULL, t->pred != NULL);
+      const search_opts_t o = {-1, 0.0, NULL, NULL, mask, want, NULL, t->pred != NULL, 0, NULL};
+      t->err = run_search(&t->ctx, s, 1, &ki, &o);
       for (karst_int_t j = i + 1; j < t->n_keys; j++)
         mask[t->keys[j]] = 0;
       if (t->err) goto cleanup;
@@ -869,4 +930,178 @@ cleanup:
   free(tasks);
   free(threads);
   return err;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Routed rows towards targets (backward searches), one target per task.    */
+/* ------------------------------------------------------------------------ */
+typedef struct {
+  karst_ctx_t ctx; /* private context: errors are copied back by the caller */
+  const karst_graph_t *g;
+  karst_int_t n_targets, n_sources;
+  const karst_int_t *targets, *sources;
+  const karst_route_t *const *routes;
+  const unsigned char *closed;
+  double *dist;
+  float *bound;
+  int32_t *succ;
+  int thread, nthreads;
+  volatile int *interrupt;
+  karst_error_t err;
+} trows_task_t;
+
+static void *trows_worker(void *arg) {
+  trows_task_t *t = arg;
+  karst_search_t *s = NULL;
+  unsigned char *mask = NULL;
+  const karst_graph_t *g = t->g;
+  t->err = karst_search_create(&t->ctx, g, &s);
+  if (t->err) goto cleanup;
+  mask = calloc((size_t)(g->n > 0 ? g->n : 1), 1);
+  if (!mask) {
+    t->err = karst_set_error(&t->ctx, KARST_ENOMEM, "target rows: out of memory");
+    goto cleanup;
+  }
+  for (karst_int_t i = t->thread; i < t->n_targets; i += t->nthreads) {
+    if (t->interrupt && *t->interrupt) {
+      t->err = karst_set_error(&t->ctx, KARST_EINTERRUPTED, "routing searches interrupted");
+      goto cleanup;
+    }
+    karst_int_t ti = t->targets[i], want = 0;
+    for (karst_int_t j = 0; j < t->n_sources; j++)
+      if (!mask[t->sources[j]]) mask[t->sources[j]] = 1, want++;
+    const search_opts_t o = {-1,   0.0,
+                             NULL, t->closed,
+                             mask, want,
+                             NULL, t->succ != NULL,
+                             1,    t->routes ? t->routes[i] : NULL};
+    t->err = run_search(&t->ctx, s, 1, &ti, &o);
+    for (karst_int_t j = 0; j < t->n_sources; j++)
+      mask[t->sources[j]] = 0;
+    if (t->err) goto cleanup;
+    for (karst_int_t j = 0; j < t->n_sources; j++)
+      t->dist[i * t->n_sources + j] = karst_search_dist(s, t->sources[j]);
+    if (t->succ) {
+      int32_t *row = t->succ + (size_t)i * (size_t)g->n;
+      for (karst_int_t v = 0; v < g->n; v++)
+        row[v] = is_settled(s, v) ? s->pred[v] : -2;
+    }
+    if (t->bound) {
+      /* Dijkstra settles in nondecreasing cost, so a vertex it did not settle costs at least the
+       * largest settled cost R: min(d, R) bounds d from below and, like d, changes by at most the
+       * arc cost along an arc. */
+      float *row = t->bound + (size_t)i * (size_t)g->n;
+      double R = 0.0;
+      for (karst_int_t v = 0; v < g->n; v++)
+        if (is_settled(s, v) && s->node[v].dist > R) R = s->node[v].dist;
+      for (karst_int_t v = 0; v < g->n; v++)
+        row[v] = float_below(is_settled(s, v) ? s->node[v].dist : R);
+    }
+  }
+cleanup:
+  free(mask);
+  karst_search_free(s);
+  return NULL;
+}
+
+/**
+ * Least routed costs from sources to targets (see paths.h). Each target's row is one backward
+ * Dijkstra (Dijkstra 1959 on the reversed arcs: the routed costs are directed), rows spread over
+ * threads, target i to thread i mod T: the output does not depend on T.
+ * Time complexity: O(targets (m + n) log n) in the worst case.
+ */
+karst_error_t karst_paths_target_rows(karst_ctx_t *ctx, const karst_graph_t *g,
+                                      karst_int_t n_targets, const karst_int_t *targets,
+                                      const karst_route_t *const *routes,
+                                      const unsigned char *closed, karst_int_t n_sources,
+                                      const karst_int_t *sources, double *dist, float *bound,
+                                      int32_t *succ) {
+  karst_error_t err = KARST_SUCCESS;
+  trows_task_t *tasks = NULL;
+  pthread_t *threads = NULL;
+  if (n_targets < 0 || n_sources < 0 || (n_targets > 0 && (!targets || !dist)) ||
+      (n_sources > 0 && !sources))
+    return karst_set_error(ctx, KARST_EINVAL, "target rows: %lld targets, %lld sources",
+                           (long long)n_targets, (long long)n_sources);
+  if (g->n >= INT32_MAX)
+    return karst_set_error(ctx, KARST_ERANGE, "target rows: %lld vertices exceed 2^31 - 1",
+                           (long long)g->n);
+  for (karst_int_t i = 0; i < n_targets + n_sources; i++) {
+    karst_int_t v = i < n_targets ? targets[i] : sources[i - n_targets];
+    if (v < 0 || v >= g->n)
+      return karst_set_error(ctx, KARST_EINVAL, "target rows: vertex %lld outside [0, %lld)",
+                             (long long)v, (long long)g->n);
+  }
+  if (n_targets == 0) return KARST_SUCCESS;
+  int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
+  if (T > n_targets) T = (int)n_targets;
+  tasks = calloc((size_t)T, sizeof *tasks);
+  threads = calloc((size_t)T, sizeof *threads);
+  if (!tasks || !threads) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "target rows: out of memory");
+    goto cleanup;
+  }
+  for (int t = 0; t < T; t++) {
+    karst_ctx_init(&tasks[t].ctx);
+    tasks[t] = (trows_task_t){
+        tasks[t].ctx, g,    n_targets, n_sources, targets, sources, routes,
+        closed,       dist, bound,     succ,      t,       T,       ctx ? ctx->interrupt : NULL,
+        KARST_SUCCESS};
+  }
+  int started = 0;
+  if (T > 1)
+    for (; started < T; started++)
+      if (pthread_create(&threads[started], NULL, trows_worker, &tasks[started])) break;
+  for (int t = started; t < T; t++) /* threads that could not start: their rows are done here */
+    trows_worker(&tasks[t]);
+  for (int t = 0; t < started; t++)
+    pthread_join(threads[t], NULL);
+  for (int t = 0; t < T; t++)
+    if (tasks[t].err) {
+      err = karst_set_error(ctx, tasks[t].err, "%s", tasks[t].ctx.errmsg);
+      goto cleanup;
+    }
+cleanup:
+  free(tasks);
+  free(threads);
+  return err;
+}
+
+/**
+ * The path from @p source to a succ row's target (karst_paths_target_rows), following the
+ * successors, and its routed cost under @p route (NULL: base costs).
+ * @return KARST_EUNREACHABLE when the row did not settle @p source; KARST_EINVAL for a cycle.
+ * Time complexity: O(path length × degree).
+ */
+karst_error_t karst_paths_row_path(karst_ctx_t *ctx, const karst_graph_t *g,
+                                   const int32_t *succ_row, const karst_route_t *route,
+                                   karst_int_t source, karst_path_t *path) {
+  if (source < 0 || source >= g->n || succ_row[source] == -2)
+    return karst_set_error(ctx, KARST_EUNREACHABLE, "no finite-cost path from vertex %lld",
+                           (long long)source);
+  karst_int_t len = 0;
+  for (karst_int_t u = source; u >= 0; u = succ_row[u])
+    if (++len > g->n)
+      return karst_set_error(ctx, KARST_EINVAL, "routing row from vertex %lld has a cycle",
+                             (long long)source);
+  karst_error_t err = path_reserve(ctx, path, len);
+  if (err) return err;
+  path->n = len;
+  double cost = 0;
+  karst_int_t i = 0;
+  for (karst_int_t u = source; u >= 0; u = succ_row[u]) {
+    path->v[i++] = u;
+    karst_int_t w = succ_row[u];
+    if (w >= 0) {
+      double best = INFINITY;
+      for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++)
+        if (g->adj[a] == w) {
+          double c = route ? route_cost(route, g->cost[a], u, w) : g->cost[a];
+          if (c < best) best = c;
+        }
+      cost += best;
+    }
+  }
+  path->cost = cost;
+  return KARST_SUCCESS;
 }

@@ -24,7 +24,7 @@
 #include <string.h>
 
 #include "core/parallel_internal.h"
-#include "cost/cost_internal.h"
+#include "geology/geology_internal.h"
 #include "karst/sampling.h"
 
 /* Largest background grid (cells) that may be allocated: 2^31 (8 GiB of
@@ -140,7 +140,8 @@ static const double *cgrid_conflict(const cgrid_t *g, const double p[3], double 
 /* ------------------------------------------------------------------------ */
 typedef struct sampler {
   karst_ctx_t *ctx;
-  const karst_scenario_t *sc;
+  const karst_geology_t *geo;
+  const karst_scenario_t *sc; /* the geology's */
   karst_rng_t *rng;
   karst_samples_t *s;
   double rf, rc, rm; /* feature radius, fill radius, min of both */
@@ -156,6 +157,7 @@ typedef struct sampler {
   int64_t delta[125]; /* linear offsets of the cells that can hold a conflicting fill sample */
   int off[125][3];    /* the same as (di, dj, dk) */
   const char *stage;  /* for messages */
+  int excluding;      /* the geology has exclusion zones or insoluble strata */
 } sampler_t;
 
 /* Linear index of fill cell (i, j, k) in the bordered grid. */
@@ -225,47 +227,17 @@ static int cells_push(cells_t *c, int64_t x) {
   return 1;
 }
 
-/* A horizon plane with the trigonometry of karst_horizon_elevation done
- * once: the same operations on the same values, hence the same elevations. */
-typedef struct plane {
-  double elevation, ox, oy, sa, ca, t;
-  int flat;
-} plane_t;
-
-static plane_t plane_of(const karst_horizon_t *h) {
-  const double d2r = M_PI / 180.0, a = h->dip_direction * d2r;
-  plane_t P = {h->elevation, h->origin[0],      h->origin[1], sin(a),
-               cos(a),       tan(h->dip * d2r), h->dip == 0.0};
-  return P;
-}
-
-static double plane_elevation(const plane_t *P, double x, double y) {
-  if (P->flat) return P->elevation;
-  double along = (x - P->ox) * P->sa + (y - P->oy) * P->ca;
-  return P->elevation - along * P->t;
-}
-
 /* A region sampled at the feature radius: a layer |z − L(x, y)| <= band
- * around a horizon (or the water table), or the permeable volume. */
+ * around a horizon (or a water table), or the permeable volume. */
 typedef struct region {
   karst_sample_source_t src;
-  const karst_horizon_t *layer; /* NULL for the permeable volume */
+  const karst_i_surf_t *layer; /* NULL for the permeable volume */
   double band;
-  plane_t plane; /* of the layer */
 } region_t;
 
 static int region_contains(const sampler_t *S, const region_t *R, const double p[3]) {
-  if (R->layer) return fabs(p[2] - plane_elevation(&R->plane, p[0], p[1])) <= R->band;
+  if (R->layer) return fabs(p[2] - karst_i_surf_z(R->layer, p[0], p[1])) <= R->band;
   return karst_permeability_eval(&S->sc->permeability, p) < S->sc->sampling.permeable_threshold;
-}
-
-/* Layer elevation range over a column rectangle (a plane: extremes at corners). */
-static void layer_range(const plane_t *L, double x0, double x1, double y0, double y1, double *zlo,
-                        double *zhi) {
-  double z[4] = {plane_elevation(L, x0, y0), plane_elevation(L, x1, y0), plane_elevation(L, x0, y1),
-                 plane_elevation(L, x1, y1)};
-  *zlo = fmin(fmin(z[0], z[1]), fmin(z[2], z[3]));
-  *zhi = fmax(fmax(z[0], z[1]), fmax(z[2], z[3]));
 }
 
 /* Conservative bounding box of {p : node value < t} ("all" = whole space). */
@@ -367,11 +339,13 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out,
         double x1 = fmin(S->hi[0], g->origin[0] + (i + 1) * g->cell);
         double y0 = fmax(S->lo[1], g->origin[1] + j * g->cell);
         double y1 = fmin(S->hi[1], g->origin[1] + (j + 1) * g->cell);
-        double ztop = karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1);
+        double tlo, ztop;
+        karst_i_surf_range(&S->geo->terrain, x0, x1, y0, y1, &tlo, &ztop);
         double zlo = fmax(S->lo[2], box.lo[2]), zhi = fmin(fmin(S->hi[2], box.hi[2]), ztop);
         if (R->layer) {
           double llo, lhi;
-          layer_range(&R->plane, x0, x1, y0, y1, &llo, &lhi);
+          karst_i_surf_range_bound(R->layer, x0, x1, y0, y1, &llo, &lhi);
+          if (!isfinite(llo) || !isfinite(lhi)) continue;
           zlo = fmax(zlo, llo - R->band), zhi = fmin(zhi, lhi + R->band);
         }
         if (zlo > zhi) continue;
@@ -491,7 +465,8 @@ static void region_tile_pass(region_job_t *J, size_t t) {
     double zlo = -INFINITY, zhi = INFINITY, p[3];
     if (R->layer) {
       double x0 = g->origin[0] + c[0] * g->cell, y0 = g->origin[1] + c[1] * g->cell;
-      layer_range(&R->plane, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
+      karst_i_surf_range_bound(R->layer, x0, x0 + g->cell, y0, y0 + g->cell, &zlo, &zhi);
+      if (!isfinite(zlo) || !isfinite(zhi)) continue;
       zlo -= R->band, zhi += R->band;
     }
     double blo[3], bhi[3];
@@ -499,7 +474,7 @@ static void region_tile_pass(region_job_t *J, size_t t) {
     cells[w++] = key;
     for (int a = 0; a < 3; a++)
       p[a] = karst_rng_uniform_range(&rng, blo[a], bhi[a]);
-    if (!region_contains(S, R, p) || !karst_cost_in_bedrock(S->sc, p)) continue;
+    if (!region_contains(S, R, p) || !karst_geology_in_bedrock(S->geo, p)) continue;
     const double *e = cgrid_conflict(g, p, S->rf);
     if (e) {
       if (box_covered(blo, bhi, e, S->rf)) w--; /* never again */
@@ -678,8 +653,12 @@ static void fill_tile_pass(fill_job_t *J, int64_t t) {
     int64_t c[3] = {id % S->pd[0] - 2, id / S->pd[0] % S->pd[1] - 2, id / S->pd[0] / S->pd[1] - 2};
     double p[3];
     if (!dart_in_cell(S, &rng, S->lo, S->cc, c, -INFINITY, INFINITY, p)) continue;
-    if (!(p[2] < karst_terrain_height(&S->sc->terrain, p[0], p[1]))) {
+    if (!(p[2] < karst_i_surf_z(&S->geo->terrain, p[0], p[1]))) {
       cells[w++] = id;
+      continue;
+    }
+    if (S->excluding && karst_geology_exclusion_at(S->geo, p, NULL) != KARST_EXCLUDED_NONE) {
+      cells[w++] = id; /* an exclusion zone holds no sample; the cell may take one elsewhere */
       continue;
     }
     int feat;
@@ -739,7 +718,9 @@ static karst_error_t sample_fill(sampler_t *S) {
     for (int64_t i = 0; i < S->cd[0]; i++) {
       double x0 = S->lo[0] + i * S->cc, x1 = fmin(S->hi[0], x0 + S->cc);
       double y0 = S->lo[1] + j * S->cc, y1 = fmin(S->hi[1], y0 + S->cc);
-      double ztop = fmin(S->hi[2], karst_i_terrain_max_rect(&S->sc->terrain, x0, x1, y0, y1));
+      double tlo, ttop;
+      karst_i_surf_range(&S->geo->terrain, x0, x1, y0, y1, &tlo, &ttop);
+      double ztop = fmin(S->hi[2], ttop);
       int64_t k = 0;
       while (k < S->cd[2] && S->lo[2] + k * S->cc < ztop)
         k++;
@@ -894,7 +875,8 @@ static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc,
   return KARST_SUCCESS;
 }
 
-static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc) {
+static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_geology_t *geo) {
+  const karst_scenario_t *sc = geo->sc;
   const karst_sampling_t *sp = &sc->sampling;
   for (int a = 0; a < 3; a++)
     if (!isfinite(sc->domain_min[a]) || !isfinite(sc->domain_max[a]) ||
@@ -921,15 +903,16 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
                            (long long)sp->max_samples);
   for (int h = 0; h < sc->n_horizons; h++) {
     const karst_horizon_t *H = &sc->horizons[h];
-    if (!(isfinite(H->radius) && H->radius > 0) || !isfinite(H->elevation) ||
+    if (!(isfinite(H->radius) && H->radius > 0) || (!H->path && !isfinite(H->elevation)) ||
         !(H->dip >= 0 && H->dip < 90))
       return karst_set_error(ctx, KARST_EINVAL,
                              "horizon %d: radius must be > 0 and dip within [0, 90), got radius "
                              "%g, dip %g, elevation %g",
                              h + 1, H->radius, H->dip, H->elevation);
   }
-  double top = karst_i_terrain_max_rect(&sc->terrain, sc->domain_min[0], sc->domain_max[0],
-                                        sc->domain_min[1], sc->domain_max[1]);
+  double bottom, top;
+  karst_i_surf_range(&geo->terrain, sc->domain_min[0], sc->domain_max[0], sc->domain_min[1],
+                     sc->domain_max[1], &bottom, &top);
   if (!(top > sc->domain_min[2]))
     return karst_set_error(ctx, KARST_EINVAL,
                            "the domain box (z from %g to %g m) lies entirely above the terrain "
@@ -939,7 +922,7 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
   for (int i = 0; i < sc->n_key_points; i++) {
     const karst_keypoint_t *k = &sc->key_points[i];
     const double *p = k->p;
-    if (karst_cost_in_bedrock(sc, p)) continue;
+    if (karst_geology_in_bedrock(geo, p)) continue;
     int inbox = isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
     for (int a = 0; inbox && a < 3; a++)
       inbox = p[a] >= sc->domain_min[a] && p[a] <= sc->domain_max[a];
@@ -947,9 +930,15 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
       return karst_set_error(ctx, KARST_EINVAL,
                              "key point '%s' (%g, %g, %g) is outside the domain box", k->name, p[0],
                              p[1], p[2]);
-    return karst_set_error(
-        ctx, KARST_EINVAL, "key point '%s' (%g, %g, %g) is above the terrain (terrain at %g m)",
-        k->name, p[0], p[1], p[2], karst_terrain_height(&sc->terrain, p[0], p[1]));
+    double h = karst_geology_terrain(geo, p[0], p[1]);
+    if (p[2] > h)
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "key point '%s' (%g, %g, %g) is above the terrain (terrain at %g m)",
+                             k->name, p[0], p[1], p[2], h);
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "key point '%s' (%g, %g, %g) is in an exclusion zone or an insoluble "
+                           "stratum",
+                           k->name, p[0], p[1], p[2]);
   }
   if (sc->n_key_points > sp->max_samples)
     return karst_set_error(ctx, KARST_ERANGE, "%d key points exceed sampling.max_samples = %lld",
@@ -964,17 +953,18 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
  *  2. points along each prescribed path's straight segment, evenly spaced at
  *     >= feature_radius, so that low-cost edges exist there (§4.2);
  *  3. feature-radius Poisson samples within ±feature_band of each inception
- *     horizon, then of the water table;
+ *     horizon, then of each spring's water table (once per distinct table);
  *  4. feature-radius Poisson samples where the resistance π is below
  *     sampling.permeable_threshold;
  *  5. fill samples at fill_radius elsewhere.
  * Within each source the samples are then ordered along a Morton curve
  * (cache locality for the graph and path stages).
- * Only points inside the domain box and strictly below the terrain are kept.
+ * Only points in the bedrock are kept: inside the domain box, strictly below
+ * the terrain, outside every exclusion zone and insoluble stratum.
  * Every random draw comes from @p rng or from streams derived from one draw
  * of it (same stream => same samples, for any ctx->nthreads).
  * @param ctx context (errors, progress, interrupt).
- * @param sc the scenario (validated here: radii, domain, key points).
+ * @param geo the geology of the realisation (validated here: radii, domain, key points).
  * @param rng the random stream of this stage.
  * @param out initialised sample set, replaced on success, unchanged on failure.
  * @return KARST_SUCCESS; KARST_EINVAL for an invalid scenario (e.g. a domain
@@ -985,15 +975,17 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc
  * KARST_SAMPLING_DART_PASSES darts per background cell, each checking O(1)
  * neighbouring cells; the fill is divided among ctx->nthreads threads.
  */
-karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_rng_t *rng,
+karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, karst_rng_t *rng,
                                  karst_samples_t *out) {
   karst_samples_t s;
   karst_samples_init(&s);
   sampler_t S;
   memset(&S, 0, sizeof S);
-  karst_error_t err = check_scenario(ctx, sc);
+  karst_error_t err = check_scenario(ctx, geo);
   if (err != KARST_SUCCESS) return err;
-  S.ctx = ctx, S.sc = sc, S.rng = rng, S.s = &s;
+  const karst_scenario_t *sc = geo->sc;
+  S.ctx = ctx, S.geo = geo, S.sc = sc, S.rng = rng, S.s = &s;
+  S.excluding = sc->n_exclusions > 0 || geo->n_insoluble > 0;
   S.rf = sc->sampling.feature_radius;
   S.rc = sc->sampling.fill_radius;
   S.rm = fmin(S.rf, S.rc);
@@ -1075,29 +1067,28 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_scenario_t *sc, k
       double p[3];
       for (int a = 0; a < 3; a++)
         p[a] = P[a] + (j / m) * (Q[a] - P[a]);
-      if (!karst_cost_in_bedrock(sc, p) || cgrid_conflict(&S.feat, p, S.rf)) continue;
+      if (!karst_geology_in_bedrock(geo, p) || cgrid_conflict(&S.feat, p, S.rf)) continue;
       if ((err = add_sample(&S, p, KARST_SAMPLE_PRESCRIBED)) != KARST_SUCCESS) goto cleanup;
     }
   }
 
   S.stage = "horizon";
   for (int h = 0; h < sc->n_horizons; h++) {
-    region_t R = {KARST_SAMPLE_HORIZON, &sc->horizons[h], sc->sampling.feature_band,
-                  plane_of(&sc->horizons[h])};
+    region_t R = {KARST_SAMPLE_HORIZON, &geo->horizon[h], sc->sampling.feature_band};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
   S.stage = "water table";
-  karst_horizon_t wt;
-  memset(&wt, 0, sizeof wt);
-  wt.elevation = sc->water_table;
-  wt.radius = 1.0;
-  if (isfinite(sc->water_table)) {
-    region_t R = {KARST_SAMPLE_WATER_TABLE, &wt, sc->sampling.feature_band, plane_of(&wt)};
+  for (int w = 0; w < geo->n_springs; w++) {
+    int seen = 0; /* springs sharing one water table sample it once */
+    for (int v = 0; v < w && !seen; v++)
+      seen = karst_i_surf_equal(&geo->water_table[v], &geo->water_table[w]);
+    if (seen) continue;
+    region_t R = {KARST_SAMPLE_WATER_TABLE, &geo->water_table[w], sc->sampling.feature_band};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
   S.stage = "permeability";
   {
-    region_t R = {KARST_SAMPLE_PERMEABILITY, NULL, 0.0, {0, 0, 0, 0, 0, 0, 1}};
+    region_t R = {KARST_SAMPLE_PERMEABILITY, NULL, 0.0};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
   S.stage = "fill";

@@ -44,10 +44,39 @@ karst_error_t karst_i_overrides_init(karst_ctx_t *ctx, karst_i_override_set_t *s
 }
 
 void karst_i_overrides_destroy(karst_i_override_set_t *set) {
+  for (int i = 0; i < set->n_files; i++) {
+    free(set->file_keys[i]);
+    free(set->file_values[i]);
+  }
+  free(set->file_keys);
+  free(set->file_values);
   free(set->types);
   free(set->targets);
   free(set->owner);
   memset(set, 0, sizeof *set);
+}
+
+int karst_i_overrides_note_file(karst_i_override_set_t *set, const char *key, const char *value) {
+  if (set->n_files == set->cap_files) {
+    int cap = set->cap_files ? 2 * set->cap_files : 8;
+    char **k = realloc(set->file_keys, (size_t)cap * sizeof *k);
+    if (!k) return -1;
+    set->file_keys = k;
+    char **v = realloc(set->file_values, (size_t)cap * sizeof *v);
+    if (!v) return -1;
+    set->file_values = v;
+    set->cap_files = cap;
+  }
+  char *kc = strdup(key), *vc = strdup(value);
+  if (!kc || !vc) {
+    free(kc);
+    free(vc);
+    return -1;
+  }
+  set->file_keys[set->n_files] = kc;
+  set->file_values[set->n_files] = vc;
+  set->n_files++;
+  return 0;
 }
 
 int karst_i_override_of(const karst_i_override_set_t *set, const yaml_document_t *doc,
@@ -407,13 +436,6 @@ karst_error_t karst_scenario_value_text(karst_ctx_t *ctx, const char *path, cons
   return err;
 }
 
-/* The scalar at "terrain.heightfield" of @p doc, or NULL. */
-static yaml_node_t *heightfield_node(yaml_document_t *doc) {
-  yaml_node_t *v = NULL;
-  lookup(doc, "terrain.heightfield", &v);
-  return v && v->type == YAML_SCALAR_NODE ? v : NULL;
-}
-
 /* @p target as a path relative to the directory @p from (both absolute and canonical). */
 static char *relative_path(const char *from, const char *target) {
   size_t common = 0, i = 0;
@@ -469,31 +491,43 @@ static int write_yaml(void *data, unsigned char *buffer, size_t size) {
   return fwrite(buffer, 1, size, (FILE *)data) == size;
 }
 
+/* The directory part of @p path ("." when there is none), malloc'ed. */
+static char *dir_of(const char *path) {
+  const char *slash = strrchr(path, '/');
+  if (!slash) return strdup(".");
+  size_t len = slash == path ? 1 : (size_t)(slash - path);
+  return strndup(path, len);
+}
+
 /**
  * Write scenario @p path with @p n overrides applied to @p out (scenario.h): the file's text
  * with the overridden scalars replaced when every override replaces a scalar the file gives
- * (not one shared through an alias), else the document as libyaml emits it; a relative
- * terrain.heightfield is rewritten relative to @p out's directory. The file is loaded back
+ * (not one shared through an alias), else the document as libyaml emits it. Every relative file
+ * path the reader resolved (terrain.heightfield, terrain.surface, surfaces of horizons and
+ * strata ...) is rewritten relative to @p out's directory. The file is loaded back
  * (karst_scenario_load) before it replaces @p out.
  * @return the codes of karst_scenario_load_with_overrides for @p path, KARST_EIO when @p out
- *         cannot be written, KARST_EEXTERNAL when libyaml cannot emit the document.
- * Time complexity: O(file size × (1 + n)) plus two scenario loads.
+ *         cannot be written or a file cannot be resolved, KARST_EEXTERNAL when libyaml cannot
+ *         emit the document.
+ * Time complexity: O(file size × (1 + n + files)) plus two scenario loads.
  */
 karst_error_t karst_scenario_write_with_overrides(karst_ctx_t *ctx, const char *path,
                                                   const karst_scenario_override_t *ov, int n,
                                                   const char *header, const char *out) {
   karst_error_t err = KARST_SUCCESS;
-  karst_i_override_set_t set, hset;
+  karst_i_override_set_t set, fset;
   karst_scenario_t sc, check;
   yaml_document_t doc;
-  int have_doc = 0;
+  int have_doc = 0, n_rebase = 0;
   unsigned char *text = NULL;
   size_t text_len = 0;
-  char *hf_abs = NULL, *out_dir = NULL, *out_copy = NULL, *rel = NULL;
+  char *src_dir = NULL, *out_dir = NULL, *out_parent = NULL;
+  char **rebased = NULL;
+  karst_scenario_override_t *fov = NULL;
   const karst_i_override_target_t **order = NULL;
+  const char **order_text = NULL;
   karst_atomic_file_t f = {0};
-  karst_scenario_override_t hov = {"terrain.heightfield", NULL, "rebasing terrain.heightfield", 0};
-  memset(&hset, 0, sizeof hset);
+  memset(&fset, 0, sizeof fset);
   karst_scenario_init(&sc);
   karst_scenario_init(&check);
   err = karst_i_overrides_init(ctx, &set, ov, n);
@@ -502,45 +536,60 @@ karst_error_t karst_scenario_write_with_overrides(karst_ctx_t *ctx, const char *
   if (err) goto cleanup;
   have_doc = 1;
 
-  /* A relative heightfield resolves from the scenario's directory: rewrite it for out's. */
-  yaml_node_t *hf = heightfield_node(&doc);
-  if (hf && sc.terrain.is_grid && sc.terrain.path && hf->data.scalar.value[0] != '/') {
-    out_copy = strdup(out);
-    if (!out_copy) goto no_memory;
-    char *slash = strrchr(out_copy, '/');
-    if (slash)
-      *(slash == out_copy ? slash + 1 : slash) = '\0';
-    else
-      strcpy(out_copy, ".");
-    hf_abs = realpath(sc.terrain.path, NULL);
-    out_dir = realpath(out_copy, NULL);
-    if (!hf_abs || !out_dir) {
-      err = karst_set_error(ctx, KARST_EIO, "%s: cannot resolve %s: %s", out,
-                            hf_abs ? out_copy : sc.terrain.path, strerror(errno));
+  /* Relative files resolve from the scenario's directory: rewrite them for out's. */
+  src_dir = dir_of(path);
+  out_parent = dir_of(out);
+  fov = calloc((size_t)(set.n_files > 0 ? set.n_files : 1), sizeof *fov);
+  rebased = calloc((size_t)(set.n_files > 0 ? set.n_files : 1), sizeof *rebased);
+  if (!src_dir || !out_parent || !fov || !rebased) goto no_memory;
+  for (int i = 0; i < set.n_files; i++) {
+    const char *name = set.file_values[i];
+    if (name[0] == '/') continue;
+    if (!out_dir && !(out_dir = realpath(out_parent, NULL))) {
+      err = karst_set_error(ctx, KARST_EIO, "%s: cannot resolve the directory %s: %s", out,
+                            out_parent, strerror(errno));
       goto cleanup;
     }
-    rel = relative_path(out_dir, hf_abs);
-    if (!rel) goto no_memory;
-    /* libyaml keeps the quotes out of the scalar: give the value as the reader will see it. */
-    hov.value = rel;
-    err = karst_i_overrides_init(ctx, &hset, &hov, 1);
+    size_t len = strlen(src_dir) + strlen(name) + 2;
+    char *joined = malloc(len);
+    if (!joined) goto no_memory;
+    snprintf(joined, len, "%s/%s", src_dir, name);
+    char *abs = realpath(joined, NULL);
+    free(joined);
+    if (!abs) {
+      err = karst_set_error(ctx, KARST_EIO, "%s: cannot resolve %s (%s): %s", path, name,
+                            set.file_keys[i], strerror(errno));
+      goto cleanup;
+    }
+    rebased[n_rebase] = relative_path(out_dir, abs);
+    free(abs);
+    if (!rebased[n_rebase]) goto no_memory;
+    fov[n_rebase] =
+        (karst_scenario_override_t){set.file_keys[i], rebased[n_rebase], "rebasing a file path", 0};
+    n_rebase++;
+  }
+  if (n_rebase > 0) {
+    err = karst_i_overrides_init(ctx, &fset, fov, n_rebase);
     if (err) goto cleanup;
-    hset.first_node = (int)(doc.nodes.top - doc.nodes.start) + 1;
-    err = karst_i_overrides_apply(ctx, path, &doc, &hset);
+    err = karst_i_overrides_apply(ctx, path, &doc, &fset);
     if (err) goto cleanup;
   }
 
   /* libyaml also reads UTF-16 files; their text is not edited in place. */
   int substitute = !(text_len >= 2 && ((text[0] == 0xFF && text[1] == 0xFE) ||
                                        (text[0] == 0xFE && text[1] == 0xFF)));
-  int total = n + (hset.n ? 1 : 0);
+  int total = n + n_rebase;
   order = calloc((size_t)(total > 0 ? total : 1), sizeof *order);
-  if (!order) goto no_memory;
+  order_text = calloc((size_t)(total > 0 ? total : 1), sizeof *order_text);
+  if (!order || !order_text) goto no_memory;
   for (int k = 0; k < n; k++) {
     if (!set.targets[k].replaced || set.targets[k].shared) substitute = 0;
     order[k] = &set.targets[k];
   }
-  if (hset.n) order[n] = &hset.targets[0];
+  for (int k = 0; k < n_rebase; k++) {
+    if (!fset.targets[k].replaced || fset.targets[k].shared) substitute = 0;
+    order[n + k] = &fset.targets[k];
+  }
   /* Marks count characters: turn them into byte offsets of the UTF-8 text. */
   for (int k = 0; k < total && substitute; k++) {
     karst_i_override_target_t *t = (karst_i_override_target_t *)order[k];
@@ -549,10 +598,16 @@ karst_error_t karst_scenario_write_with_overrides(karst_ctx_t *ctx, const char *
     t->start = (size_t)a;
     t->end = (size_t)b;
   }
-  /* Two overrides of one key: only the last one's text can be written in place. */
   qsort(order, (size_t)total, sizeof *order, cmp_target);
   for (int k = 1; k < total; k++)
     if (order[k]->start < order[k - 1]->end) substitute = 0;
+  /* The text of each target: a number as given, a path quoted. */
+  for (int k = 0; k < total; k++) {
+    for (int j = 0; j < n; j++)
+      if (order[k] == &set.targets[j]) order_text[k] = ov[j].value;
+    for (int j = 0; j < n_rebase; j++)
+      if (order[k] == &fset.targets[j]) order_text[k] = NULL; /* quoted below */
+  }
 
   err = karst_atomic_open(ctx, &f, out, "wb");
   if (err) goto cleanup;
@@ -561,12 +616,11 @@ karst_error_t karst_scenario_write_with_overrides(karst_ctx_t *ctx, const char *
     size_t at = 0;
     for (int k = 0; k < total; k++) {
       fwrite(text + at, 1, order[k]->start - at, f.fp);
-      const char *value = order[k] == &hset.targets[0] && hset.n ? rel : NULL;
-      if (value) {
-        quote_yaml(f.fp, value);
+      if (order_text[k]) {
+        fputs(order_text[k], f.fp);
       } else {
-        for (int j = 0; j < n; j++)
-          if (&set.targets[j] == order[k]) fputs(ov[j].value, f.fp);
+        for (int j = 0; j < n_rebase; j++)
+          if (order[k] == &fset.targets[j]) quote_yaml(f.fp, rebased[j]);
       }
       at = order[k]->end;
     }
@@ -611,13 +665,17 @@ cleanup:
   if (have_doc) yaml_document_delete(&doc);
   free(text);
   free(order);
-  free(rel);
-  free(hf_abs);
+  free(order_text);
+  for (int k = 0; rebased && k < n_rebase; k++)
+    free(rebased[k]);
+  free(rebased);
+  free(fov);
+  free(src_dir);
   free(out_dir);
-  free(out_copy);
+  free(out_parent);
   karst_scenario_destroy(&sc);
   karst_scenario_destroy(&check);
-  karst_i_overrides_destroy(&hset);
+  karst_i_overrides_destroy(&fset);
   karst_i_overrides_destroy(&set);
   return err;
 }

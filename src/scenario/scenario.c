@@ -17,6 +17,8 @@
 
 #include <yaml.h>
 
+#include "karst/geology.h"
+#include "karst/surface.h"
 #include "scenario_internal.h"
 
 /* ------------------------------------------------------------------------ */
@@ -51,7 +53,10 @@ void karst_scenario_init(karst_scenario_t *sc) {
   sc->cost.fracture_combine = KARST_FRACTURE_SUM;
   sc->tortuosity = 0.1;
   sc->classification.vertical_angle = 60.0;
-  sc->classification.water_table_band = 5.0;
+  sc->routing.vadose_factor = 2.0;
+  sc->routing.rise_cost = 4.0;
+  sc->routing.phreatic_depth = 50.0;
+  sc->routing.water_table_band = 5.0;
   sc->classification.epikarst_depth = 10.0;
   sc->classification.chamber_resistance = 0.05;
   sc->classification.radius_correlation = 100.0;
@@ -76,7 +81,18 @@ void karst_scenario_destroy(karst_scenario_t *sc) {
   free(sc->name);
   free(sc->terrain.path);
   free(sc->terrain.z);
+  karst_surface_free(sc->terrain.surface);
+  for (int i = 0; i < sc->n_horizons; i++)
+    free(sc->horizons[i].path), karst_surface_free(sc->horizons[i].surface);
   free(sc->horizons);
+  free(sc->water_table.path), karst_surface_free(sc->water_table.surface);
+  for (int i = 0; i < sc->n_key_points; i++)
+    free(sc->key_points[i].water_table.path),
+        karst_surface_free(sc->key_points[i].water_table.surface);
+  for (int i = 0; i < sc->n_strata; i++) {
+    free(sc->strata[i].top.path), karst_surface_free(sc->strata[i].top.surface);
+    free(sc->strata[i].bottom.path), karst_surface_free(sc->strata[i].bottom.surface);
+  }
   free(sc->fractures);
   if (sc->permeability.root) {
     free_perm(sc->permeability.root);
@@ -84,6 +100,14 @@ void karst_scenario_destroy(karst_scenario_t *sc) {
   }
   free(sc->key_points);
   free(sc->prescribed);
+  free(sc->strata);
+  for (int i = 0; i < sc->n_exclusions; i++)
+    free(sc->exclusions[i].polygon);
+  free(sc->exclusions);
+  free(sc->faults);
+  free(sc->connectivity.sinks);
+  free(sc->connectivity.springs);
+  free(sc->connectivity.matrix);
   memset(sc, 0, sizeof *sc);
 }
 
@@ -135,7 +159,7 @@ struct schema {
   int n;
 };
 
-#define MAX_FIELDS 24
+#define MAX_FIELDS 32
 #define PATH_LEN 256
 
 /* Everything the walk needs. */
@@ -145,7 +169,10 @@ struct reader {
   yaml_document_t *doc;
   karst_scenario_t *sc;
   long perm_nodes;
-  yaml_node_t *prescribed;     /* read after the key points, whose names it uses */
+  yaml_node_t *prescribed;   /* read after the key points, whose names it uses */
+  yaml_node_t *connectivity; /* likewise */
+  yaml_node_t **drains;      /* per key point: its drains_to list, read after all key points */
+  int n_drains;
   karst_i_override_set_t *ovs; /* values put into the document before the walk, or NULL */
 };
 
@@ -667,8 +694,16 @@ static karst_error_t read_kp_name(reader_t *r, yaml_node_t *n, void *base, const
   return KARST_SUCCESS;
 }
 
+static karst_error_t read_horizon_name(reader_t *r, yaml_node_t *n, void *base, const char *path);
+static karst_error_t read_horizon_surface(reader_t *r, yaml_node_t *n, void *base,
+                                          const char *path);
+static karst_error_t read_kp_water_table(reader_t *r, yaml_node_t *n, void *base, const char *path);
+static karst_error_t defer_drains(reader_t *r, yaml_node_t *n, void *base, const char *path);
+
 static const field_t horizon_fields[] = {
-    {.key = "elevation", .type = T_NUM, .off = offsetof(karst_horizon_t, elevation), .required = 1},
+    {.key = "name", .type = T_FN, .fn = read_horizon_name},
+    {.key = "surface", .type = T_FN, .fn = read_horizon_surface},
+    {.key = "elevation", .type = T_NUM, .off = offsetof(karst_horizon_t, elevation)},
     {.key = "dip",
      .type = T_NUM,
      .off = offsetof(karst_horizon_t, dip),
@@ -684,7 +719,61 @@ static const field_t horizon_fields[] = {
      .range = RANGE_GT(0, " m"),
      .required = 1},
 };
-static const schema_t horizon_schema = {horizon_fields, 5};
+static const schema_t horizon_schema = {horizon_fields, 7};
+
+static const field_t dfn_fields[] = {
+    {.key = "p32",
+     .type = T_NUM,
+     .off = offsetof(karst_fracture_t, p32),
+     .range = RANGE_GT(0, " m2/m3"),
+     .required = 1},
+    {.key = "size_exponent",
+     .type = T_NUM,
+     .off = offsetof(karst_fracture_t, size_exponent),
+     .range = RANGE_GT(1, "")},
+    {.key = "r_min",
+     .type = T_NUM,
+     .off = offsetof(karst_fracture_t, r_min),
+     .range = RANGE_GT(0, " m")},
+    {.key = "r_max",
+     .type = T_NUM,
+     .off = offsetof(karst_fracture_t, r_max),
+     .range = RANGE_GT(0, " m")},
+    {.key = "factor",
+     .type = T_NUM,
+     .off = offsetof(karst_fracture_t, factor),
+     .range = RANGE_OPEN_CLOSED(0, 1, "")},
+    {.key = "influence",
+     .type = T_NUM,
+     .off = offsetof(karst_fracture_t, influence),
+     .range = RANGE_GT(0, " m")},
+};
+static const schema_t dfn_schema = {dfn_fields, 6};
+
+/* fractures[i].fisher_kappa: a finite κ > 0 (not given: no dispersion, stored as 0). */
+static karst_error_t read_kappa(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  static const range_t gt0 = RANGE_GT(0, "");
+  char d[80];
+  double v = 0;
+  karst_error_t err = get_number(r, n, path, &v);
+  if (err) return err;
+  if (!in_range(&gt0, v))
+    return fail_at(r, n, KARST_ERANGE, "%s must be > 0, got %s", path, describe(n, d, sizeof d));
+  ((karst_fracture_t *)base)->kappa = v;
+  return KARST_SUCCESS;
+}
+
+/* fractures[i].dfn: the family realised as discs (docs/scenario.md, "Fractures"). */
+static karst_error_t read_dfn(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_fracture_t *f = base;
+  karst_error_t err = walk_map(r, n, &dfn_schema, f, path, NULL);
+  if (err) return err;
+  if (!(f->r_min <= f->r_max))
+    return fail_at(r, n, KARST_ERANGE, "%s: r_min (%g m) must not exceed r_max (%g m)", path,
+                   f->r_min, f->r_max);
+  f->dfn = 1;
+  return KARST_SUCCESS;
+}
 
 static const field_t fracture_fields[] = {
     {.key = "dip_direction",
@@ -701,8 +790,10 @@ static const field_t fracture_fields[] = {
      .type = T_NUM,
      .off = offsetof(karst_fracture_t, weight),
      .range = RANGE_GE(0, "")},
+    {.key = "fisher_kappa", .type = T_FN, .fn = read_kappa},
+    {.key = "dfn", .type = T_FN, .fn = read_dfn},
 };
-static const schema_t fracture_schema = {fracture_fields, 3};
+static const schema_t fracture_schema = {fracture_fields, 5};
 
 static const field_t keypoint_fields[] = {
     {.key = "name", .type = T_FN, .fn = read_kp_name},
@@ -713,15 +804,24 @@ static const field_t keypoint_fields[] = {
      .names = keypoint_type_names,
      .n_names = 3},
     {.key = "position", .type = T_VEC3, .off = offsetof(karst_keypoint_t, p), .required = 1},
+    {.key = "water_table", .type = T_FN, .fn = read_kp_water_table},
+    {.key = "drains_to", .type = T_FN, .fn = defer_drains},
 };
-static const schema_t keypoint_schema = {keypoint_fields, 3};
+static const schema_t keypoint_schema = {keypoint_fields, 5};
 
 static void init_horizon(void *item) {
   karst_horizon_t *h = item;
   h->origin[0] = h->origin[1] = NAN; /* domain centre, once the domain is known */
+  h->elevation = NAN;                /* required unless a surface file is given */
 }
 static void init_fracture(void *item) {
-  ((karst_fracture_t *)item)->weight = 1.0;
+  karst_fracture_t *f = item;
+  f->weight = 1.0;
+  f->size_exponent = 2.5; /* the power-law exponent of many joint sets (Bonnet et al. 2001) */
+  f->r_min = 5.0;
+  f->r_max = 50.0;
+  f->factor = 0.5;
+  f->influence = NAN; /* sampling.feature_radius, once sampling is read */
 }
 static void init_keypoint(void *item) {
   (void)item;
@@ -765,11 +865,16 @@ static karst_error_t read_units(reader_t *r, yaml_node_t *n, void *base, const c
                  path, describe(n, d, sizeof d));
 }
 
-/* terrain: {elevation: z} or {heightfield: file.asc}, the file relative to the scenario. */
+static char *resolve_relative(reader_t *r, const char *name, const char *path);
+static karst_error_t read_surface_file(reader_t *r, yaml_node_t *v, const char *path,
+                                       const char *file, struct karst_surface **out);
+
+/* terrain: {elevation: z}, {heightfield: file.asc} or {surface: file.ts|.asc}, files relative to
+ * the scenario. */
 static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const char *path) {
-  static const char *const keys[] = {"elevation", "heightfield"};
+  static const char *const keys[] = {"elevation", "heightfield", "surface"};
   karst_scenario_t *sc = base;
-  yaml_node_t *vals[2] = {NULL, NULL};
+  yaml_node_t *vals[3] = {NULL, NULL, NULL};
   char d[80], sub[PATH_LEN];
   karst_error_t err = KARST_SUCCESS;
   char *resolved = NULL;
@@ -781,19 +886,36 @@ static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const
                    path, describe(n, d, sizeof d));
   for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
     int idx = 0;
-    if ((err = check_key(r, n, p, keys, 2, path, NULL, &idx))) return err;
+    if ((err = check_key(r, n, p, keys, 3, path, NULL, &idx))) return err;
     vals[idx] = yaml_document_get_node(r->doc, p->value);
   }
-  if (vals[0] && vals[1])
-    return fail_at(r, n, KARST_EINVAL, "%s gives both elevation and heightfield; give one of them",
-                   path);
-  if (!vals[0] && !vals[1])
+  int given = !!vals[0] + !!vals[1] + !!vals[2];
+  if (given > 1)
     return fail_at(r, n, KARST_EINVAL,
-                   "%s must give elevation (flat, m) or heightfield (an ESRI ASCII grid file)",
+                   "%s gives more than one of elevation, heightfield and surface; give one of them",
                    path);
-  yaml_node_t *v = vals[0] ? vals[0] : vals[1];
+  if (given == 0)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s must give elevation (flat, m), heightfield (an ESRI ASCII grid file) or "
+                   "surface (a GOCAD TSurf or grid file)",
+                   path);
+  yaml_node_t *v = vals[0] ? vals[0] : (vals[1] ? vals[1] : vals[2]);
   sc->pos_terrain.line = line_of(v);
   sc->pos_terrain.column = col_of(v);
+  if (vals[2]) { /* a triangulated (or grid) terrain through the surface module */
+    const char *name;
+    join(sub, path, "surface");
+    if ((err = get_string(r, v, sub, &name))) return err;
+    free(sc->terrain.path);
+    if (!(sc->terrain.path = resolve_relative(r, name, sub))) return no_memory(r);
+    if ((err = read_surface_file(r, v, sub, sc->terrain.path, &sc->terrain.surface))) return err;
+    double lo[3], hi[3];
+    karst_surface_bounds(sc->terrain.surface, lo, hi);
+    sc->terrain.is_grid = 0;
+    sc->terrain.zmin = lo[2], sc->terrain.zmax = hi[2];
+    sc->terrain.lipschitz = karst_surface_lipschitz(sc->terrain.surface);
+    return KARST_SUCCESS;
+  }
   if (vals[0]) {
     join(sub, path, "elevation");
     if ((err = get_number(r, v, sub, &sc->terrain.elevation))) return err;
@@ -803,12 +925,7 @@ static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const
   join(sub, path, "heightfield");
   const char *hf;
   if ((err = get_string(r, v, sub, &hf))) return err;
-  const char *slash = strrchr(r->file, '/');
-  size_t dirlen = (hf[0] == '/' || !slash) ? 0 : (size_t)(slash - r->file) + 1;
-  resolved = malloc(dirlen + strlen(hf) + 1);
-  if (!resolved) return no_memory(r);
-  memcpy(resolved, r->file, dirlen);
-  strcpy(resolved + dirlen, hf);
+  if (!(resolved = resolve_relative(r, hf, sub))) return no_memory(r);
   if ((err = karst_i_open_regular(r->ctx, resolved, "heightfield", KARST_HEIGHTFIELD_MAX_BYTES,
                                   &fp))) {
     char msg[KARST_ERRMSG_MAX];
@@ -1025,6 +1142,439 @@ static karst_error_t read_radius(reader_t *r, yaml_node_t *n, void *base, const 
   return KARST_SUCCESS;
 }
 
+/* --- geological surfaces ------------------------------------------------- */
+
+/* The file @p name, given at key @p path, resolved relative to the scenario file (caller frees),
+ * or NULL (no memory). A load with overrides notes the key, so that a scenario written elsewhere
+ * can rebase it (karst_scenario_write_with_overrides). */
+static char *resolve_relative(reader_t *r, const char *name, const char *path) {
+  const char *slash = strrchr(r->file, '/');
+  size_t dirlen = (name[0] == '/' || !slash) ? 0 : (size_t)(slash - r->file) + 1;
+  char *out = malloc(dirlen + strlen(name) + 1);
+  if (!out) return NULL;
+  memcpy(out, r->file, dirlen);
+  strcpy(out + dirlen, name);
+  if (r->ovs && karst_i_overrides_note_file(r->ovs, path, name) != 0) {
+    free(out);
+    return NULL;
+  }
+  return out;
+}
+
+/* Read the surface file @p file (a grid .asc or a GOCAD TSurf .ts) into *out; a failure names
+ * the key and its position in the scenario after the file's own FILE:LINE message. */
+static karst_error_t read_surface_file(reader_t *r, yaml_node_t *v, const char *path,
+                                       const char *file, struct karst_surface **out) {
+  karst_surface_free(*out);
+  *out = NULL;
+  karst_error_t err = karst_surface_load(r->ctx, file, out);
+  if (err) {
+    size_t len = strlen(r->ctx->errmsg);
+    snprintf(r->ctx->errmsg + len, KARST_ERRMSG_MAX - len, " (the surface of %s at %s:%d:%d)", path,
+             r->file, line_of(v), col_of(v));
+  }
+  return err;
+}
+
+/* Read the surface file of a definition. */
+static karst_error_t load_surface_file(reader_t *r, yaml_node_t *v, const char *path,
+                                       karst_surface_def_t *d) {
+  return read_surface_file(r, v, path, d->path, &d->surface);
+}
+
+static karst_error_t read_surface_path(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_surface_def_t *d = base;
+  const char *name;
+  karst_error_t err = get_string(r, n, path, &name);
+  if (err) return err;
+  free(d->path);
+  if (!(d->path = resolve_relative(r, name, path))) return no_memory(r);
+  return load_surface_file(r, n, path, d);
+}
+
+static const field_t surface_fields[] = {
+    {.key = "elevation", .type = T_NUM, .off = offsetof(karst_surface_def_t, elevation)},
+    {.key = "dip",
+     .type = T_NUM,
+     .off = offsetof(karst_surface_def_t, dip),
+     .range = RANGE_CLOSED_OPEN(0, 90, " degrees")},
+    {.key = "dip_direction",
+     .type = T_NUM,
+     .off = offsetof(karst_surface_def_t, dip_direction),
+     .range = RANGE_CLOSED_OPEN(0, 360, " degrees")},
+    {.key = "origin", .type = T_VEC2, .off = offsetof(karst_surface_def_t, origin)},
+    {.key = "surface", .type = T_FN, .fn = read_surface_path},
+};
+static const schema_t surface_schema = {surface_fields, 5};
+
+/* A surface: a number (a horizontal plane at that elevation), a plane {elevation, dip,
+ * dip_direction, origin}, or {surface: FILE}. */
+static karst_error_t read_surface_def(reader_t *r, yaml_node_t *n, karst_surface_def_t *d,
+                                      const char *path) {
+  char d2[80];
+  karst_error_t err;
+  d->origin[0] = d->origin[1] = NAN; /* the domain centre, once the domain is known */
+  d->line = line_of(n);
+  d->column = col_of(n);
+  if (n->type == YAML_SCALAR_NODE) {
+    if ((err = get_number(r, n, path, &d->elevation))) return err;
+    d->given = 1;
+    return KARST_SUCCESS;
+  }
+  if (n->type != YAML_MAPPING_NODE)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s must be an elevation (m), a plane {elevation, dip, dip_direction, origin} "
+                   "or {surface: FILE}, got %s",
+                   path, describe(n, d2, sizeof d2));
+  d->elevation = NAN;
+  int has_file = 0, has_plane = 0;
+  for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
+    yaml_node_t *k = yaml_document_get_node(r->doc, p->key);
+    if (k->type != YAML_SCALAR_NODE) continue;
+    if (!strcmp(scalar(k), "surface"))
+      has_file = 1;
+    else
+      has_plane = 1;
+  }
+  if (has_file && has_plane) /* before any file is read */
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s gives both a surface file and plane keys (elevation, dip, dip_direction, "
+                   "origin); give one of them",
+                   path);
+  if ((err = walk_map(r, n, &surface_schema, d, path, NULL))) return err;
+  int plane_keys = 0;
+  for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
+    const char *k = scalar(yaml_document_get_node(r->doc, p->key));
+    plane_keys += strcmp(k, "surface") != 0;
+    if (!strcmp(k, "elevation")) { /* messages about the plane point at its elevation */
+      yaml_node_t *v = yaml_document_get_node(r->doc, p->value);
+      d->line = line_of(v), d->column = col_of(v);
+    }
+  }
+  if (d->path && plane_keys > 0)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s gives both a surface file and plane keys (elevation, dip, dip_direction, "
+                   "origin); give one of them",
+                   path);
+  if (!d->path && isnan(d->elevation))
+    return fail_at(r, n, KARST_EINVAL, "%s needs elevation (a plane) or surface (a file)", path);
+  d->given = 1;
+  return KARST_SUCCESS;
+}
+
+static karst_error_t read_water_table(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_scenario_t *sc = base;
+  karst_error_t err = read_surface_def(r, n, &sc->water_table, path);
+  sc->pos_water_table.line = line_of(n);
+  sc->pos_water_table.column = col_of(n);
+  return err;
+}
+
+static karst_error_t read_kp_water_table(reader_t *r, yaml_node_t *n, void *base,
+                                         const char *path) {
+  return read_surface_def(r, n, &((karst_keypoint_t *)base)->water_table, path);
+}
+
+/* drains_to: a list of spring names, resolved once every key point is known (finish). */
+static karst_error_t defer_drains(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  (void)path;
+  karst_keypoint_t *kp = base;
+  long idx = kp - r->sc->key_points;
+  if (idx < 0 || idx >= r->sc->n_key_points) return KARST_SUCCESS;
+  if (!r->drains) {
+    r->drains = calloc((size_t)r->sc->n_key_points, sizeof *r->drains);
+    if (!r->drains) return no_memory(r);
+    r->n_drains = r->sc->n_key_points;
+  }
+  r->drains[idx] = n;
+  kp->drains_line = line_of(n);
+  kp->drains_column = col_of(n);
+  return KARST_SUCCESS;
+}
+
+static karst_error_t read_stratum_top(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  return read_surface_def(r, n, &((karst_stratum_t *)base)->top, path);
+}
+static karst_error_t read_stratum_bottom(reader_t *r, yaml_node_t *n, void *base,
+                                         const char *path) {
+  return read_surface_def(r, n, &((karst_stratum_t *)base)->bottom, path);
+}
+
+/* A name of at most KARST_SCENARIO_NAME_MAX - 1 bytes into a char[KARST_SCENARIO_NAME_MAX] at base.
+ */
+static karst_error_t read_name_into(reader_t *r, yaml_node_t *n, char *out, const char *path) {
+  const char *s = NULL;
+  karst_error_t err = get_string(r, n, path, &s);
+  if (err) return err;
+  if (strlen(s) >= KARST_SCENARIO_NAME_MAX)
+    return fail_at(r, n, KARST_ERANGE, "%s must be at most %d characters, got %zu", path,
+                   KARST_SCENARIO_NAME_MAX - 1, strlen(s));
+  memcpy(out, s, strlen(s) + 1);
+  return KARST_SUCCESS;
+}
+static karst_error_t read_stratum_name(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  return read_name_into(r, n, ((karst_stratum_t *)base)->name, path);
+}
+static karst_error_t read_fault_name(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  return read_name_into(r, n, ((karst_fault_t *)base)->name, path);
+}
+static karst_error_t read_horizon_name(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  return read_name_into(r, n, ((karst_horizon_t *)base)->name, path);
+}
+
+static karst_error_t read_horizon_surface(reader_t *r, yaml_node_t *n, void *base,
+                                          const char *path) {
+  karst_horizon_t *h = base;
+  const char *name;
+  karst_error_t err = get_string(r, n, path, &name);
+  if (err) return err;
+  free(h->path);
+  if (!(h->path = resolve_relative(r, name, path))) return no_memory(r);
+  return read_surface_file(r, n, path, h->path, &h->surface);
+}
+
+static const char *const soluble_names[] = {"false", "true"};
+
+static const field_t strat_fields[] = {
+    {.key = "name", .type = T_FN, .fn = read_stratum_name},
+    {.key = "top", .type = T_FN, .fn = read_stratum_top},
+    {.key = "bottom", .type = T_FN, .fn = read_stratum_bottom},
+    {.key = "soluble",
+     .type = T_ENUM,
+     .off = offsetof(karst_stratum_t, soluble),
+     .names = soluble_names,
+     .n_names = 2},
+};
+static const schema_t strata_schema = {strat_fields, 4};
+
+static void init_stratum(void *item) {
+  ((karst_stratum_t *)item)->soluble = 1;
+}
+static karst_error_t read_strata(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_scenario_t *sc = base;
+  return read_list(r, n, path, sizeof(karst_stratum_t), &strata_schema, init_stratum,
+                   offsetof(karst_stratum_t, line), offsetof(karst_stratum_t, column),
+                   (void **)&sc->strata, &sc->n_strata);
+}
+
+/* --- exclusion zones ------------------------------------------------------ */
+
+static const field_t exbox_fields[] = {
+    {.key = "min", .type = T_VEC3, .off = offsetof(karst_exclusion_t, min), .required = 1},
+    {.key = "max", .type = T_VEC3, .off = offsetof(karst_exclusion_t, max), .required = 1},
+};
+static const schema_t exbox_schema = {exbox_fields, 2};
+static const field_t exsphere_fields[] = {
+    {.key = "center", .type = T_VEC3, .off = offsetof(karst_exclusion_t, center), .required = 1},
+    {.key = "radius",
+     .type = T_NUM,
+     .off = offsetof(karst_exclusion_t, radius),
+     .range = RANGE_GT(0, " m"),
+     .required = 1},
+};
+static const schema_t exsphere_schema = {exsphere_fields, 2};
+
+/* prism.polygon: [[x, y], ...], at least 3 vertices. */
+static karst_error_t read_polygon(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_exclusion_t *e = base;
+  char d[80], sub[PATH_LEN];
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of [x, y] vertices, got %s", path,
+                   describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m < 3 || m > KARST_SCENARIO_PRISM_MAX_VERTICES)
+    return fail_at(r, n, KARST_ERANGE, "%s must have 3 to %d vertices, got %ld", path,
+                   KARST_SCENARIO_PRISM_MAX_VERTICES, m);
+  double *poly = malloc(sizeof(double) * 2 * (size_t)m);
+  if (!poly) return no_memory(r);
+  free(e->polygon);
+  e->polygon = poly;
+  e->n_vertices = (int)m;
+  for (long i = 0; i < m; i++) {
+    yaml_node_t *v = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    index_path(sub, path, i);
+    karst_error_t err = get_vec(r, v, sub, 2, poly + 2 * i);
+    if (err) return err;
+  }
+  /* A polygon of zero area would exclude nothing but its outline. */
+  double area = 0;
+  for (long i = 0, j = m - 1; i < m; j = i++)
+    area += poly[2 * j] * poly[2 * i + 1] - poly[2 * i] * poly[2 * j + 1];
+  if (!(fabs(area) > 0))
+    return fail_at(r, n, KARST_EINVAL, "%s has zero area (its vertices are collinear)", path);
+  return KARST_SUCCESS;
+}
+static const field_t exprism_fields[] = {
+    {.key = "polygon", .type = T_FN, .fn = read_polygon, .required = 1},
+    {.key = "bottom", .type = T_NUM, .off = offsetof(karst_exclusion_t, bottom), .required = 1},
+    {.key = "top", .type = T_NUM, .off = offsetof(karst_exclusion_t, top), .required = 1},
+};
+static const schema_t exprism_schema = {exprism_fields, 3};
+
+static karst_error_t read_ex_name(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  return read_name_into(r, n, ((karst_exclusion_t *)base)->name, path);
+}
+/* One exclusion: a name and exactly one of box, sphere, prism. */
+static karst_error_t read_ex_shape(reader_t *r, yaml_node_t *n, void *base, const char *path,
+                                   int kind) {
+  karst_exclusion_t *e = base;
+  static const schema_t *const schemas[3] = {&exbox_schema, &exsphere_schema, &exprism_schema};
+  static const char *const names[3] = {"box", "sphere", "prism"};
+  if (e->kind >= 0)
+    return fail_at(r, n, KARST_EINVAL, "%s: an exclusion is one shape; this one is already a %s",
+                   path, names[e->kind]);
+  e->kind = kind;
+  karst_error_t err = walk_map(r, n, schemas[kind], e, path, NULL);
+  if (err) return err;
+  if (kind == KARST_EXCLUSION_BOX)
+    for (int a = 0; a < 3; a++)
+      if (!(e->min[a] < e->max[a]))
+        return fail_at(r, n, KARST_ERANGE, "%s: min[%d] (%g m) must be below max[%d] (%g m)", path,
+                       a, e->min[a], a, e->max[a]);
+  if (kind == KARST_EXCLUSION_PRISM && !(e->bottom < e->top))
+    return fail_at(r, n, KARST_ERANGE, "%s: bottom (%g m) must be below top (%g m)", path,
+                   e->bottom, e->top);
+  return KARST_SUCCESS;
+}
+static karst_error_t read_ex_box(reader_t *r, yaml_node_t *n, void *b, const char *p) {
+  return read_ex_shape(r, n, b, p, KARST_EXCLUSION_BOX);
+}
+static karst_error_t read_ex_sphere(reader_t *r, yaml_node_t *n, void *b, const char *p) {
+  return read_ex_shape(r, n, b, p, KARST_EXCLUSION_SPHERE);
+}
+static karst_error_t read_ex_prism(reader_t *r, yaml_node_t *n, void *b, const char *p) {
+  return read_ex_shape(r, n, b, p, KARST_EXCLUSION_PRISM);
+}
+static const field_t exclusion_fields[] = {
+    {.key = "name", .type = T_FN, .fn = read_ex_name},
+    {.key = "box", .type = T_FN, .fn = read_ex_box},
+    {.key = "sphere", .type = T_FN, .fn = read_ex_sphere},
+    {.key = "prism", .type = T_FN, .fn = read_ex_prism},
+};
+static const schema_t exclusion_schema = {exclusion_fields, 4};
+static void init_exclusion(void *item) {
+  ((karst_exclusion_t *)item)->kind = -1;
+}
+static karst_error_t read_exclusions(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_scenario_t *sc = base;
+  karst_error_t err =
+      read_list(r, n, path, sizeof(karst_exclusion_t), &exclusion_schema, init_exclusion,
+                offsetof(karst_exclusion_t, line), offsetof(karst_exclusion_t, column),
+                (void **)&sc->exclusions, &sc->n_exclusions);
+  if (err) return err;
+  for (int i = 0; i < sc->n_exclusions; i++)
+    if (sc->exclusions[i].kind < 0) {
+      char sub[PATH_LEN];
+      index_path(sub, path, i);
+      return karst_set_error(r->ctx, KARST_EINVAL, "%s:%d:%d: %s needs one of box, sphere, prism",
+                             r->file, sc->exclusions[i].line, sc->exclusions[i].column, sub);
+    }
+  return KARST_SUCCESS;
+}
+
+/* --- faults ----------------------------------------------------------------- */
+
+/* faults[i].radius: a finite radius > 0 (not given: an unbounded plane, stored as INFINITY). */
+static karst_error_t read_fault_radius(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  static const range_t gt0 = RANGE_GT(0, " m");
+  char d[80];
+  double v = 0;
+  karst_error_t err = get_number(r, n, path, &v);
+  if (err) return err;
+  if (!in_range(&gt0, v))
+    return fail_at(r, n, KARST_ERANGE, "%s must be > 0 m, got %s", path, describe(n, d, sizeof d));
+  ((karst_fault_t *)base)->radius = v;
+  return KARST_SUCCESS;
+}
+
+static const char *const fault_kind_names[] = {"conduit", "barrier"};
+static const field_t fault_fields[] = {
+    {.key = "name", .type = T_FN, .fn = read_fault_name},
+    {.key = "center", .type = T_VEC3, .off = offsetof(karst_fault_t, center), .required = 1},
+    {.key = "dip_direction",
+     .type = T_NUM,
+     .off = offsetof(karst_fault_t, dip_direction),
+     .range = RANGE_CLOSED_OPEN(0, 360, " degrees"),
+     .required = 1},
+    {.key = "dip",
+     .type = T_NUM,
+     .off = offsetof(karst_fault_t, dip),
+     .range = RANGE_CLOSED(0, 90, " degrees"),
+     .required = 1},
+    {.key = "radius", .type = T_FN, .fn = read_fault_radius},
+    {.key = "damage_zone",
+     .type = T_NUM,
+     .off = offsetof(karst_fault_t, damage_zone),
+     .range = RANGE_GT(0, " m")},
+    {.key = "kind",
+     .type = T_ENUM,
+     .off = offsetof(karst_fault_t, barrier),
+     .names = fault_kind_names,
+     .n_names = 2},
+    {.key = "factor",
+     .type = T_NUM,
+     .off = offsetof(karst_fault_t, factor),
+     .range = RANGE_OPEN_CLOSED(0, 1, "")},
+    {.key = "crossing_cost",
+     .type = T_NUM,
+     .off = offsetof(karst_fault_t, crossing_cost),
+     .range = RANGE_GE(0, "")},
+};
+static const schema_t fault_schema = {fault_fields, 9};
+static void init_fault(void *item) {
+  karst_fault_t *f = item;
+  f->radius = INFINITY;
+  f->damage_zone = 10.0;
+  f->factor = 0.3;
+  f->crossing_cost = 100.0;
+}
+static karst_error_t read_faults(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_scenario_t *sc = base;
+  return read_list(r, n, path, sizeof(karst_fault_t), &fault_schema, init_fault,
+                   offsetof(karst_fault_t, line), offsetof(karst_fault_t, column),
+                   (void **)&sc->faults, &sc->n_faults);
+}
+
+/* --- connectivity --------------------------------------------------------- */
+
+static karst_error_t defer_connectivity(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  (void)base;
+  (void)path;
+  r->connectivity = n;
+  return KARST_SUCCESS;
+}
+
+static const field_t routing_fields[] = {
+    {.key = "vadose_factor",
+     .type = T_NUM,
+     .off = offsetof(karst_routing_t, vadose_factor),
+     .range = RANGE_GE(1, "")},
+    {.key = "rise_cost",
+     .type = T_NUM,
+     .off = offsetof(karst_routing_t, rise_cost),
+     .range = RANGE_GE(0, "")},
+    {.key = "phreatic_depth",
+     .type = T_NUM,
+     .off = offsetof(karst_routing_t, phreatic_depth),
+     .range = RANGE_GT(0, " m")},
+    {.key = "water_table_band",
+     .type = T_NUM,
+     .off = offsetof(karst_routing_t, water_table_band),
+     .range = RANGE_GE(0, " m")},
+};
+static const schema_t routing_schema = {routing_fields, 4};
+
+/* classification.water_table_band moved to routing.water_table_band (the band is the routing's
+ * epiphreatic zone, which the classification also uses): say so rather than "unknown key". */
+static karst_error_t moved_water_table_band(reader_t *r, yaml_node_t *n, void *base,
+                                            const char *path) {
+  (void)base;
+  return fail_at(r, n, KARST_EINVAL,
+                 "%s is now routing.water_table_band (the epiphreatic band of the two-stage "
+                 "routing, which the classification uses too); move it there",
+                 path);
+}
+
 /* --- the top level --------------------------------------------------------- */
 
 static const field_t domain_fields[] = {
@@ -1032,15 +1582,6 @@ static const field_t domain_fields[] = {
     {.key = "max", .type = T_VEC3, .off = offsetof(karst_scenario_t, domain_max), .required = 1},
 };
 static const schema_t domain_schema = {domain_fields, 2};
-
-static const field_t water_table_fields[] = {
-    {.key = "elevation",
-     .type = T_NUM,
-     .off = offsetof(karst_scenario_t, water_table),
-     .required = 1,
-     .pos = offsetof(karst_scenario_t, pos_water_table)},
-};
-static const schema_t water_table_schema = {water_table_fields, 1};
 
 static const field_t permeability_fields[] = {
     {.key = "background",
@@ -1150,10 +1691,6 @@ static const field_t classification_fields[] = {
      .type = T_NUM,
      .off = offsetof(karst_classification_t, vertical_angle),
      .range = RANGE_CLOSED(0, 90, " degrees")},
-    {.key = "water_table_band",
-     .type = T_NUM,
-     .off = offsetof(karst_classification_t, water_table_band),
-     .range = RANGE_GE(0, " m")},
     {.key = "epikarst_depth",
      .type = T_NUM,
      .off = offsetof(karst_classification_t, epikarst_depth),
@@ -1167,6 +1704,7 @@ static const field_t classification_fields[] = {
      .off = offsetof(karst_classification_t, radius_correlation),
      .range = RANGE_GE(0, " m")},
     {.key = "radius", .type = T_FN, .fn = read_radius},
+    {.key = "water_table_band", .type = T_FN, .fn = moved_water_table_band},
 };
 static const schema_t classification_schema = {classification_fields, 6};
 
@@ -1187,7 +1725,15 @@ static const field_t top_fields[] = {
      .sub = &domain_schema,
      .pos = offsetof(karst_scenario_t, pos_domain)},
     {.key = "terrain", .type = T_FN, .fn = read_terrain},
-    {.key = "water_table", .type = T_MAP, .sub = &water_table_schema},
+    {.key = "water_table", .type = T_FN, .fn = read_water_table},
+    {.key = "strata", .type = T_FN, .fn = read_strata},
+    {.key = "exclusions", .type = T_FN, .fn = read_exclusions},
+    {.key = "faults", .type = T_FN, .fn = read_faults},
+    {.key = "connectivity", .type = T_FN, .fn = defer_connectivity},
+    {.key = "routing",
+     .type = T_MAP,
+     .off = offsetof(karst_scenario_t, routing),
+     .sub = &routing_schema},
     {.key = "horizons", .type = T_FN, .fn = read_horizons},
     {.key = "fractures", .type = T_FN, .fn = read_fractures},
     {.key = "permeability",
@@ -1220,7 +1766,7 @@ static const field_t top_fields[] = {
      .sub = &classification_schema},
     {.key = "random", .type = T_MAP, .sub = &random_schema},
 };
-static const schema_t top_schema = {top_fields, 17};
+static const schema_t top_schema = {top_fields, 22};
 _Static_assert(sizeof top_fields / sizeof top_fields[0] <= MAX_FIELDS, "raise MAX_FIELDS");
 
 /* ------------------------------------------------------------------------ */
@@ -1375,6 +1921,185 @@ static karst_error_t name_key_points(reader_t *r) {
   return KARST_SUCCESS;
 }
 
+/* Index of the key point named @p name among those of @p type, or fail with a did-you-mean. */
+static karst_error_t key_of_type(reader_t *r, yaml_node_t *v, const char *path,
+                                 karst_keypoint_type_t type, int *out) {
+  karst_scenario_t *sc = r->sc;
+  const char *name;
+  char nm[64];
+  karst_error_t err = get_string(r, v, path, &name);
+  if (err) return err;
+  int k = find_key_point(sc, name);
+  if (k >= 0 && sc->key_points[k].type == type) {
+    *out = k;
+    return KARST_SUCCESS;
+  }
+  clip(name, strlen(name), nm, sizeof nm);
+  if (k >= 0)
+    return fail_at(r, v, KARST_EINVAL, "%s names key point '%s', which is a %s, not a %s", path, nm,
+                   keypoint_type_names[sc->key_points[k].type], keypoint_type_names[type]);
+  const char **names = malloc(sizeof(char *) * (sc->n_key_points > 0 ? sc->n_key_points : 1));
+  if (!names) return no_memory(r);
+  int m = 0;
+  for (int i = 0; i < sc->n_key_points; i++)
+    if (sc->key_points[i].type == type) names[m++] = sc->key_points[i].name;
+  const char *hint = karst_i_suggest(name, names, m);
+  err = fail_at(r, v, KARST_ENOTFOUND, "%s names an unknown %s '%s'%s%s%s", path,
+                keypoint_type_names[type], nm, hint ? " (did you mean '" : "", hint ? hint : "",
+                hint ? "'?)" : "");
+  free(names);
+  return err;
+}
+
+/* key_points[i].drains_to: [spring, ...]. */
+static karst_error_t read_drains(reader_t *r, int i, yaml_node_t *n) {
+  karst_keypoint_t *kp = &r->sc->key_points[i];
+  char d[80], kpath[PATH_LEN], path[PATH_LEN], sub[PATH_LEN];
+  index_path(kpath, "key_points", i);
+  join(path, kpath, "drains_to");
+  if (kp->type != KARST_KEYPOINT_SINK)
+    return fail_at(r, n, KARST_EINVAL, "%s: only a sink drains to springs; '%s' is a %s", path,
+                   kp->name, keypoint_type_names[kp->type]);
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of spring names, got %s", path,
+                   describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m < 1 || m > KARST_SCENARIO_MAX_SPRINGS)
+    return fail_at(r, n, KARST_ERANGE, "%s must name 1 to %d springs, got %ld", path,
+                   KARST_SCENARIO_MAX_SPRINGS, m);
+  kp->n_drains_to = 0;
+  for (long j = 0; j < m; j++) {
+    yaml_node_t *v = yaml_document_get_node(r->doc, n->data.sequence.items.start[j]);
+    int k;
+    index_path(sub, path, j);
+    karst_error_t err = key_of_type(r, v, sub, KARST_KEYPOINT_SPRING, &k);
+    if (err) return err;
+    for (int q = 0; q < kp->n_drains_to; q++)
+      if (kp->drains_to[q] == k)
+        return fail_at(r, v, KARST_EINVAL, "%s names spring '%s' twice", path,
+                       r->sc->key_points[k].name);
+    kp->drains_to[kp->n_drains_to++] = k;
+  }
+  return KARST_SUCCESS;
+}
+
+/* A list of key-point names of one type into a new array of indices. */
+static karst_error_t read_name_list(reader_t *r, yaml_node_t *n, const char *path,
+                                    karst_keypoint_type_t type, int **out, int *count) {
+  char d[80], sub[PATH_LEN];
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of %s names, got %s", path,
+                   keypoint_type_names[type], describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m < 1 || m > r->sc->n_key_points)
+    return fail_at(r, n, KARST_ERANGE, "%s must name 1 to %d key points, got %ld", path,
+                   r->sc->n_key_points, m);
+  int *v = malloc(sizeof(int) * (size_t)m);
+  if (!v) return no_memory(r);
+  free(*out);
+  *out = v;
+  *count = (int)m;
+  for (long j = 0; j < m; j++) {
+    yaml_node_t *it = yaml_document_get_node(r->doc, n->data.sequence.items.start[j]);
+    index_path(sub, path, j);
+    karst_error_t err = key_of_type(r, it, sub, type, &v[j]);
+    if (err) return err;
+    for (long q = 0; q < j; q++)
+      if (v[q] == v[j])
+        return fail_at(r, it, KARST_EINVAL, "%s names '%s' twice", path,
+                       r->sc->key_points[v[j]].name);
+  }
+  return KARST_SUCCESS;
+}
+
+/* connectivity: {sinks: [...], springs: [...], matrix: [[0|1|2, ...], ...]} (KarstNSim's
+ * matrix: rows sinks, columns springs); sinks and springs default to all, in file order. */
+static karst_error_t read_connectivity(reader_t *r, yaml_node_t *n) {
+  static const char *const keys[] = {"sinks", "springs", "matrix"};
+  karst_scenario_t *sc = r->sc;
+  karst_connectivity_t *c = &sc->connectivity;
+  const char *path = "connectivity";
+  char d[80], sub[PATH_LEN], sub2[PATH_LEN];
+  yaml_node_t *vals[3] = {NULL, NULL, NULL};
+  karst_error_t err;
+  if (is_null(n)) return KARST_SUCCESS;
+  if (n->type != YAML_MAPPING_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a map with sinks, springs and matrix, got %s",
+                   path, describe(n, d, sizeof d));
+  for (yaml_node_pair_t *p = n->data.mapping.pairs.start; p < n->data.mapping.pairs.top; p++) {
+    int idx = 0;
+    if ((err = check_key(r, n, p, keys, 3, path, NULL, &idx))) return err;
+    vals[idx] = yaml_document_get_node(r->doc, p->value);
+  }
+  if (!vals[2]) return fail_at(r, n, KARST_EINVAL, "%s is missing the required key 'matrix'", path);
+  c->line = line_of(n);
+  c->column = col_of(n);
+  for (int t = 0; t < 2; t++) {
+    karst_keypoint_type_t type = t ? KARST_KEYPOINT_SPRING : KARST_KEYPOINT_SINK;
+    int **list = t ? &c->springs : &c->sinks, *cnt = t ? &c->n_springs : &c->n_sinks;
+    join(sub, path, keys[t]);
+    if (vals[t]) {
+      if ((err = read_name_list(r, vals[t], sub, type, list, cnt))) return err;
+    } else {
+      int m = 0;
+      for (int i = 0; i < sc->n_key_points; i++)
+        m += sc->key_points[i].type == type;
+      if (m == 0)
+        return fail_at(r, n, KARST_EINVAL, "%s: the scenario has no %s", path,
+                       keypoint_type_names[type]);
+      if (!(*list = malloc(sizeof(int) * (size_t)m))) return no_memory(r);
+      *cnt = 0;
+      for (int i = 0; i < sc->n_key_points; i++)
+        if (sc->key_points[i].type == type) (*list)[(*cnt)++] = i;
+    }
+  }
+  yaml_node_t *mx = vals[2];
+  join(sub, path, "matrix");
+  long rows = mx->type == YAML_SEQUENCE_NODE
+                  ? mx->data.sequence.items.top - mx->data.sequence.items.start
+                  : -1;
+  if (rows != c->n_sinks)
+    return fail_at(
+        r, mx, KARST_EINVAL, "%s must be a list of %d rows (one per sink), got %s", sub, c->n_sinks,
+        rows < 0 ? describe(mx, d, sizeof d) : (snprintf(d, sizeof d, "%ld rows", rows), d));
+  if (!(c->matrix = malloc((size_t)c->n_sinks * (size_t)c->n_springs))) return no_memory(r);
+  for (long i = 0; i < rows; i++) {
+    yaml_node_t *row = yaml_document_get_node(r->doc, mx->data.sequence.items.start[i]);
+    index_path(sub2, sub, i);
+    long cols = row->type == YAML_SEQUENCE_NODE
+                    ? row->data.sequence.items.top - row->data.sequence.items.start
+                    : -1;
+    if (cols != c->n_springs)
+      return fail_at(r, row, KARST_EINVAL,
+                     "%s (sink '%s') must list %d values 0, 1 or 2 (one per spring), got %s", sub2,
+                     sc->key_points[c->sinks[i]].name, c->n_springs,
+                     cols < 0 ? describe(row, d, sizeof d)
+                              : (snprintf(d, sizeof d, "%ld values", cols), d));
+    int any = 0;
+    for (long j = 0; j < cols; j++) {
+      yaml_node_t *v = yaml_document_get_node(r->doc, row->data.sequence.items.start[j]);
+      char sub3[PATH_LEN];
+      int64_t x;
+      index_path(sub3, sub2, j);
+      if ((err = get_integer(r, v, sub3, 0, 2, 0, 2, &x))) return err;
+      c->matrix[i * c->n_springs + j] = (unsigned char)x;
+      any |= x > 0;
+    }
+    if (!any)
+      return fail_at(r, row, KARST_EINVAL,
+                     "%s: sink '%s' may drain to no spring (every value is 0); allow at least one",
+                     sub2, sc->key_points[c->sinks[i]].name);
+  }
+  c->given = 1;
+  return KARST_SUCCESS;
+}
+
+/* Plane origins left out default to the domain centre. */
+static void centre_origin(const karst_scenario_t *sc, karst_surface_def_t *d) {
+  for (int a = 0; a < 2; a++)
+    if (isnan(d->origin[a])) d->origin[a] = 0.5 * (sc->domain_min[a] + sc->domain_max[a]);
+}
+
 static karst_error_t finish(reader_t *r) {
   karst_scenario_t *sc = r->sc;
   karst_error_t err;
@@ -1386,14 +2111,36 @@ static karst_error_t finish(reader_t *r) {
     sc->name = strndup(base, len);
     if (!sc->name) return no_memory(r);
   }
-  if (!sc->pos_water_table.line) sc->water_table = sc->domain_min[2];
   for (int i = 0; i < sc->n_horizons; i++) {
+    karst_horizon_t *h = &sc->horizons[i];
     for (int a = 0; a < 2; a++)
-      if (isnan(sc->horizons[i].origin[a]))
-        sc->horizons[i].origin[a] = 0.5 * (sc->domain_min[a] + sc->domain_max[a]);
+      if (isnan(h->origin[a])) h->origin[a] = 0.5 * (sc->domain_min[a] + sc->domain_max[a]);
+    if (!h->path && isnan(h->elevation))
+      return karst_set_error(r->ctx, KARST_EINVAL,
+                             "%s:%d:%d: horizons[%d] needs elevation (a plane) or surface (a "
+                             "grid or TSurf file)",
+                             r->file, h->line, h->column, i);
+    if (h->path && !isnan(h->elevation))
+      return karst_set_error(r->ctx, KARST_EINVAL,
+                             "%s:%d:%d: horizons[%d] gives both elevation and surface; give one "
+                             "of them",
+                             r->file, h->line, h->column, i);
+    if (h->path) h->elevation = 0; /* unused: the surface file gives the elevations */
   }
+  centre_origin(sc, &sc->water_table);
+  for (int i = 0; i < sc->n_key_points; i++)
+    centre_origin(sc, &sc->key_points[i].water_table);
+  for (int i = 0; i < sc->n_strata; i++) {
+    centre_origin(sc, &sc->strata[i].top);
+    centre_origin(sc, &sc->strata[i].bottom);
+  }
+  for (int i = 0; i < sc->n_fractures; i++)
+    if (isnan(sc->fractures[i].influence)) sc->fractures[i].influence = sc->sampling.feature_radius;
   if ((err = name_key_points(r))) return err;
   if (r->prescribed && (err = read_prescribed(r, r->prescribed))) return err;
+  for (int i = 0; i < r->n_drains; i++)
+    if (r->drains[i] && (err = read_drains(r, i, r->drains[i]))) return err;
+  if (r->connectivity && (err = read_connectivity(r, r->connectivity))) return err;
   return KARST_SUCCESS;
 }
 
@@ -1554,6 +2301,46 @@ static karst_error_t check_perm(karst_ctx_t *ctx, const karst_scenario_t *sc,
                     (int)n->kind);
 }
 
+/* A plane surface must have finite values; a file surface must have been read. */
+static karst_error_t check_surface(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                   const karst_surface_def_t *d, const char *path) {
+  if (!d->given) return KARST_SUCCESS;
+  if (d->path) {
+    if (!d->surface)
+      return check_fail(ctx, sc, d->line, d->column, KARST_EINVAL,
+                        "%s: the surface file '%s' was not read", path, d->path);
+    const double lo[2] = {sc->domain_min[0], sc->domain_min[1]},
+                 hi[2] = {sc->domain_max[0], sc->domain_max[1]};
+    karst_ctx_t cover;
+    karst_ctx_init(&cover);
+    if (karst_surface_check_covers(&cover, d->surface, lo, hi, path))
+      return check_fail(ctx, sc, d->line, d->column, KARST_ERANGE, "%s", cover.errmsg);
+    return KARST_SUCCESS;
+  }
+  if (!isfinite(d->elevation) || !isfinite(d->origin[0]) || !isfinite(d->origin[1]))
+    return check_fail(ctx, sc, d->line, d->column, KARST_ERANGE,
+                      "%s: elevation and origin must be finite, got %g at (%g, %g)", path,
+                      d->elevation, d->origin[0], d->origin[1]);
+  if (!(d->dip >= 0 && d->dip < 90) || !(d->dip_direction >= 0 && d->dip_direction < 360))
+    return check_fail(ctx, sc, d->line, d->column, KARST_ERANGE,
+                      "%s: dip must be within [0, 90) and dip_direction within [0, 360) degrees, "
+                      "got %g and %g",
+                      path, d->dip, d->dip_direction);
+  return KARST_SUCCESS;
+}
+
+/* A water table given as a plane must reach the domain: its elevation at the origin within the
+ * domain's z range. */
+static karst_error_t check_water_table(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                       const karst_surface_def_t *d, const char *path) {
+  if (!d->given || d->path) return KARST_SUCCESS;
+  if (!(d->elevation >= sc->domain_min[2] && d->elevation <= sc->domain_max[2]))
+    return check_fail(ctx, sc, d->line, d->column, KARST_ERANGE,
+                      "%s.elevation must be within the domain's z range [%g, %g] m, got %g", path,
+                      sc->domain_min[2], sc->domain_max[2], d->elevation);
+  return KARST_SUCCESS;
+}
+
 /**
  * Check the rules of a scenario: every field within its documented range,
  * and the cross-field rules — domain min < max, the terrain above the domain
@@ -1594,7 +2381,19 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
   }
 
   const karst_terrain_t *tr = &sc->terrain;
-  if (tr->is_grid) {
+  if (tr->surface) {
+    const double lo[2] = {sc->domain_min[0], sc->domain_min[1]},
+                 hi[2] = {sc->domain_max[0], sc->domain_max[1]};
+    karst_ctx_t cover;
+    karst_ctx_init(&cover);
+    if (karst_surface_check_covers(&cover, tr->surface, lo, hi, "terrain.surface"))
+      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE, "%s", cover.errmsg);
+    if (!(tr->zmax > sc->domain_min[2]))
+      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE,
+                        "terrain.surface '%s' peaks at %g m, not above domain.min z (%g m): "
+                        "there is no bedrock",
+                        tr->path ? tr->path : "", tr->zmax, sc->domain_min[2]);
+  } else if (tr->is_grid) {
     if (!tr->z || tr->ncols < 1 || tr->nrows < 1 || !(tr->cellsize > 0))
       return check_fail(ctx, sc, pt->line, pt->column, KARST_EINVAL,
                         "terrain.heightfield holds no grid");
@@ -1621,11 +2420,66 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
                         tr->elevation, sc->domain_min[2]);
   }
 
-  if (!(sc->water_table >= sc->domain_min[2] && sc->water_table <= sc->domain_max[2]))
-    return check_fail(
-        ctx, sc, sc->pos_water_table.line, sc->pos_water_table.column, KARST_ERANGE,
-        "water_table.elevation must be within the domain's z range [%g, %g] m, got %g",
-        sc->domain_min[2], sc->domain_max[2], sc->water_table);
+  if ((err = check_surface(ctx, sc, &sc->water_table, "water_table"))) return err;
+  if ((err = check_water_table(ctx, sc, &sc->water_table, "water_table"))) return err;
+  for (int i = 0; i < sc->n_key_points; i++) {
+    const karst_keypoint_t *kp = &sc->key_points[i];
+    char kpath[PATH_LEN];
+    index_path(kpath, "key_points", i);
+    join(sub, kpath, "water_table");
+    if (kp->water_table.given && kp->type != KARST_KEYPOINT_SPRING)
+      return check_fail(ctx, sc, kp->water_table.line, kp->water_table.column, KARST_EINVAL,
+                        "%s: only a spring has a water table; '%s' is a %s", sub, kp->name,
+                        keypoint_type_names[kp->type]);
+    if ((err = check_surface(ctx, sc, &kp->water_table, sub))) return err;
+    if ((err = check_water_table(ctx, sc, &kp->water_table, sub))) return err;
+  }
+  for (int i = 0; i < sc->n_strata; i++) {
+    const karst_stratum_t *st = &sc->strata[i];
+    index_path(sub, "strata", i);
+    char sub2[PATH_LEN];
+    join(sub2, sub, "top");
+    if ((err = check_surface(ctx, sc, &st->top, sub2))) return err;
+    join(sub2, sub, "bottom");
+    if ((err = check_surface(ctx, sc, &st->bottom, sub2))) return err;
+    for (int j = 0; j < i; j++)
+      if (st->name[0] && !strcmp(st->name, sc->strata[j].name))
+        return check_fail(ctx, sc, st->line, st->column, KARST_EINVAL,
+                          "%s.name '%s' is already used by strata[%d] (line %d)", sub, st->name, j,
+                          sc->strata[j].line);
+  }
+  for (int i = 0; i < sc->n_exclusions; i++) {
+    const karst_exclusion_t *e = &sc->exclusions[i];
+    int ok = 1;
+    for (int a = 0; a < 3; a++)
+      ok &= isfinite(e->min[a]) && isfinite(e->max[a]) && isfinite(e->center[a]);
+    if (e->kind == KARST_EXCLUSION_SPHERE) ok &= e->radius > 0 && isfinite(e->radius);
+    if (e->kind == KARST_EXCLUSION_PRISM) {
+      ok &= e->n_vertices >= 3 && e->polygon && e->bottom < e->top;
+      for (int v = 0; ok && v < 2 * e->n_vertices; v++)
+        ok &= isfinite(e->polygon[v]);
+    }
+    if (e->kind < 0 || e->kind > 2 || !ok)
+      return check_fail(ctx, sc, e->line, e->column, KARST_EINVAL,
+                        "exclusions[%d] is not a valid box, sphere or prism", i);
+  }
+  for (int i = 0; i < sc->n_faults; i++) {
+    const karst_fault_t *f = &sc->faults[i];
+    index_path(sub, "faults", i);
+    if ((err = check_values(ctx, sc, &fault_schema, (const char *)f, sub, f->line, f->column)))
+      return err;
+  }
+  if (sc->connectivity.given) {
+    const karst_connectivity_t *c = &sc->connectivity;
+    for (int i = 0; i < c->n_sinks; i++) {
+      const karst_keypoint_t *kp = &sc->key_points[c->sinks[i]];
+      if (kp->n_drains_to > 0)
+        return check_fail(ctx, sc, kp->drains_line, kp->drains_column, KARST_EINVAL,
+                          "key point '%s' has drains_to and a row of the connectivity matrix "
+                          "(line %d); give one of them",
+                          kp->name, c->line);
+    }
+  }
 
   for (int i = 0; i < sc->n_horizons; i++) {
     const karst_horizon_t *h = &sc->horizons[i];
@@ -1898,7 +2752,7 @@ karst_error_t karst_i_scenario_load(karst_ctx_t *ctx, const char *path, karst_i_
   int parser_ok = 0, doc_ok = 0;
   unsigned char *buf = NULL;
   size_t len = 0;
-  reader_t r = {ctx, path, &doc, &tmp, 0, NULL, set};
+  reader_t r = {ctx, path, &doc, &tmp, 0, NULL, NULL, NULL, 0, set};
 
   karst_scenario_init(&tmp);
   if (!path || !sc) {
@@ -1985,6 +2839,7 @@ karst_error_t karst_i_scenario_load(karst_ctx_t *ctx, const char *path, karst_i_
 cleanup:
   if (doc_ok) yaml_document_delete(&doc);
   if (parser_ok) yaml_parser_delete(&parser);
+  free(r.drains);
   free(buf);
   karst_scenario_destroy(&tmp);
   return err;

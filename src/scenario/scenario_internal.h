@@ -62,7 +62,10 @@ typedef struct karst_i_override_set {
   karst_i_override_target_t *targets; /**< n entries */
   int first_node;                     /**< document nodes with this id or above were added */
   int n_added, cap_added;
-  int *owner; /**< owner[id - first_node]: the override of an added node */
+  int *owner;             /**< owner[id - first_node]: the override of an added node */
+  int n_files, cap_files; /**< file paths the walk resolved (heightfield, surfaces) */
+  char **file_keys;       /**< their key paths, e.g. "terrain.heightfield" */
+  char **file_values;     /**< the text the scenario gives (relative to the file) */
 } karst_i_override_set_t;
 
 /** An empty set for @p n overrides (caller frees with karst_i_overrides_destroy). */
@@ -78,6 +81,10 @@ void karst_i_overrides_destroy(karst_i_override_set_t *set);
  */
 karst_error_t karst_i_overrides_apply(karst_ctx_t *ctx, const char *file, yaml_document_t *doc,
                                       karst_i_override_set_t *set);
+
+/** Note that the walk read the file @p value at key path @p key (copies both); 0, or -1 when out
+ *  of memory. O(1) amortised. */
+int karst_i_overrides_note_file(karst_i_override_set_t *set, const char *key, const char *value);
 
 /** The override that added node @p n of @p doc, or -1 for a node of the file. O(1). */
 int karst_i_override_of(const karst_i_override_set_t *set, const yaml_document_t *doc,

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "core/parallel_internal.h"
+#include "karst/routing.h"
 
 /**
  * Initialise @p sk as an empty network on graph @p g (which must outlive
@@ -27,7 +28,9 @@ karst_error_t karst_skeleton_init(karst_ctx_t *ctx, karst_skeleton_t *sk, const 
       karst_network_attr_add(&sk->net, KARST_ATTR_NODE, "kind", 1, 1, &d) ||
       karst_network_attr_add(&sk->net, KARST_ATTR_EDGE, "cost", 1, 0, &d) ||
       karst_network_attr_add(&sk->net, KARST_ATTR_EDGE, "branch_id", 1, 1, &d) ||
-      karst_network_attr_add(&sk->net, KARST_ATTR_EDGE, "amplification_step", 1, 1, &d)) {
+      karst_network_attr_add(&sk->net, KARST_ATTR_EDGE, "amplification_step", 1, 1, &d) ||
+      karst_network_attr_add(&sk->net, KARST_ATTR_NODE, "spring", 1, 1, &d) ||
+      karst_network_attr_add(&sk->net, KARST_ATTR_EDGE, "spring", 1, 1, &d)) {
     karst_skeleton_destroy(sk);
     return karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory for %lld vertices",
                            (long long)g->n);
@@ -177,11 +180,25 @@ static double arc_cost(const karst_graph_t *g, karst_int_t u, karst_int_t w) {
 karst_error_t karst_skeleton_add_path(karst_ctx_t *ctx, karst_skeleton_t *sk,
                                       const karst_graph_t *g, const karst_path_t *path,
                                       int amplification_step) {
+  return karst_skeleton_add_route(ctx, sk, g, path, amplification_step, -1);
+}
+
+/**
+ * karst_skeleton_add_path for a path draining to spring @p spring (its index among the springs,
+ * -1 unknown): new edges and nodes get it as their "spring" attribute (a node or edge already
+ * laid keeps its first).
+ * Time complexity: O(path length × degree), amortised.
+ */
+karst_error_t karst_skeleton_add_route(karst_ctx_t *ctx, karst_skeleton_t *sk,
+                                       const karst_graph_t *g, const karst_path_t *path,
+                                       int amplification_step, int spring) {
   karst_int_t prev = -1;
   for (karst_int_t i = 0; i < path->n; i++) {
-    karst_int_t node = -1;
+    karst_int_t node = -1, before = sk->net.n_nodes;
     karst_error_t err = node_for(ctx, sk, g, path->v[i], &node);
     if (err) return err;
+    if (node >= before)
+      karst_network_attr_find(&sk->net, KARST_ATTR_NODE, "spring")->data[node] = spring;
     if (i > 0 && node != prev) {
       double c = arc_cost(g, path->v[i - 1], path->v[i]);
       if (!(c < INFINITY))
@@ -204,6 +221,7 @@ karst_error_t karst_skeleton_add_path(karst_ctx_t *ctx, karst_skeleton_t *sk,
             (double)sk->n_paths;
         karst_network_attr_find(&sk->net, KARST_ATTR_EDGE, "amplification_step")->data[e] =
             amplification_step;
+        karst_network_attr_find(&sk->net, KARST_ATTR_EDGE, "spring")->data[e] = spring;
       }
     }
     prev = node;
@@ -242,10 +260,27 @@ void karst_skeleton_mark_junctions(karst_skeleton_t *sk) {
   free(deg);
 }
 
-/* A kept pair and its least-cost distance, for laying paths in increasing d(a, b). */
+static void reverse_path(karst_path_t *p) {
+  for (karst_int_t i = 0, j = p->n - 1; i < j; i++, j--) {
+    karst_int_t t = p->v[i];
+    p->v[i] = p->v[j];
+    p->v[j] = t;
+  }
+}
+
+/* A pair to lay, in increasing d: searched from vertex src to vertex dst with the heuristic row
+ * of dst (path sharing), read from a tree (plain union), or searched again; laid as found, or
+ * reversed (the symmetric build searches b → a with a's row and lays a → b). */
 typedef struct {
   double d;
-  karst_int_t a, b;
+  karst_int_t a, b;           /* key-point indices, for the order (a, then b) */
+  karst_int_t src, dst;       /* graph vertices */
+  const float *row;           /* lower bounds of the cost to dst, or NULL */
+  const int32_t *pred;        /* symmetric build: the tree of a (read a → b), or NULL */
+  const int32_t *succ;        /* routed build: the successor row of dst, or NULL */
+  const karst_route_t *route; /* routed costs, or NULL */
+  unsigned char tag;          /* path-sharing tag (spring + 1), 0: any */
+  int spring;                 /* the spring the route drains to, -1 unknown */
 } pair_t;
 
 static int pair_cmp(const void *x, const void *y) {
@@ -255,23 +290,51 @@ static int pair_cmp(const void *x, const void *y) {
   return (p->b > q->b) - (p->b < q->b);
 }
 
-/* Flag both arcs of every edge of @p path (all parallel copies) as network arcs. */
-static void flag_path_arcs(const karst_graph_t *g, const karst_path_t *path, unsigned char *flag) {
+/* What every pair's search shares. */
+typedef struct {
+  const karst_graph_t *g;
+  double lb, reuse;
+  int reverse;                 /* lay the found path reversed */
+  const unsigned char *closed; /* vertices a path may only end at */
+  unsigned char *flag;         /* path-sharing tags per arc, or NULL (reuse = 1) */
+  double *to_net;
+} lay_t;
+
+/* Tag both arcs of every edge of @p path (all parallel copies) as network arcs of @p tag (1 when
+ * untagged); an arc keeps the tag of the first path that laid it. */
+static void flag_path_arcs(const karst_graph_t *g, const karst_path_t *path, unsigned char *flag,
+                           unsigned char tag) {
+  unsigned char t = tag ? tag : 1;
   for (karst_int_t i = 1; i < path->n; i++) {
     karst_int_t u = path->v[i - 1], w = path->v[i];
     for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++)
-      if (g->adj[a] == w) flag[a] = 1;
+      if (g->adj[a] == w && !flag[a]) flag[a] = t;
     for (karst_int_t a = g->offsets[w]; a < g->offsets[w + 1]; a++)
-      if (g->adj[a] == u) flag[a] = 1;
+      if (g->adj[a] == u && !flag[a]) flag[a] = t;
   }
 }
 
-static void reverse_path(karst_path_t *p) {
-  for (karst_int_t i = 0, j = p->n - 1; i < j; i++, j--) {
-    karst_int_t t = p->v[i];
-    p->v[i] = p->v[j];
-    p->v[j] = t;
+/* The path of one pair (see pair_t), oriented as it is laid. */
+static karst_error_t search_pair(karst_ctx_t *ctx, karst_search_t *s, const lay_t *L,
+                                 const pair_t *P, int (*cancelled)(void *), void *cancel_arg,
+                                 karst_path_t *path) {
+  karst_error_t err;
+  if (L->flag) {
+    const karst_reuse_t ru = {L->reuse,   L->flag, L->to_net, cancelled,
+                              cancel_arg, P->tag,  P->route,  L->closed};
+    err = karst_paths_astar_reuse(ctx, s, P->src, P->dst, L->lb, P->row, &ru, path);
+  } else if (P->succ) {
+    err = karst_paths_row_path(ctx, L->g, P->succ, P->route, P->src, path);
+  } else if (P->pred) {
+    return karst_paths_tree_path(ctx, L->g, P->pred, P->src, P->dst, path);
+  } else if (P->route || L->closed) {
+    const karst_reuse_t ru = {1.0, NULL, NULL, cancelled, cancel_arg, 0, P->route, L->closed};
+    err = karst_paths_astar_reuse(ctx, s, P->src, P->dst, L->lb, P->row, &ru, path);
+  } else {
+    err = karst_paths_astar(ctx, s, P->src, P->dst, L->lb, path);
   }
+  if (!err && L->reverse) reverse_path(path);
+  return err;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -316,14 +379,9 @@ typedef struct {
 
 typedef struct {
   karst_ctx_t *ctx;
-  const karst_graph_t *g;
-  const karst_int_t *keys;
+  const lay_t *L;
   const pair_t *pairs;
   karst_int_t n_pairs;
-  const float *bound;
-  double lb, reuse;
-  unsigned char *flag;
-  double *to_net;
   karst_skeleton_t *sk;
   karst_search_t **ws; /* one workspace per thread */
   spec_slot_t *slot;   /* pair k lives in slot k % window until committed */
@@ -354,10 +412,8 @@ static void spec_commit_one(spec_t *sp, int tid) {
   else if (sl->err)
     err = karst_set_error(sp->ctx, sl->err, "%s", sl->msg);
   karst_int_t e0 = sp->sk->net.n_edges;
-  if (!err) {
-    reverse_path(&sl->path);
-    err = karst_skeleton_add_path(sp->ctx, sp->sk, sp->g, &sl->path, 0);
-  }
+  const pair_t *P = &sp->pairs[sp->commit];
+  if (!err) err = karst_skeleton_add_route(sp->ctx, sp->sk, sp->L->g, &sl->path, 0, P->spring);
   if (err) {
     sp->err = err;
     sp->stop = 1;
@@ -374,8 +430,8 @@ static void spec_commit_one(spec_t *sp, int tid) {
   atomic_store(&sp->cancel, 1);
   while (sp->in_flight > 0)
     pthread_cond_wait(&sp->cv, &sp->mu);
-  flag_path_arcs(sp->g, &sl->path, sp->flag);
-  err = karst_paths_lower_distances(sp->ctx, sp->ws[tid], sl->path.n, sl->path.v, sp->to_net);
+  flag_path_arcs(sp->L->g, &sl->path, sp->L->flag, P->tag);
+  err = karst_paths_lower_distances(sp->ctx, sp->ws[tid], sl->path.n, sl->path.v, sp->L->to_net);
   for (karst_int_t i = 0; i < sp->window; i++)
     sp->slot[i].ready = 0;
   sp->next = sp->commit;
@@ -395,7 +451,6 @@ static void spec_worker(void *arg, int tid, int nthreads) {
   karst_ctx_init(&wctx);
   karst_path_t local;
   karst_path_init(&local);
-  const karst_reuse_t ru = {sp->reuse, sp->flag, sp->to_net, spec_cancelled, sp};
   pthread_mutex_lock(&sp->mu);
   while (!sp->stop && sp->commit < sp->n_pairs) {
     if (sp->mutating || sp->next >= sp->n_pairs || sp->next >= sp->commit + sp->window) {
@@ -406,10 +461,8 @@ static void spec_worker(void *arg, int tid, int nthreads) {
     const unsigned epoch = sp->epoch;
     sp->in_flight++;
     pthread_mutex_unlock(&sp->mu);
-    const karst_int_t a = sp->pairs[k].a, b = sp->pairs[k].b;
-    const float *row = sp->bound ? sp->bound + (size_t)a * (size_t)sp->g->n : NULL;
-    karst_error_t err = karst_paths_astar_reuse(&wctx, sp->ws[tid], sp->keys[b], sp->keys[a],
-                                                sp->lb, row, &ru, &local);
+    karst_error_t err =
+        search_pair(&wctx, sp->ws[tid], sp->L, &sp->pairs[k], spec_cancelled, sp, &local);
     pthread_mutex_lock(&sp->mu);
     sp->in_flight--;
     if (epoch == sp->epoch && !sp->stop) {
@@ -431,24 +484,16 @@ static void spec_worker(void *arg, int tid, int nthreads) {
 }
 
 /* Lay the sorted pairs with path sharing on @p T >= 2 threads (see above). */
-static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const karst_graph_t *g, int T,
-                                        const karst_int_t *keys, const pair_t *pairs,
-                                        karst_int_t n_pairs, const float *bound, double lb,
-                                        double reuse, unsigned char *flag, double *to_net,
+static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const lay_t *L, int T,
+                                        const pair_t *pairs, karst_int_t n_pairs,
                                         karst_skeleton_t *sk, karst_int_t *kept) {
   spec_t sp;
   memset(&sp, 0, sizeof sp);
   karst_error_t err = KARST_SUCCESS;
   sp.ctx = ctx;
-  sp.g = g;
-  sp.keys = keys;
+  sp.L = L;
   sp.pairs = pairs;
   sp.n_pairs = n_pairs;
-  sp.bound = bound;
-  sp.lb = lb;
-  sp.reuse = reuse;
-  sp.flag = flag;
-  sp.to_net = to_net;
   sp.sk = sk;
   sp.window = (karst_int_t)T * SPEC_WINDOW_PER_THREAD;
   atomic_init(&sp.cancel, 0);
@@ -459,7 +504,7 @@ static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const karst_graph_t *g
     goto cleanup;
   }
   for (int t = 0; t < T; t++)
-    if ((err = karst_search_create(ctx, g, &sp.ws[t]))) goto cleanup;
+    if ((err = karst_search_create(ctx, L->g, &sp.ws[t]))) goto cleanup;
   if (pthread_mutex_init(&sp.mu, NULL)) {
     err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: cannot create a mutex");
     goto cleanup;
@@ -486,6 +531,66 @@ cleanup:
   return err;
 }
 
+/* Lay the sorted pairs one after another (one thread), or speculatively on several. */
+static karst_error_t lay_pairs(karst_ctx_t *ctx, lay_t *L, const pair_t *pairs, karst_int_t n_pairs,
+                               karst_skeleton_t *sk, karst_int_t *n_kept) {
+  karst_error_t err = KARST_SUCCESS;
+  karst_search_t *s = NULL;
+  karst_path_t path;
+  karst_path_init(&path);
+  karst_int_t kept = 0;
+  const int sharing = L->reuse < 1.0;
+  if (sharing) {
+    const karst_graph_t *g = L->g;
+    L->flag = calloc((size_t)(g->n_arcs > 0 ? g->n_arcs : 1), 1);
+    L->to_net = malloc((size_t)(g->n > 0 ? g->n : 1) * sizeof *L->to_net);
+    if (!L->flag || !L->to_net) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory for path sharing");
+      goto cleanup;
+    }
+    /* The network distance N is kept only up to a cap M: min(N, M) is still a lower bound of N
+     * that changes by at most the arc cost along an arc, which is all the A* heuristic needs
+     * (karst_paths_astar_reuse), and each new path then lowers N only within M of it instead
+     * of over its whole catchment (for the first path, the whole graph). */
+    double dmax = 0.0;
+    for (karst_int_t k = 0; k < n_pairs; k++)
+      dmax = fmax(dmax, pairs[k].d);
+    const double cap = n_pairs > 0 ? KARST_SKELETON_NET_DISTANCE_CAP * dmax : 0.0;
+    for (karst_int_t v = 0; v < g->n; v++)
+      L->to_net[v] = cap;
+  }
+  const int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
+  if (sharing && T > 1 && n_pairs > 1) {
+    err = lay_pairs_parallel(ctx, L, T, pairs, n_pairs, sk, &kept);
+    goto cleanup;
+  }
+  if ((err = karst_search_create(ctx, L->g, &s))) goto cleanup;
+  for (karst_int_t k = 0; k < n_pairs; k++) {
+    if (karst_interrupted(ctx)) {
+      err = karst_set_error(ctx, KARST_EINTERRUPTED, "skeleton interrupted");
+      goto cleanup;
+    }
+    const pair_t *P = &pairs[k];
+    if ((err = search_pair(ctx, s, L, P, NULL, NULL, &path))) goto cleanup;
+    if ((err = karst_skeleton_add_route(ctx, sk, L->g, &path, 0, P->spring))) goto cleanup;
+    if (sharing) {
+      flag_path_arcs(L->g, &path, L->flag, P->tag);
+      if ((err = karst_paths_lower_distances(ctx, s, path.n, path.v, L->to_net))) goto cleanup;
+    }
+    kept++;
+    karst_progress(ctx, "skeleton", (double)(k + 1), (double)n_pairs);
+  }
+cleanup:
+  if (n_kept) *n_kept = kept;
+  karst_path_destroy(&path);
+  karst_search_free(s);
+  free(L->flag);
+  free(L->to_net);
+  L->flag = NULL;
+  L->to_net = NULL;
+  return err;
+}
+
 /**
  * The large-scale skeleton S (Paris et al. 2021, §5.1): apply the γ rule to
  * the key-point distance matrix (on the original least-cost distances d),
@@ -498,6 +603,8 @@ cleanup:
  * tunnel, so conduits merge into shared corridors instead of braiding. With
  * reuse = 1 each path is the pair's least-cost path and the skeleton is their
  * plain union. Key-point nodes get kind interior here; the caller marks them.
+ * This is the symmetric build on a metric d (every key point connected to every
+ * other); the generation pipeline lays the routes of karst_skeleton_build_routes.
  *
  * Searches (reuse < 1): one A* per kept pair with the heuristic of
  * karst_paths_astar_reuse (the key point's exact-distance row when @p bound is
@@ -508,11 +615,8 @@ cleanup:
  * 1081 pairs are kept, 51 k vertices, 1.1 M edges, one thread, shared 2-core
  * machine, first binary-heap version), for the 1081 searches: at reuse = 0.8 (the preset) 1.26
  * s; 1.55 s without the network term (N = 0, h = r·D); 13.5 s with the Euclidean bound r·lb·|v − t|
- * alone. At reuse = 0.5 (with equal fracture weights): 0.82 s, 1.46 s, 3.38 s. The same network
- * each time, as it must be (the searches are exact and break ties by vertex index).
- * With ctx->nthreads > 1 the searches run ahead on several threads and are
- * committed in pair order (lay_pairs_parallel): on the looping cave the 1081
- * searches take 0.61 s on 2 threads against 1.18 s on one, same network.
+ * alone. With ctx->nthreads > 1 the searches run ahead on several threads and are
+ * committed in pair order (lay_pairs_parallel), same network.
  *
  * @param g             the sample graph.
  * @param n_keys, keys  key points as vertices.
@@ -537,12 +641,8 @@ karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, kar
   karst_error_t err = KARST_SUCCESS;
   unsigned char *keep = malloc((size_t)(n_keys * n_keys > 0 ? n_keys * n_keys : 1));
   pair_t *pairs = NULL;
-  unsigned char *flag = NULL;
-  double *to_net = NULL;
-  karst_search_t *s = NULL;
-  karst_path_t path;
-  karst_path_init(&path);
-  karst_int_t kept = 0, n_pairs = 0;
+  karst_int_t n_pairs = 0;
+  if (n_kept) *n_kept = 0;
   if (!(reuse > 0 && reuse <= 1)) {
     err = karst_set_error(ctx, KARST_EINVAL, "skeleton.reuse must be within (0, 1], got %g", reuse);
     goto cleanup;
@@ -552,7 +652,6 @@ karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, kar
     goto cleanup;
   }
   if ((err = karst_skeleton_gamma_keep(ctx, n_keys, dist, gamma, keep))) goto cleanup;
-  if ((err = karst_search_create(ctx, g, &s))) goto cleanup;
   for (karst_int_t i = 0; i < n_keys; i++)
     if ((err = karst_skeleton_mark_node(ctx, sk, g, keys[i], KARST_NODE_INTERIOR))) goto cleanup;
   pairs = malloc((size_t)(n_keys * n_keys / 2 + 1) * sizeof *pairs);
@@ -560,66 +659,71 @@ karst_error_t karst_skeleton_build(karst_ctx_t *ctx, const karst_graph_t *g, kar
     err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
     goto cleanup;
   }
+  const int sharing = reuse < 1.0;
   for (karst_int_t a = 0; a < n_keys; a++)
     for (karst_int_t b = a + 1; b < n_keys; b++)
-      if (keep[a * n_keys + b] && keys[a] != keys[b])
-        pairs[n_pairs++] = (pair_t){dist[a * n_keys + b], a, b};
+      if (keep[a * n_keys + b] && keys[a] != keys[b]) {
+        pair_t P = {dist[a * n_keys + b], a, b, keys[a], keys[b], NULL, NULL, NULL, NULL, 0, -1};
+        if (sharing) { /* b towards a, with a's row; laid reversed */
+          P.src = keys[b], P.dst = keys[a];
+          P.row = bound ? bound + (size_t)a * (size_t)g->n : NULL;
+        } else {
+          P.pred = pred ? pred + (size_t)a * (size_t)g->n : NULL;
+        }
+        pairs[n_pairs++] = P;
+      }
   qsort(pairs, (size_t)n_pairs, sizeof *pairs, pair_cmp);
-  const int sharing = reuse < 1.0;
-  if (sharing) {
-    flag = calloc((size_t)(g->n_arcs > 0 ? g->n_arcs : 1), 1);
-    to_net = malloc((size_t)(g->n > 0 ? g->n : 1) * sizeof *to_net);
-    if (!flag || !to_net) {
-      err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory for path sharing");
-      goto cleanup;
-    }
-    /* The network distance N is kept only up to a cap M: min(N, M) is still a lower bound of N
-     * that changes by at most the arc cost along an arc, which is all the A* heuristic needs
-     * (karst_paths_astar_reuse), and each new path then lowers N only within M of it instead
-     * of over its whole catchment (for the first path, the whole graph). */
-    const double cap = n_pairs > 0 ? KARST_SKELETON_NET_DISTANCE_CAP * pairs[n_pairs - 1].d : 0.0;
-    for (karst_int_t v = 0; v < g->n; v++)
-      to_net[v] = cap;
-  }
-  const karst_reuse_t ru = {reuse, flag, to_net, NULL, NULL};
-  const int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
-  if (sharing && T > 1 && n_pairs > 1) {
-    err = lay_pairs_parallel(ctx, g, T, keys, pairs, n_pairs, bound, lb_per_metre, reuse, flag,
-                             to_net, sk, &kept);
-    goto cleanup;
-  }
-  for (karst_int_t k = 0; k < n_pairs; k++) {
-    const karst_int_t a = pairs[k].a, b = pairs[k].b;
-    if (karst_interrupted(ctx)) {
-      err = karst_set_error(ctx, KARST_EINTERRUPTED, "skeleton interrupted");
-      goto cleanup;
-    }
-    if (sharing) {
-      const float *row = bound ? bound + (size_t)a * (size_t)g->n : NULL;
-      if ((err = karst_paths_astar_reuse(ctx, s, keys[b], keys[a], lb_per_metre, row, &ru, &path)))
-        goto cleanup;
-      reverse_path(&path);
-    } else if (pred) {
-      err = karst_paths_tree_path(ctx, g, pred + (size_t)a * (size_t)g->n, keys[a], keys[b], &path);
-    } else {
-      err = karst_paths_astar(ctx, s, keys[a], keys[b], lb_per_metre, &path);
-    }
-    if (err) goto cleanup;
-    if ((err = karst_skeleton_add_path(ctx, sk, g, &path, 0))) goto cleanup;
-    if (sharing) {
-      flag_path_arcs(g, &path, flag);
-      if ((err = karst_paths_lower_distances(ctx, s, path.n, path.v, to_net))) goto cleanup;
-    }
-    kept++;
-    karst_progress(ctx, "skeleton", (double)(k + 1), (double)n_pairs);
-  }
+  lay_t L = {g, lb_per_metre, reuse, sharing, NULL, NULL, NULL};
+  err = lay_pairs(ctx, &L, pairs, n_pairs, sk, n_kept);
 cleanup:
-  if (n_kept) *n_kept = kept;
-  karst_path_destroy(&path);
-  karst_search_free(s);
   free(keep);
   free(pairs);
-  free(flag);
-  free(to_net);
+  return err;
+}
+
+/**
+ * The skeleton of a routing plan (karst_routing_plan): its routes laid in the plan's order
+ * (increasing routed cost), each from its upstream key point to its target on the routed costs of
+ * the route's spring, with path sharing (@p reuse < 1: a route follows conduits already laid
+ * towards the same spring at reuse × their cost; the heuristic rows are the plan's backward rows)
+ * or as the plain union of least-cost paths read from the plan's successor rows (reuse = 1). A
+ * route never passes through a sink or a spring (plan->closed). New edges and nodes get the
+ * route's spring. Key-point nodes get kind interior here; the caller marks them.
+ * Same-network guarantee as karst_skeleton_build on any thread count.
+ * @return KARST_SUCCESS, KARST_EINVAL (reuse), KARST_EUNREACHABLE, KARST_ENOMEM,
+ *         KARST_EINTERRUPTED.
+ * Time complexity: per route the path length (rows) or one A* search.
+ */
+karst_error_t karst_skeleton_build_routes(karst_ctx_t *ctx, const karst_graph_t *g,
+                                          const karst_routing_plan_t *plan, double reuse,
+                                          double lb_per_metre, karst_skeleton_t *sk,
+                                          karst_int_t *n_kept) {
+  karst_error_t err = KARST_SUCCESS;
+  if (n_kept) *n_kept = 0;
+  if (!(reuse > 0 && reuse <= 1))
+    return karst_set_error(ctx, KARST_EINVAL, "skeleton.reuse must be within (0, 1], got %g",
+                           reuse);
+  for (int k = 0; k < plan->n_keys; k++)
+    if ((err = karst_skeleton_mark_node(ctx, sk, g, k, KARST_NODE_INTERIOR))) return err;
+  pair_t *pairs = malloc((size_t)(plan->n_pairs > 0 ? plan->n_pairs : 1) * sizeof *pairs);
+  if (!pairs) return karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
+  for (int i = 0; i < plan->n_pairs; i++) {
+    const karst_route_pair_t *R = &plan->pairs[i];
+    size_t row = (size_t)R->target * (size_t)g->n;
+    pairs[i] = (pair_t){R->d,
+                        R->src,
+                        R->dst,
+                        R->src,
+                        R->dst,
+                        plan->bound ? plan->bound + row : NULL,
+                        NULL,
+                        plan->succ && reuse >= 1.0 ? plan->succ + row : NULL,
+                        karst_routing_route(plan, R->spring),
+                        (unsigned char)(R->spring + 1),
+                        R->spring};
+  }
+  lay_t L = {g, lb_per_metre, reuse, 0, plan->closed, NULL, NULL};
+  err = lay_pairs(ctx, &L, pairs, plan->n_pairs, sk, n_kept);
+  free(pairs);
   return err;
 }

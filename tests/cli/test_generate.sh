@@ -67,7 +67,7 @@ EOF
 out=$("$KARST" generate "$TMP/small.yaml" -o "$TMP/a" --seed 5 --samples --threads 1 --quiet 2>&1)
 status=$?
 [ $status -eq 0 ] || fail "generate failed: $out"
-for f in network.vtp network_nodes.dat network_links.dat samples.vtp run.json; do
+for f in network.vtp network_nodes.dat network_links.dat samples.vtp geology.vtp run.json; do
   [ -s "$TMP/a/$f" ] || fail "$f missing or empty"
 done
 ls -A "$TMP/a" | grep -q '^\.' && fail "temporary files left behind: $(ls -A "$TMP/a")"
@@ -92,10 +92,24 @@ r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1] + "/network.vtp"); r.U
 pd = r.GetOutput()
 assert pd.GetNumberOfPoints() == d["counts"]["network_nodes"], pd.GetNumberOfPoints()
 assert pd.GetNumberOfLines() == d["counts"]["network_edges"], pd.GetNumberOfLines()
-for a in ("tunnel_type", "radius", "cost", "vadose", "branch_id", "amplification_step"):
+for a in ("tunnel_type", "radius", "cost", "vadose", "zone", "spring", "branch_id",
+          "amplification_step"):
     assert pd.GetCellData().GetArray(a) is not None, a
-for a in ("kind", "water_table_distance"):
+for a in ("kind", "water_table_distance", "spring"):
     assert pd.GetPointData().GetArray(a) is not None, a
+zn = pd.GetFieldData().GetAbstractArray("zone_names")
+assert [zn.GetValue(i) for i in range(zn.GetNumberOfValues())] == ["vadose", "epiphreatic", "phreatic"]
+sn = pd.GetFieldData().GetAbstractArray("spring_names")
+assert sn is not None and sn.GetNumberOfValues() >= 1
+# geology.vtp: polygons with the feature arrays; the terrain (feature 0) is there.
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1] + "/geology.vtp"); r.Update()
+g = r.GetOutput()
+assert g.GetNumberOfPolys() > 0, g.GetNumberOfPolys()
+feat = g.GetCellData().GetArray("feature")
+assert feat is not None and g.GetCellData().GetArray("feature_id") is not None
+assert 0 in {int(feat.GetValue(i)) for i in range(feat.GetNumberOfValues())}
+fn = g.GetFieldData().GetAbstractArray("feature_names")
+assert fn.GetValue(0) == "terrain" and fn.GetValue(6) == "exclusion", fn.GetValue(0)
 r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1] + "/samples.vtp"); r.Update()
 assert r.GetOutput().GetNumberOfPoints() == d["counts"]["samples"], r.GetOutput().GetNumberOfPoints()
 EOF
@@ -124,7 +138,7 @@ EOF
 
 # Same seed: byte-identical outputs, also with another thread count.
 "$KARST" generate "$TMP/small.yaml" -o "$TMP/b" --seed 5 --samples --threads 2 --quiet || fail "second run failed"
-for f in network.vtp network_nodes.dat network_links.dat samples.vtp; do
+for f in network.vtp network_nodes.dat network_links.dat samples.vtp geology.vtp; do
   cmp -s "$TMP/a/$f" "$TMP/b/$f" || fail "$f differs between two runs with seed 5"
 done
 
@@ -160,10 +174,10 @@ cp -r "$TMP/b" "$TMP/g"
 rm "$TMP/g/run.json" && mkdir -p "$TMP/g/run.json/x"
 "$KARST" generate "$TMP/small.yaml" -o "$TMP/g" --seed 6 --samples --quiet 2>/dev/null
 [ $? -eq 1 ] || fail "a rerun that cannot write run.json should exit 1"
-for f in network.vtp network_nodes.dat network_links.dat samples.vtp; do
+for f in network.vtp network_nodes.dat network_links.dat samples.vtp geology.vtp; do
   cmp -s "$TMP/b/$f" "$TMP/g/$f" || fail "$f of the previous set changed by a failed run"
 done
-[ "$(ls -A "$TMP/g" | wc -l)" -eq 5 ] || fail "a failed rerun left temporaries: $(ls -A "$TMP/g")"
+[ "$(ls -A "$TMP/g" | wc -l)" -eq 6 ] || fail "a failed rerun left temporaries: $(ls -A "$TMP/g")"
 
 # A file system that refuses the writes (a full disk; here the file-size limit of ulimit -f, with
 # SIGXFSZ ignored so that write(2) fails with EFBIG instead): exit 1, a message naming the output

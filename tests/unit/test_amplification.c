@@ -9,6 +9,7 @@
 
 #include <cmocka.h>
 
+#include "geology_fixture.h"
 #include "graph_fixture.h"
 #include "test_util.h"
 
@@ -68,9 +69,10 @@ static void test_displacement(void **state) {
       karst_rng_t r1, r2;
       karst_rng_init(&r1, seed, 0);
       karst_rng_init(&r2, seed, 0);
-      assert_int_equal(karst_amplification_displace(&ctx, &sc, th, &r1, &opt, &in, &out),
+      karst_geology_t *geo = geo_make(&sc);
+      assert_int_equal(karst_amplification_displace(&ctx, geo, th, &r1, &opt, &in, &out),
                        KARST_SUCCESS);
-      assert_int_equal(karst_amplification_displace(&ctx, &sc, th, &r2, &opt, &in, &out2),
+      assert_int_equal(karst_amplification_displace(&ctx, geo, th, &r2, &opt, &in, &out2),
                        KARST_SUCCESS);
       assert_int_equal(out.n_nodes, 9);
       assert_int_equal(out.n_edges, 8);
@@ -99,6 +101,7 @@ static void test_displacement(void **state) {
         assert_true(dev <= 2 * A);
         maxdev_all = fmax(maxdev_all, dev);
       }
+      karst_geology_free(geo);
       karst_network_destroy(&in);
       karst_network_destroy(&out);
       karst_network_destroy(&out2);
@@ -111,9 +114,11 @@ static void test_displacement(void **state) {
   karst_network_t a, b;
   karst_network_init(&a);
   karst_network_init(&b);
-  assert_int_equal(karst_amplification_displace(&ctx, &sc, 1.5, &r, NULL, &a, &b), KARST_EINVAL);
+  karst_geology_t *geo = geo_make(&sc);
+  assert_int_equal(karst_amplification_displace(&ctx, geo, 1.5, &r, NULL, &a, &b), KARST_EINVAL);
   /* empty network in, empty network out */
-  assert_int_equal(karst_amplification_displace(&ctx, &sc, 0.5, &r, NULL, &a, &b), KARST_SUCCESS);
+  assert_int_equal(karst_amplification_displace(&ctx, geo, 0.5, &r, NULL, &a, &b), KARST_SUCCESS);
+  karst_geology_free(geo);
   assert_int_equal(b.n_nodes, 0);
   karst_network_destroy(&a);
   karst_network_destroy(&b);
@@ -174,8 +179,10 @@ static void run_ramify(double dead_fraction, karst_int_t *cyc, karst_int_t *comp
   karst_rng_t ra;
   karst_rng_init(&ra, 77, 0);
   karst_int_t paths;
-  assert_int_equal(karst_amplification_ramify(&ctx, &sc, &g, &ra, NULL, &sk, npts, &paths),
+  karst_geology_t *geo = geo_make(&sc);
+  assert_int_equal(karst_amplification_ramify(&ctx, geo, &g, NULL, &ra, NULL, &sk, npts, &paths),
                    KARST_SUCCESS);
+  karst_geology_free(geo);
   assert_true(sk.net.n_edges > before);
   *cyc = cyclomatic(&sk.net, comp);
   const double *kind = karst_network_attr_find(&sk.net, KARST_ATTR_NODE, "kind")->data;

@@ -11,6 +11,7 @@
 
 #include <cmocka.h>
 
+#include "geology_fixture.h"
 #include "karst.h"
 #include "test_util.h"
 
@@ -44,10 +45,12 @@ static double midpoint_integral(const karst_scenario_t *sc, const double a[3], c
                                 int n) {
   double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), sum = 0;
+  karst_geology_t *g = geo_make(sc);
   for (int i = 0; i < n; i++) {
     double s = (i + 0.5) / n, p[3] = {a[0] + s * d[0], a[1] + s * d[1], a[2] + s * d[2]};
-    sum += karst_cost_point(sc, p, d);
+    sum += karst_cost_point(g, p, d);
   }
+  karst_geology_free(g);
   return sum * len / n;
 }
 
@@ -59,10 +62,10 @@ static void test_constant_cost(void **state) {
   base_scenario(&sc);
   sc.cost.horizon = 1, sc.cost.permeability = 1, sc.permeability.background = 0.5;
   double a[3] = {10, 10, 10}, b[3] = {13, 14, 10};
-  assert_close(karst_cost_edge(&sc, a, b), 12.5, 1e-12);
-  assert_close(karst_cost_edge(&sc, a, a), 0.0, 0.0);
+  assert_close(T_cost_edge(&sc, a, b), 12.5, 1e-12);
+  assert_close(T_cost_edge(&sc, a, a), 0.0, 0.0);
   double p[3] = {50, 50, 50}, d[3] = {0, 0, 1};
-  assert_close(karst_cost_point(&sc, p, d), 2.5, 1e-15);
+  assert_close(T_cost_point(&sc, p, d), 2.5, 1e-15);
   karst_scenario_destroy(&sc);
 }
 
@@ -76,13 +79,13 @@ static void test_horizon_vertical_edge(void **state) {
   sc.cost.horizon = 1;
   add_horizon(&sc, 50, 4, 0, 0);
   double a[3] = {20, 20, 40}, b[3] = {20, 20, 60};
-  assert_close(karst_cost_edge(&sc, a, b), 36.0, 1e-12);
+  assert_close(T_cost_edge(&sc, a, b), 36.0, 1e-12);
   /* The point term: g(2/4) = 3/4 − 2/8 = 0.5, so c = 1.5. */
   double p[3] = {0, 0, 52}, d[3] = {1, 0, 0};
-  assert_close(karst_cost_point(&sc, p, d), 1.5, 1e-15);
+  assert_close(T_cost_point(&sc, p, d), 1.5, 1e-15);
   /* Edge along the horizon plane costs exactly w0 per metre. */
   double c0[3] = {10, 10, 50}, c1[3] = {90, 10, 50};
-  assert_close(karst_cost_edge(&sc, c0, c1), 80.0, 1e-12);
+  assert_close(T_cost_edge(&sc, c0, c1), 80.0, 1e-12);
   karst_scenario_destroy(&sc);
 }
 
@@ -98,7 +101,7 @@ static void test_horizon_oblique_edge(void **state) {
   add_horizon(&sc, 50, 4, 0, 0);
   double a[3] = {10, 30, 47}, b[3] = {10 + 44.0 / 3.0, 30, 58};
   double expect = 55.0 / 3.0 + 5.0 / 3.0 * 7.0546875;
-  assert_close(karst_cost_edge(&sc, a, b), expect, 1e-12);
+  assert_close(T_cost_edge(&sc, a, b), expect, 1e-12);
   karst_scenario_destroy(&sc);
 }
 
@@ -118,7 +121,7 @@ static void test_horizon_dipping_reference(void **state) {
                          {5, 95, 20, 95, 5, 80},
                          {40, 40, 52, 60, 40, 52}};
   for (int e = 0; e < 4; e++) {
-    double got = karst_cost_edge(&sc, E[e], E[e] + 3);
+    double got = T_cost_edge(&sc, E[e], E[e] + 3);
     double ref = midpoint_integral(&sc, E[e], E[e] + 3, 2000000);
     assert_rel(got, ref, 1e-9);
   }
@@ -135,14 +138,14 @@ static void test_fracture_strike(void **state) {
   sc.cost.fracture = 2.0;
   add_fracture(&sc, 90, 90, 0.75);
   double a[3] = {50, 10, 50}, north[3] = {50, 30, 50}, up[3] = {50, 10, 70}, east[3] = {70, 10, 50};
-  assert_close(karst_cost_edge(&sc, a, north), 20.0 * 1.0, 1e-12);
-  assert_close(karst_cost_edge(&sc, a, up), 20.0 * 1.0, 1e-12);
-  assert_close(karst_cost_edge(&sc, a, east), 20.0 * (1.0 + 2.0 * 0.75), 1e-12);
+  assert_close(T_cost_edge(&sc, a, north), 20.0 * 1.0, 1e-12);
+  assert_close(T_cost_edge(&sc, a, up), 20.0 * 1.0, 1e-12);
+  assert_close(T_cost_edge(&sc, a, east), 20.0 * (1.0 + 2.0 * 0.75), 1e-12);
   /* 45° between strike and normal: (n·d)² = 1/2. */
   double ne[3] = {60, 20, 50};
-  assert_close(karst_cost_edge(&sc, a, ne), sqrt(200.0) * (1.0 + 2.0 * 0.75 * 0.5), 1e-12);
+  assert_close(T_cost_edge(&sc, a, ne), sqrt(200.0) * (1.0 + 2.0 * 0.75 * 0.5), 1e-12);
   double d[3] = {3, 0, 0};
-  assert_close(karst_cost_fracture_term(&sc, d), 0.75, 1e-15);
+  assert_close(T_fracture_term(&sc, d), 0.75, 1e-15);
   karst_scenario_destroy(&sc);
 }
 
@@ -160,7 +163,7 @@ static void test_perm_stratum(void **state) {
   sc.permeability.root->bottom = 10, sc.permeability.root->top = 20;
   sc.permeability.root->resistance = 0;
   double a[3] = {30, 30, 5}, b[3] = {30, 30, 25};
-  assert_close(karst_cost_edge(&sc, a, b), 30.0, 1e-12);
+  assert_close(T_cost_edge(&sc, a, b), 30.0, 1e-12);
   karst_scenario_destroy(&sc);
 }
 
@@ -186,7 +189,7 @@ static void test_perm_sphere_reference(void **state) {
                          {50, 50, 50, 51, 50, 50},
                          {35, 35, 35, 65, 60, 62}};
   for (int e = 0; e < 4; e++) {
-    double got = karst_cost_edge(&sc, E[e], E[e] + 3);
+    double got = T_cost_edge(&sc, E[e], E[e] + 3);
     double ref = midpoint_integral(&sc, E[e], E[e] + 3, 2000000);
     assert_rel(got, ref, 1e-7);
   }
@@ -208,24 +211,24 @@ static void test_bedrock_segments(void **state) {
   const double v[6] = {50, 10, 50, 50, 10, 50};
   memcpy(sc.terrain.z, v, sizeof v);
   double a[3] = {0, 5, 30}, b[3] = {20, 5, 30}, a2[3] = {0, 5, 5}, b2[3] = {20, 5, 5};
-  assert_true(karst_cost_in_bedrock(&sc, a) && karst_cost_in_bedrock(&sc, b));
-  assert_false(karst_cost_segment_in_bedrock(&sc, a, b));
-  assert_true(isinf(karst_cost_edge(&sc, a, b)));
-  assert_true(karst_cost_segment_in_bedrock(&sc, a2, b2));
-  assert_close(karst_cost_edge(&sc, a2, b2), 20.0, 1e-12);
+  assert_true(T_in_bedrock(&sc, a) && T_in_bedrock(&sc, b));
+  assert_false(T_segment_in_bedrock(&sc, a, b));
+  assert_true(isinf(T_cost_edge(&sc, a, b)));
+  assert_true(T_segment_in_bedrock(&sc, a2, b2));
+  assert_close(T_cost_edge(&sc, a2, b2), 20.0, 1e-12);
   /* Saddle: one cell, corners z00 = 10, z10 = 0, z01 = 0, z11 = 10. */
   sc.terrain.ncols = 2, sc.terrain.nrows = 2;
   const double s[4] = {10, 0, 0, 10};
   memcpy(sc.terrain.z, s, sizeof s);
   double p[3] = {0, 0, 5.1}, q[3] = {10, 10, 5.1}, p2[3] = {0, 0, 4.9}, q2[3] = {10, 10, 4.9};
-  assert_true(karst_cost_in_bedrock(&sc, p) && karst_cost_in_bedrock(&sc, q));
-  assert_false(karst_cost_segment_in_bedrock(&sc, p, q));
-  assert_true(karst_cost_segment_in_bedrock(&sc, p2, q2));
+  assert_true(T_in_bedrock(&sc, p) && T_in_bedrock(&sc, q));
+  assert_false(T_segment_in_bedrock(&sc, p, q));
+  assert_true(T_segment_in_bedrock(&sc, p2, q2));
   /* Outside the box, non-finite input. */
   double out[3] = {-1, 5, 0}, nan3[3] = {NAN, 5, 0};
-  assert_false(karst_cost_in_bedrock(&sc, out));
-  assert_true(isinf(karst_cost_edge(&sc, out, p2)));
-  assert_true(isinf(karst_cost_edge(&sc, nan3, p2)));
+  assert_false(T_in_bedrock(&sc, out));
+  assert_true(isinf(T_cost_edge(&sc, out, p2)));
+  assert_true(isinf(T_cost_edge(&sc, nan3, p2)));
   karst_scenario_destroy(&sc);
 }
 
@@ -245,8 +248,8 @@ static void test_prescribed(void **state) {
   sc.prescribed = calloc(1, sizeof(karst_prescribed_path_t));
   sc.prescribed[0].a = 0, sc.prescribed[0].b = 1;
   double a[3] = {30, 51, 20}, b[3] = {40, 49, 21}, c[3] = {30, 60, 20};
-  assert_close(karst_cost_edge(&sc, a, b), 0.1 * sqrt(100 + 4 + 1), 1e-12);
-  assert_close(karst_cost_edge(&sc, a, c), sqrt(81.0), 1e-12);
+  assert_close(T_cost_edge(&sc, a, b), 0.1 * sqrt(100 + 4 + 1), 1e-12);
+  assert_close(T_cost_edge(&sc, a, c), sqrt(81.0), 1e-12);
   karst_scenario_destroy(&sc);
 }
 
@@ -296,15 +299,16 @@ static void test_lower_bound(void **state) {
     sc.permeability.root->radius = 20, sc.permeability.root->falloff = 10;
     sc.permeability.root->resistance = karst_rng_uniform(&r);
     double lb = karst_cost_lower_bound_per_metre(&sc), cmin = INFINITY, fmin_seen = INFINITY;
+    karst_geology_t *g = geo_make(&sc);
     for (int i = 0; i < 10000; i++) {
       double p[3], d[3];
       for (int a = 0; a < 3; a++)
         p[a] = karst_rng_uniform_range(&r, 0, 100);
       karst_rng_unit_vector(&r, d);
-      double c = karst_cost_point(&sc, p, d);
+      double c = karst_cost_point(g, p, d);
       assert_true(lb <= c);
       cmin = fmin(cmin, c);
-      fmin_seen = fmin(fmin_seen, karst_cost_fracture_term(&sc, d));
+      fmin_seen = fmin(fmin_seen, karst_cost_fracture_term(g, d));
     }
     for (int i = 0; i < 300; i++) {
       double a[3], b[3], d[3];
@@ -314,8 +318,9 @@ static void test_lower_bound(void **state) {
       double len = karst_rng_uniform_range(&r, 0.1, 10);
       for (int k = 0; k < 3; k++)
         b[k] = a[k] + len * d[k];
-      assert_true(lb * len <= karst_cost_edge(&sc, a, b));
+      assert_true(lb * len <= karst_cost_edge(g, a, b));
     }
+    karst_geology_free(g);
     (void)cmin;
     /* The fracture part of the bound is tight: some random direction comes
      * within 2 % of Σ w_k of the minimum λmin (1e4 directions). */

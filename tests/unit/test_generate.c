@@ -15,6 +15,7 @@
 
 typedef struct {
   karst_scenario_t sc;
+  karst_geology_t *geo; /* of sc, built once the key points are set */
   double *xyz;
   karst_int_t n;
   karst_graph_t g;
@@ -29,7 +30,8 @@ static void make_fixture(fixture_t *f, int isolate_key) {
   sc->domain_max[0] = sc->domain_max[1] = 200;
   sc->domain_max[2] = 60;
   sc->terrain.elevation = 60;
-  sc->water_table = 30;
+  sc->water_table.given = 1;
+  sc->water_table.elevation = 30;
   sc->gamma = 2.0;
   sc->tortuosity = 0.3;
   sc->amplification.steps = 2;
@@ -61,6 +63,10 @@ static void make_fixture(fixture_t *f, int isolate_key) {
   free(lat);
   if (isolate_key)       /* move key point 4 far away: its k nearest neighbours are still found, */
     f->xyz[3 * 4] = 1e6; /* so make every edge touching it infinite below instead */
+  karst_ctx_t gctx;
+  karst_ctx_init(&gctx);
+  f->geo = NULL;
+  assert_int_equal(karst_geology_create(&gctx, sc, 0, 0, &f->geo), KARST_SUCCESS);
   fx_cost_ctx_t cc = {sc, 4};
   fx_knn_graph(&f->g, f->n, f->xyz, 20, fx_scenario_cost, &cc);
   if (isolate_key)
@@ -70,6 +76,7 @@ static void make_fixture(fixture_t *f, int isolate_key) {
 }
 
 static void free_fixture(fixture_t *f) {
+  karst_geology_free(f->geo);
   fx_graph_free(&f->g);
   free(f->xyz);
   karst_scenario_destroy(&f->sc);
@@ -102,24 +109,24 @@ static void test_pipeline_after_graph(void **state) {
   karst_generate_stats_t st;
   memset(&st, 0, sizeof st);
   ctx.nthreads = 1;
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 42, 0, &f.g, 1.0, &n1, &st),
+  assert_int_equal(karst_i_generate_from_graph(&ctx, f.geo, 42, 0, &f.g, 1.0, &n1, &st),
                    KARST_SUCCESS);
   ctx.nthreads = 2;
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 42, 0, &f.g, 1.0, &n2, NULL),
+  assert_int_equal(karst_i_generate_from_graph(&ctx, f.geo, 42, 0, &f.g, 1.0, &n2, NULL),
                    KARST_SUCCESS);
   assert_same_network(&n1, &n2); /* same seed: identical, whatever the thread count */
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 43, 0, &f.g, 1.0, &n3, NULL),
+  assert_int_equal(karst_i_generate_from_graph(&ctx, f.geo, 43, 0, &f.g, 1.0, &n3, NULL),
                    KARST_SUCCESS);
   assert_true(n3.n_nodes != n1.n_nodes ||
               memcmp(n3.xyz, n1.xyz, (size_t)n1.n_nodes * 3 * sizeof(double)) !=
                   0); /* another seed differs */
   /* Attributes promised by generate.h. */
-  const char *node_attrs[] = {"kind", "water_table_distance"};
-  const char *edge_attrs[] = {"tunnel_type", "radius",    "cost",
-                              "vadose",      "branch_id", "amplification_step"};
-  for (int i = 0; i < 2; i++)
+  const char *node_attrs[] = {"kind", "water_table_distance", "spring"};
+  const char *edge_attrs[] = {"tunnel_type", "radius", "cost",      "vadose",
+                              "zone",        "spring", "branch_id", "amplification_step"};
+  for (int i = 0; i < 3; i++)
     assert_non_null(karst_network_attr_find(&n1, KARST_ATTR_NODE, node_attrs[i]));
-  for (int i = 0; i < 6; i++)
+  for (int i = 0; i < 8; i++)
     assert_non_null(karst_network_attr_find(&n1, KARST_ATTR_EDGE, edge_attrs[i]));
   /* Key points are nodes 0..4 with their kinds and names (the skeleton adds them first). */
   const double *kind = karst_network_attr_find(&n1, KARST_ATTR_NODE, "kind")->data;
@@ -166,7 +173,7 @@ static void test_unreachable_key_point(void **state) {
   karst_ctx_init(&ctx);
   karst_network_t net;
   karst_network_init(&net);
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 1, 0, &f.g, 1.0, &net, NULL),
+  assert_int_equal(karst_i_generate_from_graph(&ctx, f.geo, 1, 0, &f.g, 1.0, &net, NULL),
                    KARST_EUNREACHABLE);
   print_message("%s\n", ctx.errmsg);
   assert_non_null(strstr(ctx.errmsg, "'way_2'"));
@@ -179,20 +186,26 @@ static void test_single_key_point(void **state) {
   (void)state;
   fixture_t f;
   make_fixture(&f, 0);
-  f.sc.n_key_points = 1; /* the sink alone: no pair, a one-node network */
+  f.sc.n_key_points = 1; /* a spring alone: no route, a one-node network */
+  f.sc.key_points[0].type = KARST_KEYPOINT_SPRING;
   f.sc.amplification.steps = 0;
+  karst_geology_free(f.geo);
+  karst_ctx_t gctx;
+  karst_ctx_init(&gctx);
+  assert_int_equal(karst_geology_create(&gctx, &f.sc, 0, 0, &f.geo), KARST_SUCCESS);
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
   karst_network_t net;
   karst_network_init(&net);
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 1, 0, &f.g, 1.0, &net, NULL),
+  assert_int_equal(karst_i_generate_from_graph(&ctx, f.geo, 1, 0, &f.g, 1.0, &net, NULL),
                    KARST_SUCCESS);
   assert_int_equal(net.n_nodes, 1);
   assert_int_equal(net.n_edges, 0);
   f.sc.n_key_points = 0;
-  assert_int_equal(karst_i_generate_from_graph(&ctx, &f.sc, 1, 0, &f.g, 1.0, &net, NULL),
+  assert_int_equal(karst_i_generate_from_graph(&ctx, f.geo, 1, 0, &f.g, 1.0, &net, NULL),
                    KARST_EINVAL);
   f.sc.n_key_points = 5;
+  f.sc.key_points[0].type = KARST_KEYPOINT_SINK;
   karst_network_destroy(&net);
   free_fixture(&f);
 }

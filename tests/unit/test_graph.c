@@ -11,6 +11,7 @@
 
 #include <cmocka.h>
 
+#include "geology_fixture.h"
 #include "karst.h"
 #include "test_util.h"
 
@@ -111,9 +112,9 @@ static void test_knn_exact(void **state) {
   karst_graph_t g1, g2;
   karst_graph_init(&g1), karst_graph_init(&g2);
   ctx.nthreads = 1;
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g1), KARST_SUCCESS);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g1), KARST_SUCCESS);
   ctx.nthreads = 2;
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g2), KARST_SUCCESS);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g2), KARST_SUCCESS);
   check_symmetric(&g1);
   check_against_brute(&s, &g1, 12);
   /* The union of the 12-NN relations gives every vertex at least 12 neighbours. */
@@ -143,7 +144,7 @@ static void test_knn_collinear(void **state) {
   karst_ctx_init(&ctx);
   karst_graph_t g;
   karst_graph_init(&g);
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
   check_symmetric(&g);
   check_against_brute(&s, &g, 4);
   karst_graph_destroy(&g);
@@ -163,20 +164,20 @@ static void test_graph_small_cases(void **state) {
   karst_samples_init(&s);
   karst_graph_t g;
   karst_graph_init(&g);
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
   assert_int_equal(g.n, 0);
   assert_int_equal(g.n_arcs, 0);
   assert_int_equal(g.offsets[0], 0);
   double p[3] = {1, 2, 3};
   karst_samples_add(&s, p, KARST_SAMPLE_KEYPOINT);
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
   assert_int_equal(g.n, 1);
   assert_int_equal(g.n_arcs, 0);
   for (int i = 0; i < 5; i++) {
     double q[3] = {10.0 + i, 20.0 + i * i, 30};
     karst_samples_add(&s, q, KARST_SAMPLE_FILL);
   }
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
   assert_int_equal(g.n_arcs, 6 * 5); /* complete graph on 6 vertices */
   karst_samples_destroy(&s);
 
@@ -190,17 +191,17 @@ static void test_graph_small_cases(void **state) {
     karst_samples_add(&s, q, KARST_SAMPLE_FILL);
   }
   sc.sampling.k = 5;
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
   check_symmetric(&g);
   for (karst_int_t v = 0; v < 40; v++)
     for (karst_int_t a = g.offsets[v]; a < g.offsets[v + 1]; a++)
       assert_true((v < 20) == (g.adj[a] < 20));
   /* Invalid k and non-finite samples are refused. */
   sc.sampling.k = 0;
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_EINVAL);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_EINVAL);
   sc.sampling.k = 5;
   s.xyz[7] = NAN;
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_EINVAL);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_EINVAL);
   assert_non_null(strstr(ctx.errmsg, "sample 2"));
   assert_int_equal(g.n, 40); /* unchanged on failure */
   karst_graph_destroy(&g);
@@ -228,7 +229,7 @@ static void test_graph_excludes_air(void **state) {
   karst_ctx_init(&ctx);
   karst_graph_t g;
   karst_graph_init(&g);
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
   /* k = 3 joins everything, but only the two 5 m edges stay under ground. */
   assert_int_equal(g.n_arcs, 4);
   check_symmetric(&g);
@@ -280,7 +281,7 @@ static void test_pipeline(void **state) {
   (void)state;
   karst_scenario_t sc;
   karst_scenario_init(&sc);
-  sc.domain_max[2] = 60, sc.terrain.elevation = 50, sc.water_table = 30;
+  sc.domain_max[2] = 60, sc.terrain.elevation = 50, T_set_water_table(&sc, 30);
   sc.sampling.fill_radius = 6, sc.sampling.feature_radius = 3, sc.sampling.k = 20;
   sc.n_fractures = 1;
   sc.fractures = calloc(1, sizeof(karst_fracture_t));
@@ -296,10 +297,10 @@ static void test_pipeline(void **state) {
   karst_rng_init(&rng, 1, 0);
   karst_samples_t s;
   karst_samples_init(&s);
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
   karst_graph_t g;
   karst_graph_init(&g);
-  assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
+  assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
   check_symmetric(&g);
   double lb = karst_cost_lower_bound_per_metre(&sc);
   for (karst_int_t v = 0; v < g.n; v++) {
@@ -356,7 +357,7 @@ static void test_costs_all_terms(void **state) {
   for (int t = 0; t < 3; t++) {
     karst_graph_init(&g[t]);
     ctx.nthreads = threads[t];
-    assert_int_equal(karst_graph_build(&ctx, &sc, &s, &g[t]), KARST_SUCCESS);
+    assert_int_equal(T_graph_build(&ctx, &sc, &s, &g[t]), KARST_SUCCESS);
   }
   check_symmetric(&g[0]);
   check_against_brute(&s, &g[0], 10);
@@ -370,8 +371,7 @@ static void test_costs_all_terms(void **state) {
       karst_int_t w = g[0].adj[a];
       const double *p = s.xyz + 3 * v, *q = s.xyz + 3 * w;
       /* computed once, from the smaller index to the larger */
-      assert_true(g[0].cost[a] ==
-                  (v < w ? karst_cost_edge(&sc, p, q) : karst_cost_edge(&sc, q, p)));
+      assert_true(g[0].cost[a] == (v < w ? T_cost_edge(&sc, p, q) : T_cost_edge(&sc, q, p)));
       if (v % 37 != 0) continue;
       double d[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, sum = 0;
       const int m = 4000;
@@ -379,7 +379,7 @@ static void test_costs_all_terms(void **state) {
         double x[3], t = (i + 0.5) / m;
         for (int c = 0; c < 3; c++)
           x[c] = p[c] + t * d[c];
-        sum += karst_cost_point(&sc, x, d);
+        sum += T_cost_point(&sc, x, d);
       }
       /* The stratum makes π jump (by at most 1) where the edge crosses its
        * two faces; a midpoint rule errs by at most |jump| h / 2 per jump,

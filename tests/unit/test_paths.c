@@ -9,6 +9,7 @@
 
 #include <cmocka.h>
 
+#include "geology_fixture.h"
 #include "graph_fixture.h"
 #include "test_util.h"
 
@@ -326,8 +327,8 @@ static void test_fracture_min_axes(void **state) {
   double lb[2], frac[2];
   for (int mode = 0; mode < 2; mode++) {
     sc.cost.fracture_combine = mode ? KARST_FRACTURE_MIN : KARST_FRACTURE_SUM;
-    double cx = karst_cost_fracture_term(&sc, x), cy = karst_cost_fracture_term(&sc, y),
-           cd = karst_cost_fracture_term(&sc, diag);
+    double cx = T_fracture_term(&sc, x), cy = T_fracture_term(&sc, y),
+           cd = T_fracture_term(&sc, diag);
     assert_close(cx, mode ? 0.0 : 10.0, 1e-12);
     assert_close(cy, mode ? 0.0 : 10.0, 1e-12);
     assert_close(cd, mode ? 5.0 : 10.0, 1e-12);
@@ -407,8 +408,10 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
         assert_true((double)bound[(size_t)i * n + v] <= karst_search_dist(s1, v));
     }
     unsigned char *flag = calloc((size_t)g.n_arcs + 1, 1), *in_net = calloc((size_t)n, 1);
-    double *to_net = malloc((size_t)n * sizeof *to_net), *to_cap = malloc((size_t)n * sizeof *to_cap);
-    const double M = 30.0; /* the skeleton's cap on the network distance, here about a third of the box */
+    double *to_net = malloc((size_t)n * sizeof *to_net),
+           *to_cap = malloc((size_t)n * sizeof *to_cap);
+    const double M =
+        30.0; /* the skeleton's cap on the network distance, here about a third of the box */
     for (karst_int_t v = 0; v < n; v++)
       to_net[v] = INFINITY, to_cap[v] = M;
     karst_path_t p, q;
@@ -423,8 +426,9 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
       assert_int_equal(karst_search_create(&ctx, &gd, &s2), KARST_SUCCESS);
       assert_int_equal(karst_paths_dijkstra(&ctx, s2, 1, &src, NULL, NULL, 0, NULL), KARST_SUCCESS);
       double dref = karst_search_dist(s2, t);
-      const karst_reuse_t full = {r, flag, to_net, NULL, NULL}, no_net = {r, flag, NULL, NULL, NULL},
-                          capped = {r, flag, to_cap, NULL, NULL};
+      const karst_reuse_t full = {r, flag, to_net, NULL, NULL, 0, NULL, NULL},
+                          no_net = {r, flag, NULL, NULL, NULL, 0, NULL, NULL},
+                          capped = {r, flag, to_cap, NULL, NULL, 0, NULL, NULL};
       karst_error_t e =
           karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, bound + (size_t)ia * n, &full, &p);
       if (!(dref < INFINITY)) {
@@ -475,7 +479,7 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
       free(cd);
     }
     /* A factor outside (0, 1] is refused. */
-    const karst_reuse_t bad = {0.0, flag, to_net, NULL, NULL};
+    const karst_reuse_t bad = {0.0, flag, to_net, NULL, NULL, 0, NULL, NULL};
     assert_int_equal(karst_paths_astar_reuse(&ctx, s1, keys[0], keys[1], 1.0, NULL, &bad, &p),
                      KARST_EINVAL);
     karst_path_destroy(&p);

@@ -10,6 +10,7 @@
 
 #include <cmocka.h>
 
+#include "geology_fixture.h"
 #include "karst.h"
 #include "test_util.h"
 
@@ -19,6 +20,7 @@ static void add_key(karst_scenario_t *sc, const char *name, double x, double y, 
   karst_keypoint_t *k = &sc->key_points[sc->n_key_points++];
   memset(k, 0, sizeof *k);
   snprintf(k->name, sizeof k->name, "%s", name);
+  if (!strcmp(name, "spring")) k->type = KARST_KEYPOINT_SPRING; /* its water table is sampled */
   k->p[0] = x, k->p[1] = y, k->p[2] = z;
 }
 
@@ -37,7 +39,7 @@ static void scenario(karst_scenario_t *sc) {
   sc->domain_min[0] = 0, sc->domain_min[1] = 0, sc->domain_min[2] = 0;
   sc->domain_max[0] = 100, sc->domain_max[1] = 80, sc->domain_max[2] = 60;
   sc->terrain.elevation = 50;
-  sc->water_table = 32;
+  T_set_water_table(sc, 32);
   sc->sampling.feature_radius = 3;
   sc->sampling.fill_radius = 8;
   sc->sampling.feature_band = 1;
@@ -93,7 +95,7 @@ static void test_sampling_rules(void **state) {
   karst_rng_init(&rng, 11, 3);
   karst_samples_t s;
   karst_samples_init(&s);
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
   /* Key points first, exact, in order. */
   assert_int_equal(s.n_key_points, 3);
   for (int i = 0; i < 3; i++) {
@@ -155,7 +157,7 @@ static void test_sampling_determinism(void **state) {
     karst_rng_t rng;
     karst_rng_init(&rng, 5, r == 2 ? 1 : 0);
     karst_samples_init(&s[r]);
-    assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s[r]), KARST_SUCCESS);
+    assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s[r]), KARST_SUCCESS);
   }
   assert_int_equal(s[0].n, s[1].n);
   assert_memory_equal(s[0].xyz, s[1].xyz, sizeof(double) * 3 * (size_t)s[0].n);
@@ -187,7 +189,7 @@ static void test_sampling_threads(void **state) {
     karst_rng_init(&rng, 11, 0);
     karst_samples_init(&s[t]);
     ctx.nthreads = threads[t];
-    assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s[t]), KARST_SUCCESS);
+    assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s[t]), KARST_SUCCESS);
   }
   for (int t = 1; t < 3; t++) {
     assert_int_equal(s[0].n, s[t].n);
@@ -208,7 +210,7 @@ static void test_sampling_dip_grid_prescribed(void **state) {
   karst_scenario_t sc;
   karst_scenario_init(&sc);
   sc.domain_max[0] = 100, sc.domain_max[1] = 80, sc.domain_max[2] = 60;
-  sc.water_table = -50;
+  T_set_water_table(&sc, -50);
   sc.sampling.feature_radius = 3, sc.sampling.fill_radius = 8, sc.sampling.feature_band = 1.5;
   add_horizon(&sc, 25, 15, 120);
   /* Terrain plane z = 30 + 0.2 x on a 5 x 5 grid of 25 m cells (exact in bilinear). */
@@ -228,7 +230,7 @@ static void test_sampling_dip_grid_prescribed(void **state) {
   karst_rng_init(&rng, 2, 0);
   karst_samples_t s;
   karst_samples_init(&s);
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
   int nh = 0, np = 0;
   for (karst_int_t i = 0; i < s.n; i++) {
     const double *p = s.xyz + 3 * i;
@@ -266,7 +268,7 @@ static void test_sampling_degenerate(void **state) {
 
   karst_scenario_init(&sc); /* 100 m box, flat terrain at 100 m, water table at 0 */
   sc.domain_max[2] = 99;
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
   assert_int_equal(s.n_key_points, 0);
   for (karst_int_t i = 0; i < s.n; i++)
     assert_int_not_equal(s.source[i], KARST_SAMPLE_HORIZON);
@@ -275,9 +277,9 @@ static void test_sampling_degenerate(void **state) {
 
   karst_scenario_init(&sc);
   sc.domain_max[0] = sc.domain_max[1] = sc.domain_max[2] = 1;
-  sc.water_table = -10;
+  T_set_water_table(&sc, -10);
   add_key(&sc, "only", 0.5, 0.5, 0.5);
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
   assert_true(s.n >= 1 && s.n_key_points == 1);
   assert_int_equal(s.source[0], KARST_SAMPLE_KEYPOINT);
   karst_scenario_destroy(&sc);
@@ -286,7 +288,7 @@ static void test_sampling_degenerate(void **state) {
   karst_int_t before = s.n;
   karst_scenario_init(&sc);
   sc.domain_min[2] = 150, sc.domain_max[2] = 200;
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_EINVAL);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_EINVAL);
   assert_non_null(strstr(ctx.errmsg, "entirely above the terrain"));
   assert_int_equal(s.n, before);
   karst_scenario_destroy(&sc);
@@ -295,25 +297,25 @@ static void test_sampling_degenerate(void **state) {
   karst_scenario_init(&sc);
   sc.terrain.elevation = 50;
   add_key(&sc, "sinkhole7", 10, 10, 70);
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_EINVAL);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_EINVAL);
   assert_non_null(strstr(ctx.errmsg, "sinkhole7"));
   karst_scenario_destroy(&sc);
 
   /* max_samples respected with a clear error. */
   karst_scenario_init(&sc);
   sc.sampling.max_samples = 500;
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_ERANGE);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_ERANGE);
   assert_non_null(strstr(ctx.errmsg, "max_samples = 500"));
   karst_scenario_destroy(&sc);
 
   /* Invalid radius, empty box axis. */
   karst_scenario_init(&sc);
   sc.sampling.fill_radius = 0;
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_EINVAL);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_EINVAL);
   assert_non_null(strstr(ctx.errmsg, "fill_radius"));
   sc.sampling.fill_radius = 10;
   sc.domain_max[1] = sc.domain_min[1];
-  assert_int_equal(karst_sampling_run(&ctx, &sc, &rng, &s), KARST_EINVAL);
+  assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_EINVAL);
   karst_scenario_destroy(&sc);
   assert_int_equal(s.n, before);
   karst_samples_destroy(&s);

@@ -16,6 +16,7 @@
 
 #include <cmocka.h>
 
+#include "geology_fixture.h"
 #include "karst.h"
 #include "scenario/scenario_internal.h"
 #include "test_util.h"
@@ -43,7 +44,11 @@ static void test_init_defaults(void **state) {
   assert_close(sc.domain_max[2], 100, 0);
   assert_int_equal(sc.terrain.is_grid, 0);
   assert_close(sc.terrain.elevation, 100, 0);
-  assert_close(sc.water_table, 0, 0);
+  assert_int_equal(sc.water_table.given, 0); /* each spring's own horizontal plane */
+  assert_close(sc.routing.vadose_factor, 2, 0);
+  assert_close(sc.routing.rise_cost, 4, 0);
+  assert_close(sc.routing.phreatic_depth, 50, 0);
+  assert_close(sc.routing.water_table_band, 5, 0);
   assert_close(sc.permeability.background, 1, 0);
   assert_close(sc.cost.w0, 1, 0);
   assert_close(sc.cost.horizon, 1, 0);
@@ -64,7 +69,6 @@ static void test_init_defaults(void **state) {
   assert_close(sc.amplification.dead_end_fraction, 0, 0);
   assert_close(sc.tortuosity, 0.1, 0);
   assert_close(sc.classification.vertical_angle, 60, 0);
-  assert_close(sc.classification.water_table_band, 5, 0);
   assert_close(sc.classification.epikarst_depth, 10, 0);
   assert_close(sc.classification.chamber_resistance, 0.05, 0);
   for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++) {
@@ -104,7 +108,8 @@ static void test_branchwork(void **state) {
   assert_int_equal(sc.sampling.k, 40);
   assert_int_equal(sc.terrain.is_grid, 0);
   assert_close(sc.terrain.elevation, 100.0, 0);
-  assert_close(sc.water_table, 20.0, 0);
+  assert_int_equal(sc.water_table.given, 1);
+  assert_close(sc.water_table.elevation, 20.0, 0);
   /* The horizon's origin defaults to the domain centre (200, 300). */
   assert_close(sc.horizons[0].origin[0], 200.0, 0);
   assert_close(sc.horizons[0].origin[1], 300.0, 0);
@@ -112,7 +117,7 @@ static void test_branchwork(void **state) {
   /* The spring sits at the water table (§5.3: outlets drain to it). */
   for (int i = 0; i < sc.n_key_points; i++)
     if (sc.key_points[i].type == KARST_KEYPOINT_SPRING)
-      assert_close(sc.key_points[i].p[2], sc.water_table, 0);
+      assert_close(sc.key_points[i].p[2], sc.water_table.elevation, 0);
   /* Epikarst radius fixed at 0.5 m, others 0.5-4 m (§5.3). */
   assert_close(sc.classification.radius[KARST_TUNNEL_EPIKARST].max, 0.5, 0);
   assert_close(sc.classification.radius[KARST_TUNNEL_TUBE].max, 4.0, 0);
@@ -140,7 +145,7 @@ static void test_minimal_defaults(void **state) {
   assert_int_equal(karst_scenario_load(&ctx, DATA "good/minimal.yaml", &sc), KARST_SUCCESS);
   assert_string_equal(sc.name, "minimal");
   assert_string_equal(sc.path, DATA "good/minimal.yaml");
-  assert_close(sc.water_table, 0.0, 0);
+  assert_int_equal(sc.water_table.given, 0);
   assert_string_equal(sc.key_points[0].name, "sink1");
   assert_string_equal(sc.key_points[1].name, "spring1");
   assert_int_equal(sc.key_points[0].line, 8);
@@ -180,7 +185,7 @@ static void test_full_file(void **state) {
   assert_close(sc.terrain.zmax, 45.0, 0);
   assert_close(sc.terrain.lipschitz, sqrt(0.1 * 0.1 + 0.05 * 0.05), 1e-12);
   assert_close(karst_terrain_height(&sc.terrain, 10, 50), 33.5, 1e-12);
-  assert_close(sc.water_table, 12.5, 0);
+  assert_close(sc.water_table.elevation, 12.5, 0);
   assert_int_equal(sc.n_horizons, 2);
   assert_close(sc.horizons[0].dip, 10, 0);
   assert_close(sc.horizons[0].dip_direction, 45, 0);
@@ -282,6 +287,12 @@ static void expect_bad(const char *file, karst_error_t code, int line, int col, 
   snprintf(path, sizeof path, DATA "bad/%s", file);
   snprintf(prefix, sizeof prefix, "%s:%d:%d: ", path, line, col);
   karst_error_t err = karst_scenario_load(&ctx, path, &sc);
+  if (!err) { /* what only the geology checks (as karst validate does) */
+    karst_geology_t *g = NULL;
+    err = karst_geology_create(&ctx, &sc, 0, 0, &g);
+    karst_geology_free(g);
+    if (err) karst_scenario_destroy(&sc), karst_scenario_init(&sc);
+  }
   if (err != code || strncmp(ctx.errmsg, prefix, strlen(prefix)) != 0 || !strstr(ctx.errmsg, part))
     print_error("got %s: \"%s\"\nexpected %s: \"%s...%s...\"\n", karst_error_name(err), ctx.errmsg,
                 karst_error_name(code), prefix, part);
@@ -355,6 +366,36 @@ BAD(stratum_order, KARST_ERANGE, 15, 16, "stratum: bottom (30 m) must be below t
 BAD(feature_radius, KARST_ERANGE, 14, 3, "sampling.feature_radius (8 m) must not exceed")
 BAD(water_table_outside, KARST_ERANGE, 9, 14,
     "water_table.elevation must be within the domain's z range [0, 50] m, got 70")
+/* Geology sections (docs/scenario.md): names resolved with a did-you-mean, one shape per
+ * exclusion, matrices of the right size and values, ranges, and the moved key. */
+BAD(drains_unknown, KARST_ENOTFOUND, 7, 63,
+    "key_points[0].drains_to[0] names an unknown spring 'sprng' (did you mean 'spring'?)")
+BAD(drains_not_sink, KARST_EINVAL, 8, 66,
+    "key_points[1].drains_to: only a sink drains to springs; 'w' is a waypoint")
+BAD(connectivity_rows, KARST_EINVAL, 11, 5,
+    "connectivity.matrix must be a list of 1 rows (one per sink), got 2 rows")
+BAD(connectivity_value, KARST_ERANGE, 11, 8,
+    "connectivity.matrix[0][0] must be an integer between 0 and 2, got 3")
+BAD(connectivity_zero_row, KARST_EINVAL, 11, 7,
+    "connectivity.matrix[0]: sink 's' may drain to no spring (every value is 0)")
+BAD(exclusion_two_shapes, KARST_EINVAL, 10, 53,
+    "exclusions[0].sphere: an exclusion is one shape; this one is already a box")
+BAD(exclusion_no_shape, KARST_EINVAL, 10, 5, "exclusions[0] needs one of box, sphere, prism")
+BAD(prism_collinear, KARST_EINVAL, 10, 22,
+    "exclusions[0].prism.polygon has zero area (its vertices are collinear)")
+BAD(keypoint_excluded, KARST_EINVAL, 7, 5,
+    "key_points[0] 's' at (10, 10, 50) is inside exclusions[0] 'cave_guard' (line 10)")
+BAD(fault_dip, KARST_ERANGE, 10, 52, "faults[0].dip must be within [0, 90] degrees, got 95")
+BAD(fault_kind, KARST_EINVAL, 10, 62, "faults[0].kind must be one of conduit, barrier, got 'wall'")
+BAD(dfn_radii, KARST_ERANGE, 10, 38, "fractures[0].dfn: r_min (20 m) must not exceed r_max (5 m)")
+BAD(kappa_negative, KARST_ERANGE, 10, 47, "fractures[0].fisher_kappa must be > 0, got -2")
+BAD(water_table_on_sink, KARST_EINVAL, 7, 76,
+    "key_points[0].water_table: only a spring has a water table; 's' is a sink")
+BAD(vadose_factor, KARST_ERANGE, 10, 18, "routing.vadose_factor must be >= 1, got 0.5")
+BAD(stratum_plane_and_file, KARST_EINVAL, 10, 20,
+    "strata[0].top gives both a surface file and plane keys")
+BAD(band_in_classification, KARST_EINVAL, 10, 21,
+    "classification.water_table_band is now routing.water_table_band")
 /* Non-finite values. */
 BAD(nan, KARST_ERANGE, 14, 16, "horizons[0].elevation must be a finite number, got .nan")
 BAD(inf, KARST_ERANGE, 14, 12, "cost.horizon must be a finite number, got -.inf")
@@ -376,7 +417,8 @@ BAD(perm_two_kinds, KARST_EINVAL, 16, 5, "permeability.tree has both 'sphere' an
 BAD(perm_empty, KARST_EINVAL, 15, 12, "permeability.tree.blend must list at least one node")
 BAD(perm_alias_cycle, KARST_ERANGE, 14, 9, "nested deeper than 64 levels")
 /* Terrain and heightfields. */
-BAD(terrain_both, KARST_EINVAL, 7, 3, "terrain gives both elevation and heightfield")
+BAD(terrain_both, KARST_EINVAL, 7, 3,
+    "terrain gives more than one of elevation, heightfield and surface")
 BAD(heightfield_missing, KARST_EIO, 7, 16, "terrain.heightfield: ")
 BAD(heightfield_short, KARST_ERANGE, 7, 16,
     "covers x in [-25, 125], y in [-25, 125] m but the domain spans x in [0, 200]")
@@ -395,6 +437,79 @@ static void test_bad_heightfield_malformed(void **state) {
       DATA "bad/../terrain/bad_cellsize.asc:5:10: cellsize must be > 0, got -5 "
            "(the heightfield of terrain at " DATA "bad/heightfield_malformed.yaml:7:16)";
   assert_string_equal(ctx.errmsg, want);
+  karst_scenario_destroy(&sc);
+}
+
+/* good/geology.yaml: every geology section read as written. */
+static void test_geology_file(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  karst_error_t err = karst_scenario_load(&ctx, DATA "good/geology.yaml", &sc);
+  if (err) print_error("%s\n", ctx.errmsg);
+  assert_int_equal(err, KARST_SUCCESS);
+  assert_true(sc.water_table.given && !sc.water_table.path);
+  assert_close(sc.water_table.elevation, 30, 0);
+  assert_close(sc.water_table.dip, 2, 0);
+  assert_close(sc.water_table.origin[0], 200, 0); /* the domain centre */
+  assert_string_equal(sc.horizons[0].name, "bed_a");
+  assert_close(sc.fractures[0].kappa, 40, 0);
+  assert_int_equal(sc.fractures[0].dfn, 0);
+  assert_close(sc.fractures[1].kappa, 0, 0); /* not given: no dispersion */
+  assert_int_equal(sc.fractures[1].dfn, 1);
+  assert_close(sc.fractures[1].p32, 0.01, 0);
+  assert_close(sc.fractures[1].size_exponent, 2.2, 0);
+  assert_close(sc.fractures[1].r_min, 4, 0);
+  assert_close(sc.fractures[1].r_max, 30, 0);
+  assert_close(sc.fractures[1].factor, 0.4, 0);
+  assert_close(sc.fractures[1].influence, 2, 0);
+  assert_close(sc.fractures[0].influence, 3, 0); /* sampling.feature_radius */
+  assert_int_equal(sc.n_strata, 2);
+  assert_string_equal(sc.strata[0].name, "marl");
+  assert_int_equal(sc.strata[0].soluble, 0);
+  assert_close(sc.strata[0].top.elevation, 20, 0);
+  assert_close(sc.strata[0].bottom.elevation, 10, 0);
+  assert_int_equal(sc.strata[1].soluble, 1);
+  assert_int_equal(sc.strata[1].bottom.given, 0);
+  assert_close(sc.strata[1].top.dip_direction, 180, 0);
+  assert_int_equal(sc.n_exclusions, 3);
+  assert_int_equal(sc.exclusions[0].kind, KARST_EXCLUSION_BOX);
+  assert_string_equal(sc.exclusions[0].name, "quarry");
+  assert_close(sc.exclusions[0].max[2], 120, 0);
+  assert_int_equal(sc.exclusions[1].kind, KARST_EXCLUSION_SPHERE);
+  assert_close(sc.exclusions[1].radius, 12, 0);
+  assert_int_equal(sc.exclusions[2].kind, KARST_EXCLUSION_PRISM);
+  assert_int_equal(sc.exclusions[2].n_vertices, 4);
+  assert_close(sc.exclusions[2].polygon[7], 260, 0);
+  assert_int_equal(sc.n_faults, 2);
+  assert_true(isinf(sc.faults[0].radius));
+  assert_int_equal(sc.faults[0].barrier, 0);
+  assert_close(sc.faults[0].factor, 0.3, 0);
+  assert_int_equal(sc.faults[1].barrier, 1);
+  assert_close(sc.faults[1].radius, 50, 0);
+  assert_close(sc.faults[1].crossing_cost, 250, 0);
+  assert_int_equal(sc.key_points[0].n_drains_to, 1);
+  assert_int_equal(sc.key_points[0].drains_to[0], 3);
+  assert_true(sc.key_points[4].water_table.given);
+  assert_close(sc.key_points[4].water_table.elevation, 60, 0);
+  assert_close(sc.key_points[4].water_table.origin[1], 295, 0);
+  assert_true(sc.connectivity.given);
+  assert_int_equal(sc.connectivity.n_sinks, 2);
+  assert_int_equal(sc.connectivity.sinks[0], 1);
+  assert_int_equal(sc.connectivity.springs[1], 4);
+  assert_int_equal(sc.connectivity.matrix[1], 2);
+  assert_int_equal(sc.connectivity.matrix[2], 0);
+  assert_close(sc.routing.vadose_factor, 3, 0);
+  assert_close(sc.routing.rise_cost, 6, 0);
+  assert_close(sc.routing.phreatic_depth, 25, 0);
+  assert_close(sc.routing.water_table_band, 4, 0);
+  karst_geology_t *g = NULL;
+  assert_int_equal(karst_geology_create(&ctx, &sc, 1, 0, &g), KARST_SUCCESS);
+  assert_int_equal(karst_geology_n_springs(g), 2);
+  assert_close(karst_geology_water_table(g, 1, 200, 305), 60 - 10 * tan(3 * M_PI / 180), 1e-9);
+  karst_geology_free(g);
   karst_scenario_destroy(&sc);
 }
 
@@ -452,7 +567,24 @@ static void test_all_bad_fail(void **state) {
                                       "unknown_key",
                                       "unknown_path_point",
                                       "water_table_outside",
-                                      "weight_negative"};
+                                      "weight_negative",
+                                      "drains_unknown",
+                                      "drains_not_sink",
+                                      "connectivity_rows",
+                                      "connectivity_value",
+                                      "connectivity_zero_row",
+                                      "exclusion_two_shapes",
+                                      "exclusion_no_shape",
+                                      "prism_collinear",
+                                      "keypoint_excluded",
+                                      "fault_dip",
+                                      "fault_kind",
+                                      "dfn_radii",
+                                      "kappa_negative",
+                                      "water_table_on_sink",
+                                      "vadose_factor",
+                                      "stratum_plane_and_file",
+                                      "band_in_classification"};
   for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
     char path[1024];
     snprintf(path, sizeof path, DATA "bad/%s.yaml", files[i]);
@@ -461,6 +593,11 @@ static void test_all_bad_fail(void **state) {
     karst_scenario_t sc;
     karst_scenario_init(&sc);
     karst_error_t err = karst_scenario_load(&ctx, path, &sc);
+    if (!err) { /* the geology's own checks, as karst validate makes them */
+      karst_geology_t *g = NULL;
+      err = karst_geology_create(&ctx, &sc, 0, 0, &g);
+      karst_geology_free(g);
+    }
     if (err == KARST_SUCCESS) print_error("%s loaded without error\n", files[i]);
     assert_int_not_equal(err, KARST_SUCCESS);
     assert_true(strncmp(ctx.errmsg, DATA, strlen(DATA)) == 0);
@@ -604,7 +741,8 @@ static void test_permeability_eval(void **state) {
 /* Horizon z = e - tan(dip) * (offset along the dip direction), by hand. */
 static void test_horizon_elevation(void **state) {
   (void)state;
-  karst_horizon_t h = {100, 30, 90, {10, 20}, 5, 0, 0};
+  karst_horizon_t h = {
+      .elevation = 100, .dip = 30, .dip_direction = 90, .origin = {10, 20}, .radius = 5};
   /* 10 m east, dipping 30° east: 100 - 10 tan 30° = 94.226497... */
   assert_close(karst_horizon_elevation(&h, 20, 20), 100 - 10 / sqrt(3.0), 1e-12);
   /* Along the strike (north): unchanged. */
@@ -810,6 +948,24 @@ int main(void) {
       cmocka_unit_test(test_bad_stratum_order),
       cmocka_unit_test(test_bad_feature_radius),
       cmocka_unit_test(test_bad_water_table_outside),
+      cmocka_unit_test(test_bad_drains_unknown),
+      cmocka_unit_test(test_bad_drains_not_sink),
+      cmocka_unit_test(test_bad_connectivity_rows),
+      cmocka_unit_test(test_bad_connectivity_value),
+      cmocka_unit_test(test_bad_connectivity_zero_row),
+      cmocka_unit_test(test_bad_exclusion_two_shapes),
+      cmocka_unit_test(test_bad_exclusion_no_shape),
+      cmocka_unit_test(test_bad_prism_collinear),
+      cmocka_unit_test(test_bad_keypoint_excluded),
+      cmocka_unit_test(test_bad_fault_dip),
+      cmocka_unit_test(test_bad_fault_kind),
+      cmocka_unit_test(test_bad_dfn_radii),
+      cmocka_unit_test(test_bad_kappa_negative),
+      cmocka_unit_test(test_bad_water_table_on_sink),
+      cmocka_unit_test(test_bad_vadose_factor),
+      cmocka_unit_test(test_bad_stratum_plane_and_file),
+      cmocka_unit_test(test_bad_band_in_classification),
+      cmocka_unit_test(test_geology_file),
       cmocka_unit_test(test_bad_nan),
       cmocka_unit_test(test_bad_inf),
       cmocka_unit_test(test_bad_overflow),

@@ -345,6 +345,45 @@ static void test_write_emitted_and_rebased(void **state) {
   rmdir(dir);
 }
 
+/* Every file path the reader resolves is rebased, not only the heightfield: plateau.yaml gives
+ * terrain.heightfield, water_table.surface (a grid) and horizons[0].surface (a GOCAD TSurf), all
+ * relative to itself; written two directories away, the scenario loads with the same surfaces. */
+static void test_write_rebases_every_file(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  char dir[] = "/tmp/karst_overrides_XXXXXX";
+  assert_non_null(mkdtemp(dir));
+  char sub[300], out[320];
+  snprintf(sub, sizeof sub, "%s/a", dir);
+  assert_int_equal(mkdir(sub, 0777), 0);
+  snprintf(out, sizeof out, "%s/best.yaml", sub);
+  karst_scenario_override_t ov = {"tortuosity", "0.25", NULL, 1};
+  const char *plateau = KARST_SOURCE_DIR "/datasets/scenarios/plateau.yaml";
+  assert_int_equal(karst_scenario_write_with_overrides(&ctx, plateau, &ov, 1, NULL, out),
+                   KARST_SUCCESS);
+  karst_scenario_t sc, ref;
+  karst_scenario_init(&sc);
+  karst_scenario_init(&ref);
+  assert_int_equal(karst_scenario_load(&ctx, out, &sc), KARST_SUCCESS);
+  assert_int_equal(karst_scenario_load(&ctx, plateau, &ref), KARST_SUCCESS);
+  assert_close(sc.tortuosity, 0.25, 0);
+  assert_int_equal(sc.n_horizons, ref.n_horizons);
+  assert_true(sc.terrain.ncols == ref.terrain.ncols && sc.terrain.nrows == ref.terrain.nrows);
+  char *text = read_all(out);
+  int rebased = 0;
+  for (const char *p = text; (p = strstr(p, ": \"../")) != NULL; p++)
+    rebased++;
+  assert_int_equal(rebased, 3);
+  assert_non_null(strstr(text, "plateau/fold_horizon.ts\""));
+  free(text);
+  karst_scenario_destroy(&sc);
+  karst_scenario_destroy(&ref);
+  unlink(out);
+  rmdir(sub);
+  rmdir(dir);
+}
+
 /* The file's own text of a key (branchwork.yaml: tortuosity 0.1, skeleton.gamma 2.0,
  * fractures[0].dip 85, domain.max[1] 600); a key the file leaves out is KARST_ENOTFOUND. */
 static void test_value_text(void **state) {
@@ -372,10 +411,15 @@ static void test_value_text(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_replace_values), cmocka_unit_test(test_add_missing_key),
-      cmocka_unit_test(test_refused),        cmocka_unit_test(test_refused_lists),
-      cmocka_unit_test(test_write_in_place), cmocka_unit_test(test_write_emitted_and_rebased),
-      cmocka_unit_test(test_value_text),     cmocka_unit_test(test_nested_readers),
+      cmocka_unit_test(test_replace_values),
+      cmocka_unit_test(test_add_missing_key),
+      cmocka_unit_test(test_refused),
+      cmocka_unit_test(test_refused_lists),
+      cmocka_unit_test(test_write_in_place),
+      cmocka_unit_test(test_write_emitted_and_rebased),
+      cmocka_unit_test(test_value_text),
+      cmocka_unit_test(test_nested_readers),
+      cmocka_unit_test(test_write_rebases_every_file),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -10,6 +10,7 @@
 
 #include <cmocka.h>
 
+#include "geology_fixture.h"
 #include "graph_fixture.h"
 #include "test_util.h"
 
@@ -420,9 +421,12 @@ static void test_path_sharing_any_thread_count(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_gabriel_and_rng),         cmocka_unit_test(test_hand_cases),
-      cmocka_unit_test(test_union_and_junctions),     cmocka_unit_test(test_path_sharing_ladder),
-      cmocka_unit_test(test_skeleton_on_dense_graph), cmocka_unit_test(test_path_sharing_any_thread_count),
+      cmocka_unit_test(test_gabriel_and_rng),
+      cmocka_unit_test(test_hand_cases),
+      cmocka_unit_test(test_union_and_junctions),
+      cmocka_unit_test(test_path_sharing_ladder),
+      cmocka_unit_test(test_skeleton_on_dense_graph),
+      cmocka_unit_test(test_path_sharing_any_thread_count),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

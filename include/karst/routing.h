@@ -1,0 +1,73 @@
+/**
+ * @file routing.h
+ * @brief Which key points connect, and how water flows between them: two-stage vadose /
+ *        phreatic routing towards each spring's water table, sinks draining to springs under a
+ *        connectivity matrix, waypoints passed on the way, and the γ rule of Paris et al. 2021
+ *        (§5.1) applied within these rules. The result is the ordered list of routes the
+ *        skeleton lays (src/skeleton/). Model and proofs: docs/generation.md, "Routing".
+ */
+#ifndef KARST_ROUTING_H
+#define KARST_ROUTING_H
+
+#include <stdint.h>
+
+#include "karst/common.h"
+#include "karst/geology.h"
+#include "karst/graph.h"
+#include "karst/paths.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** One route: a least-cost path to lay from key point @c src to key point @c dst. */
+typedef struct karst_route_pair {
+  double d;     /**< least routed cost from src to dst (before path sharing) */
+  int src, dst; /**< key-point indices (graph vertices src, dst) */
+  int target;   /**< index of dst among the plan's targets (its rows) */
+  int spring;   /**< the spring the route drains to (index among springs) */
+  int required; /**< 1: a required connection (connectivity 2 or drains_to), never pruned */
+} karst_route_pair_t;
+
+/** What karst_routing_plan computes for one realisation. */
+typedef struct karst_routing_plan {
+  int n_keys, n_springs, n_targets;
+  float *dz;             /**< 2 n per spring: depth below its water table, z (karst_route_t) */
+  karst_route_t *routes; /**< one per spring */
+  int *targets;          /**< key-point index of each target: springs first, then waypoints */
+  float *bound;          /**< n_targets x n lower-bound rows (path-sharing heuristic), or NULL */
+  int32_t *succ;         /**< n_targets x n successor rows (plain union), or NULL */
+  unsigned char *closed; /**< n flags: sinks and springs, which a path may not pass through */
+  int *key_spring;       /**< per key point: the spring it drains to (a spring: itself), -1 */
+  int n_pairs;           /**< kept routes, in the order they are laid: increasing d */
+  karst_route_pair_t *pairs;
+  int n_candidates; /**< routes the rules allowed, before the γ rule */
+} karst_routing_plan_t;
+
+void karst_routing_plan_init(karst_routing_plan_t *plan);
+void karst_routing_plan_destroy(karst_routing_plan_t *plan);
+
+/** The route (routed costs) of spring @p spring in @p plan. */
+const karst_route_t *karst_routing_route(const karst_routing_plan_t *plan, int spring);
+
+/**
+ * Build the routing plan of graph @p g (whose vertices 0 .. n_keys − 1 are the scenario's key
+ * points) under geology @p geo: per spring the vertex depths below its water table; one backward
+ * search per spring, then one per waypoint (each waypoint drains to the spring it reaches most
+ * cheaply); each sink's springs (required ones from the connectivity matrix or drains_to, else
+ * the cheapest allowed one); the candidate routes sink → spring, sink → waypoint (whose spring the
+ * sink may drain to), waypoint → its spring, waypoint → waypoint of the same spring; then the
+ * γ rule with waypoints as the only intermediates. @p want_succ asks for successor rows (plain
+ * union, skeleton.reuse = 1), otherwise lower-bound rows are kept for path sharing.
+ * @return KARST_SUCCESS; KARST_EUNREACHABLE naming the key points (FILE:LINE:COLUMN) when a
+ *         required connection, a sink's every allowed spring, or a waypoint's every spring is out
+ *         of reach; KARST_EINVAL, KARST_ENOMEM, KARST_EINTERRUPTED.
+ * Time complexity: O(targets (m + n) log n) for the searches, O(k³) for the γ rule.
+ */
+karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
+                                 const karst_graph_t *g, int want_succ, karst_routing_plan_t *plan);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* KARST_ROUTING_H */
