@@ -19,12 +19,16 @@ typedef struct cli_command {
 void cli_ctx_init(karst_ctx_t *ctx, int quiet, int verbose);
 /* Print "karst CMD: message" from ctx (or the error code) to stderr; returns CLI_ERROR. */
 int cli_fail(const char *cmd, const karst_ctx_t *ctx, karst_error_t err);
+/* The exit status of a resumable run (karst ensemble, karst calibrate): KARST_EINTERRUPTED
+ * prints, on MPI rank 0 only, "karst CMD: interrupted; " and the formatted note (what is kept,
+ * how to continue); any other error is cli_fail's. Returns CLI_OK or CLI_ERROR. */
+int cli_resumable_status(const char *cmd, const karst_ctx_t *ctx, karst_error_t err, int rank,
+                         const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 /* A writer failed on the temporary file of @p output (its message names the temporary, which
  * is gone): reword ctx's message as "writing OUTPUT: message; no output was kept". */
 void cli_note_failed_output(karst_ctx_t *ctx, karst_error_t err, const char *output);
 /* Print a usage error and the command's usage line; returns CLI_USAGE. */
-int cli_usage_error(const char *cmd, const char *fmt, ...)
-    __attribute__((format(printf, 2, 3)));
+int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Look up a command by name (NULL if none). */
 const cli_command_t *cli_find_command(const char *name);
 /* Parse a number argument strictly; returns 0 on success. */

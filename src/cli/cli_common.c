@@ -53,7 +53,8 @@ static void progress_terminal(void *user, const char *stage, double done, double
   if (frac > 1) frac = 1;
   int width = 30, filled = (int)(frac * width);
   char bar[64];
-  for (int i = 0; i < width; i++) bar[i] = i < filled ? '#' : '.';
+  for (int i = 0; i < width; i++)
+    bar[i] = i < filled ? '#' : '.';
   bar[width] = '\0';
   double el = t - ps->t0, left = frac > 0 ? el * (1 - frac) / frac : NAN;
   fprintf(stderr, "\r%-16s [%s] %5.1f%%  %6.0fs left ", stage, bar, 100 * frac,
@@ -91,6 +92,21 @@ int cli_fail(const char *cmd, const karst_ctx_t *ctx, karst_error_t err) {
   return CLI_ERROR;
 }
 
+int cli_resumable_status(const char *cmd, const karst_ctx_t *ctx, karst_error_t err, int rank,
+                         const char *fmt, ...) {
+  if (!err) return CLI_OK;
+  if (err != KARST_EINTERRUPTED) return cli_fail(cmd, ctx, err);
+  if (rank == 0) {
+    fprintf(stderr, "karst %s: interrupted; ", cmd);
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+  }
+  return CLI_ERROR;
+}
+
 void cli_note_failed_output(karst_ctx_t *ctx, karst_error_t err, const char *output) {
   if (!ctx->errmsg[0]) return;
   char msg[KARST_ERRMSG_MAX];
@@ -118,7 +134,9 @@ void cli_print_help(const cli_command_t *cmd) {
   printf("karst %s: %s\n\n%s", cmd->name, cmd->summary, cmd->usage);
 }
 
-int cli_is_help(const char *arg) { return strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0; }
+int cli_is_help(const char *arg) {
+  return strcmp(arg, "-h") == 0 || strcmp(arg, "--help") == 0;
+}
 
 /* Digits only (strtoull alone would take " -5" as 2^64 - 5 and "+5" as 5). */
 int cli_parse_u64(const char *s, uint64_t *out) {

@@ -179,16 +179,11 @@ static int run(int argc, char **argv) {
   karst_calibrate_summary_t sum;
   err = karst_calibrate_run(&ctx, out, &opt, &sum);
   if (ps.tty && !quiet && rank == 0 && err) fputs("\r\033[K", stderr);
-  if (err == KARST_EINTERRUPTED) {
-    if (rank == 0)
-      fprintf(stderr,
-              "karst calibrate: interrupted; every finished simulation is kept in %s; run the "
-              "same command again to continue\n",
-              out);
-    status = CLI_ERROR;
-  } else if (err) {
-    status = cli_fail("calibrate", &ctx, err);
-  } else if (rank == 0 && !quiet) {
+  status = cli_resumable_status("calibrate", &ctx, err, rank,
+                                "every finished simulation is kept in %s; run the same command "
+                                "again to continue",
+                                out);
+  if (!err && rank == 0 && !quiet) {
     fprintf(stderr,
             "karst calibrate: %d generation(s) after the prior sample (%s), %" PRId64
             " simulations (%" PRId64 " computed) in %.1f s on %d thread(s) x %d process(es); "

@@ -68,8 +68,7 @@ static int run(int argc, char **argv) {
     int more = i + 1 < argc;
     if (strcmp(a, "-n") == 0 && more) {
       const char *v = argv[++i];
-      if (cli_parse_u64(v, &n) || n < 1 ||
-          n > KARST_ENSEMBLE_MAX_MEMBERS)
+      if (cli_parse_u64(v, &n) || n < 1 || n > KARST_ENSEMBLE_MAX_MEMBERS)
         return cli_usage_error("ensemble",
                                "-n must be a whole number of realisations within [1, %d], got '%s'",
                                KARST_ENSEMBLE_MAX_MEMBERS, v);
@@ -78,8 +77,7 @@ static int run(int argc, char **argv) {
       out = argv[++i];
     } else if (strcmp(a, "-j") == 0 && more) {
       const char *v = argv[++i];
-      if (cli_parse_int(v, &threads) || threads < 1 ||
-          threads > KARST_ENSEMBLE_MAX_THREADS)
+      if (cli_parse_int(v, &threads) || threads < 1 || threads > KARST_ENSEMBLE_MAX_THREADS)
         return cli_usage_error("ensemble",
                                "-j must be a whole number of threads within [1, %d], got '%s'",
                                KARST_ENSEMBLE_MAX_THREADS, v);
@@ -145,16 +143,11 @@ static int run(int argc, char **argv) {
   err = karst_ensemble_hooks_pipeline(&ctx, &hooks, &pipe, &sc);
   karst_ensemble_summary_t sum;
   if (!err) err = karst_ensemble_run(&ctx, out, &opt, &hooks, &sum);
-  if (err == KARST_EINTERRUPTED) {
-    if (rank == 0)
-      fprintf(stderr,
-              "karst ensemble: interrupted; the finished realisations are kept in %s; run the "
-              "same command again to compute only the missing ones\n",
-              out);
-    status = CLI_ERROR;
-  } else if (err) {
-    status = cli_fail("ensemble", &ctx, err);
-  } else if (rank == 0 && !quiet) {
+  status = cli_resumable_status("ensemble", &ctx, err, rank,
+                                "the finished realisations are kept in %s; run the same command "
+                                "again to compute only the missing ones",
+                                out);
+  if (!err && rank == 0 && !quiet) {
     fprintf(stderr,
             "karst ensemble: %" PRId64 " realisations in %s (%" PRId64 " computed, %" PRId64
             " already there) in %.1f s on %d thread(s) x %d process(es)\n",
