@@ -7,7 +7,7 @@
 
 #include "cli.h"
 
-/* What the per-generation lines need (the bar itself is cli_ctx_init's terminal display). */
+/* What the per-generation lines need (the bar is cli_count_progress). */
 typedef struct {
   int tty, quiet;
 } cal_progress_t;
@@ -151,7 +151,12 @@ static int run(int argc, char **argv) {
     status = cli_fail("calibrate", &ctx, err);
     goto cleanup;
   }
-  if (rank != 0) ctx.progress = NULL; /* the terminal bar of cli_ctx_init, on rank 0 only */
+  /* On a terminal, rank 0 only: the members of each generation, counted (not the stages of
+   * one member, which run on worker threads without progress). */
+  cli_count_progress_t bar;
+  cli_count_progress_init(&bar, "calibrate", "simulations", 0);
+  ctx.progress = (!quiet && rank == 0 && bar.tty) ? cli_count_progress : NULL;
+  ctx.progress_user = &bar;
   /* A broken scenario is an error of the file (exit 1); a --vary key it does not have, or
    * that holds no number, is a usage error (exit 2). */
   err = karst_scenario_load(&ctx, scenario, &sc);
