@@ -51,9 +51,11 @@ def posterior(args):
     print("| scenario | survey | parameter | prior | shipped | posterior median | 90 % interval |"
           " generations, final ε |")
     print("|---|---|---|---|---|---|---|---|")
+    sizes = set()
     for scen, survey, _, d in runs(args):
         j = json.load(open(os.path.join(d, "calibration", "calibration.json")))
         gens = len(j["generations"]) - 1
+        sizes.add(f"{scen} {j['scenario_hash'][:10]}: {j['particles']} particles")
         eps = j["generations"][-1]["tolerance"]
         for p in j["parameters"]:
             prior = f"{p['prior']} {p['low']:g}–{p['high']:g}" + (", integer" if p["integer"] else "")
@@ -62,7 +64,8 @@ def posterior(args):
                   f"{fmt(p['q05'])} – {fmt(p['q95'])} | {gens}, {eps:.3g} |")
     print()
     print("Weighted posterior median and 5–95 % quantiles of the last generation "
-          "(`karst calibrate`, `analysis/calibrate_surveys.sh`).")
+          "(`karst calibrate`, `analysis/calibrate_surveys.sh`; scenario file hash and particles "
+          "per generation: " + "; ".join(sorted(sizes)) + ").")
 
 
 def before_after(args):
@@ -74,6 +77,7 @@ def before_after(args):
         j = json.load(open(os.path.join(d, "calibration", "calibration.json")))
         before = os.path.join(d, "before", "metrics.csv")
         after = os.path.join(d, "calibration", "best", "metrics.csv")
+        members = len(column(after, "mean_length"))
         closer = total = 0
         zb_sum = za_sum = 0.0
         for m in j["metrics"]:
@@ -94,7 +98,8 @@ def before_after(args):
             else:
                 zcell = "not in the distance"
             print(f"| {scen} vs {survey} | {name} | {y:.4g} | {cell_b} | {cell_a} | {zcell} |")
-        notes.append(f"{scen} vs {survey}: calibrated closer in {closer} of {total} metrics; "
+        notes.append(f"{scen} vs {survey} ({members} members each): calibrated closer in "
+                     f"{closer} of {total} metrics; "
                      f"distance of the ensemble mean {math.sqrt(zb_sum):.2f} → "
                      f"{math.sqrt(za_sum):.2f}")
     print()
