@@ -11,6 +11,7 @@
 #define KARST_H
 
 #include "karst/amplification.h"
+#include "karst/arrays.h"
 #include "karst/calibrate.h"
 #include "karst/classification.h"
 #include "karst/common.h"
@@ -18,6 +19,7 @@
 #include "karst/cost.h"
 #include "karst/crs.h"
 #include "karst/ensemble.h"
+#include "karst/export.h"
 #include "karst/generate.h"
 #include "karst/geology.h"
 #include "karst/graph.h"
@@ -27,6 +29,7 @@
 #include "karst/mesh.h"
 #include "karst/metrics.h"
 #include "karst/network.h"
+#include "karst/palette.h"
 #include "karst/paths.h"
 #include "karst/readers.h"
 #include "karst/report.h"
@@ -35,6 +38,7 @@
 #include "karst/scenario.h"
 #include "karst/skeleton.h"
 #include "karst/surface.h"
+#include "karst/version.h"
 #include "karst/vtk.h"
 
 #endif

@@ -2,12 +2,14 @@
  * every effective parameter) and what it produced (counts, stage times). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "karst/amplification.h"
 #include "karst/classification.h"
 #include "karst/generate.h"
 #include "karst/io.h"
+#include "karst/version.h"
 
 /* A JSON number (shortest round-trip form), or null for NaN / infinities. */
 static void json_num(FILE *fp, double v) {
@@ -338,7 +340,8 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
 }
 
 /**
- * Write run.json for one realisation, atomically: karst version, scenario
+ * Write run.json for one realisation, atomically: karst version and those of
+ * the libraries (karst_versions_json), scenario
  * path and FNV-1a hash (karst_file_hash; null when built in code), seed and
  * realisation, every effective parameter of @p sc and of the amplification
  * constants, the counts and the wall time of each stage of @p stats.
@@ -353,12 +356,18 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   char hash[17] = "";
   karst_error_t err;
   if (sc->path && (err = karst_file_hash(ctx, sc->path, hash))) return err;
+  char *versions = karst_versions_json();
+  if (!versions) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
   karst_atomic_file_t f;
-  if ((err = karst_atomic_open(ctx, &f, path, "w"))) return err;
+  if ((err = karst_atomic_open(ctx, &f, path, "w"))) {
+    free(versions);
+    return err;
+  }
   FILE *fp = f.fp;
   const char *I = "    ";
   fputs("{\n  \"karst_version\": ", fp);
   karst_json_string(fp, karst_version());
+  fprintf(fp, ",\n  \"versions\": %s", versions);
   fputs(",\n  \"scenario\": ", fp);
   if (sc->path)
     karst_json_string(fp, sc->path);
@@ -387,5 +396,6 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   for (int s = 0; s < KARST_STAGE_COUNT; s++)
     kv_num(fp, I, karst_stage_name(s), st->stage_seconds[s], s == KARST_STAGE_COUNT - 1);
   fprintf(fp, "  },\n  \"peak_bytes\": %zu\n}\n", st->peak_bytes);
+  free(versions);
   return karst_atomic_commit(ctx, &f);
 }
