@@ -38,6 +38,7 @@
 #include "karst/json.h"
 #include "karst/metrics.h"
 #include "karst/scenario.h"
+#include "karst/version.h"
 #include "scenario/scenario_internal.h"
 
 /** Random streams of a calibration with base seed S: the proposals of generation t come from
@@ -936,6 +937,9 @@ static karst_error_t write_summary(karst_ctx_t *ctx, const run_t *r, const char 
   FILE *fp = f.fp;
   fputs("{\n  \"karst_version\": ", fp);
   karst_json_string(fp, karst_version());
+  char *versions = karst_versions_json(); /* the libraries, as in ensemble.json and run.json */
+  fprintf(fp, ",\n  \"versions\": %s", versions ? versions : "{}");
+  free(versions);
   fputs(",\n  \"method\": \"ABC-SMC: adaptive population Monte Carlo ABC of Lenormand, Jabot & "
         "Deffuant 2013 (Algorithm 4) with the weights and truncated Gaussian kernel of Beaumont "
         "et al. 2009\",\n  \"scenario\": ",

@@ -12,6 +12,7 @@
 #include "calibrate/calibrate_internal.h"
 #include "karst/compare.h"
 #include "karst/report.h"
+#include "karst/version.h"
 #include "report/svg_internal.h"
 
 /** Histogram bins of a continuous parameter over its prior range. */
@@ -344,7 +345,7 @@ karst_error_t karst_i_calibrate_report(karst_ctx_t *ctx, const char *path,
   karst_published_t pub;
   karst_published_init(&pub);
   int have_pub = 0;
-  char pubpath[4096] = "", *versions = karst_report_versions();
+  char pubpath[4096] = "", *versions = karst_versions_text();
   karst_compare_result_t cmp;
   karst_compare_result_init(&cmp);
   const karst_calibrate_options_t *o = v->opt;
