@@ -4,13 +4,15 @@
  *
  * The pipeline, in the order of the folders under src/:
  * scenario -> sampling -> graph -> paths -> skeleton -> amplification ->
- * classification -> export / metrics -> implicit geometry.
+ * classification -> export / metrics -> implicit geometry; ensembles of realisations and their
+ * calibration against surveys (ensemble, compare, calibrate, report).
  */
 #ifndef KARST_H
 #define KARST_H
 
 #include "karst/amplification.h"
 #include "karst/arrays.h"
+#include "karst/calibrate.h"
 #include "karst/classification.h"
 #include "karst/common.h"
 #include "karst/compare.h"

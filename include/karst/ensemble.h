@@ -37,7 +37,9 @@ typedef struct karst_ensemble_hooks {
   /** Build member @p index (seed karst_ensemble_member_seed(base, index)) into @p net. */
   karst_error_t (*realise)(karst_ctx_t *ctx, void *user, uint64_t member_seed, karst_int_t index,
                            karst_network_t *net);
-  /** Write the member's files into the directory @p dir; must create "network.vtp". */
+  /** Write the member's files into the directory @p dir ("network.vtp" for the pipeline and
+   *  its collection file; a runner that keeps only metrics, as karst calibrate does, writes
+   *  none). */
   karst_error_t (*write)(karst_ctx_t *ctx, void *user, const char *dir, const karst_network_t *net);
   /** Fill values[0 .. n_metrics-1] (NAN when undefined). */
   karst_error_t (*measure)(karst_ctx_t *ctx, void *user, const karst_network_t *net,

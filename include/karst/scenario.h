@@ -435,6 +435,61 @@ void karst_scenario_destroy(karst_scenario_t *sc);
  */
 karst_error_t karst_scenario_load(karst_ctx_t *ctx, const char *path, karst_scenario_t *sc);
 
+/** Longest key path of an override ("fractures[0].weight"), in bytes without the NUL. */
+#define KARST_SCENARIO_OVERRIDE_KEY_MAX 255
+
+/**
+ * One value given in place of the file's, by the key's path in the YAML document
+ * (docs/scenario.md, "Overriding values"): map keys joined by dots, list items and vector
+ * components by [index], e.g. "skeleton.gamma", "fractures[0].weight", "domain.max[2]".
+ */
+typedef struct karst_scenario_override {
+  const char *key;    /**< the key's path */
+  const char *value;  /**< YAML text of the value, e.g. "2.5" (read as a plain scalar) */
+  const char *origin; /**< where it came from, for messages (e.g. "--vary skeleton.gamma=0.5:3");
+                           NULL: "override KEY=VALUE" */
+  int numeric;        /**< 1: the key must hold a number or an integer (refused otherwise) */
+} karst_scenario_override_t;
+
+/** What the parser read an override as (karst_scenario_load_with_overrides). */
+typedef enum {
+  KARST_OVERRIDE_UNREAD = 0,  /**< not read as a scalar value */
+  KARST_OVERRIDE_NUMBER = 1,  /**< a real number */
+  KARST_OVERRIDE_INTEGER = 2, /**< an integer key (sampling.k, amplification.steps ...) */
+  KARST_OVERRIDE_TEXT = 3     /**< a string, name or enumeration */
+} karst_override_type_t;
+
+/**
+ * karst_scenario_load with @p n values overridden: each is put into the YAML document
+ * before the schema walk, so it is validated exactly like a value of the file (type, range,
+ * cross-field rules, "did you mean" for unknown keys). @p types (NULL or @p n entries)
+ * receives what each override was read as.
+ */
+karst_error_t karst_scenario_load_with_overrides(karst_ctx_t *ctx, const char *path,
+                                                 const karst_scenario_override_t *ov, int n,
+                                                 karst_override_type_t *types,
+                                                 karst_scenario_t *sc);
+
+/**
+ * Write the scenario @p path with the @p n overrides applied to @p out (atomically), as a
+ * file that loads on its own: the file's text with the overridden values replaced (its
+ * comments kept) when every override replaces a value the file gives, else the whole
+ * document re-emitted by libyaml; every relative file path it reads (terrain.heightfield,
+ * surfaces of the terrain, the water table, horizons, strata ...) is rewritten to resolve from
+ * @p out's directory. @p header (NULL or "# ..." lines) is written first. The result is
+ * loaded back before it replaces @p out.
+ */
+karst_error_t karst_scenario_write_with_overrides(karst_ctx_t *ctx, const char *path,
+                                                  const karst_scenario_override_t *ov, int n,
+                                                  const char *header, const char *out);
+
+/**
+ * The text of the value scenario @p path gives at key path @p key (as for overrides), into
+ * @p out; KARST_ENOTFOUND when the file leaves the key to its default.
+ */
+karst_error_t karst_scenario_value_text(karst_ctx_t *ctx, const char *path, const char *key,
+                                        char *out, size_t size);
+
 /** Check the cross-field rules (key points inside the domain and below the terrain, a spring
  * present ...). */
 karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc);

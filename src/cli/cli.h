@@ -19,8 +19,28 @@ typedef struct cli_command {
 /* Set up a context for a command: logger on stderr, progress on a terminal,
  * Ctrl-C sets ctx->interrupt. `quiet` silences progress and info. */
 void cli_ctx_init(karst_ctx_t *ctx, int quiet, int verbose);
+/* Progress of a count of runs (the members of an ensemble, of a calibration's generation):
+ * on a terminal a redrawn bar "STAGE [####....] done/total  rate/s  time left" that starts
+ * afresh whenever the stage changes; elsewhere, when `lines` is set, a plain line
+ * "karst COMMAND: done of total NOUN, rate per second, time left" at most every 10 s or 10 %
+ * of the work, and at the end; otherwise nothing. */
+typedef struct cli_count_progress {
+  const char *command, *noun;
+  int tty, lines;
+  double t0, last, last_fraction;
+  char stage[48];
+} cli_count_progress_t;
+void cli_count_progress_init(cli_count_progress_t *ps, const char *command, const char *noun,
+                             int lines);
+/* A karst_progress_fn: user is a cli_count_progress_t. */
+void cli_count_progress(void *user, const char *stage, double done, double total);
 /* Print "karst CMD: message" from ctx (or the error code) to stderr; returns CLI_ERROR. */
 int cli_fail(const char *cmd, const karst_ctx_t *ctx, karst_error_t err);
+/* The exit status of a resumable run (karst ensemble, karst calibrate): KARST_EINTERRUPTED
+ * prints, on MPI rank 0 only, "karst CMD: interrupted; " and the formatted note (what is kept,
+ * how to continue); any other error is cli_fail's. Returns CLI_OK or CLI_ERROR. */
+int cli_resumable_status(const char *cmd, const karst_ctx_t *ctx, karst_error_t err, int rank,
+                         const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 /* A writer failed on the temporary file of @p output (its message names the temporary, which
  * is gone): reword ctx's message as "writing OUTPUT: message; no output was kept". */
 void cli_note_failed_output(karst_ctx_t *ctx, karst_error_t err, const char *output);

@@ -63,6 +63,57 @@ static void progress_terminal(void *user, const char *stage, double done, double
   fflush(stderr);
 }
 
+void cli_count_progress_init(cli_count_progress_t *ps, const char *command, const char *noun,
+                             int lines) {
+  memset(ps, 0, sizeof *ps);
+  ps->command = command;
+  ps->noun = noun;
+  ps->tty = isatty(STDERR_FILENO);
+  ps->lines = lines;
+}
+
+void cli_count_progress(void *user, const char *stage, double done, double total) {
+  cli_count_progress_t *ps = user;
+  double t = now_s();
+  if (ps->t0 == 0 || strncmp(ps->stage, stage, sizeof ps->stage - 1) != 0) {
+    snprintf(ps->stage, sizeof ps->stage, "%s", stage);
+    ps->t0 = t;
+    ps->last = 0;
+    ps->last_fraction = 0;
+  }
+  double el = t - ps->t0, rate = el > 0 ? done / el : 0;
+  double left = rate > 0 ? (total - done) / rate : NAN;
+  double frac = total > 0 ? done / total : 1;
+  int finished = done >= total;
+  char eta[32];
+  if (finished)
+    snprintf(eta, sizeof eta, "done");
+  else if (isfinite(left))
+    snprintf(eta, sizeof eta, "%.0f s left", left);
+  else
+    snprintf(eta, sizeof eta, "time left unknown");
+  if (ps->tty) {
+    if (!finished && t - ps->last < 0.1) return;
+    ps->last = t;
+    char bar[31];
+    int filled = (int)(frac * 30);
+    for (int i = 0; i < 30; i++)
+      bar[i] = i < filled ? '#' : '.';
+    bar[30] = '\0';
+    fprintf(stderr, "\r%-12s [%s] %.0f/%.0f  %.2f/s  %-18s", ps->stage, bar, done, total, rate,
+            eta);
+    if (finished) fputc('\n', stderr);
+  } else {
+    if (!ps->lines || done == 0) return;
+    if (!finished && t - ps->last < 10 && frac - ps->last_fraction < 0.1) return;
+    ps->last = t;
+    ps->last_fraction = frac;
+    fprintf(stderr, "karst %s: %.0f of %.0f %s, %.2f per second, %s\n", ps->command, done, total,
+            ps->noun, rate, eta);
+  }
+  fflush(stderr);
+}
+
 void cli_ctx_init(karst_ctx_t *ctx, int quiet, int verbose) {
   karst_ctx_init(ctx);
   ctx->log = log_stderr;
@@ -89,6 +140,21 @@ int cli_fail(const char *cmd, const karst_ctx_t *ctx, karst_error_t err) {
     fprintf(stderr, "karst %s: %s\n", cmd, ctx->errmsg);
   else
     fprintf(stderr, "karst %s: %s\n", cmd, karst_strerror(err));
+  return CLI_ERROR;
+}
+
+int cli_resumable_status(const char *cmd, const karst_ctx_t *ctx, karst_error_t err, int rank,
+                         const char *fmt, ...) {
+  if (!err) return CLI_OK;
+  if (err != KARST_EINTERRUPTED) return cli_fail(cmd, ctx, err);
+  if (rank == 0) {
+    fprintf(stderr, "karst %s: interrupted; ", cmd);
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+  }
   return CLI_ERROR;
 }
 

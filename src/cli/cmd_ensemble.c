@@ -1,63 +1,10 @@
 /* karst ensemble: N realisations of a scenario, resumable, on threads and MPI ranks. */
 #include <inttypes.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-#include <unistd.h>
 
 #include "cli.h"
-
-/* What the progress display remembers between calls. */
-typedef struct {
-  int tty;
-  double t0, last;
-  double last_fraction;
-} ens_progress_t;
-
-static double now_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-/* On a terminal: a redrawn bar with done/total, rate and time left. Elsewhere: a plain line
- * at most every 10 s (and every 10 % of the work), and at the end. */
-static void show_progress(void *user, const char *stage, double done, double total) {
-  ens_progress_t *ps = user;
-  (void)stage;
-  double t = now_s();
-  if (ps->t0 == 0) ps->t0 = t;
-  double el = t - ps->t0, rate = el > 0 ? done / el : 0;
-  double left = rate > 0 ? (total - done) / rate : NAN;
-  double frac = total > 0 ? done / total : 1;
-  int finished = done >= total;
-  char eta[32];
-  if (isfinite(left))
-    snprintf(eta, sizeof eta, "%.0f s left", left);
-  else
-    snprintf(eta, sizeof eta, "time left unknown");
-  if (ps->tty) {
-    if (!finished && t - ps->last < 0.1) return;
-    ps->last = t;
-    char bar[31];
-    int filled = (int)(frac * 30);
-    for (int i = 0; i < 30; i++)
-      bar[i] = i < filled ? '#' : '.';
-    bar[30] = '\0';
-    fprintf(stderr, "\rensemble [%s] %.0f/%.0f  %.2f/s  %-18s", bar, done, total, rate, eta);
-    if (finished) fputc('\n', stderr);
-  } else {
-    if (!finished && done > 0 && t - ps->last < 10 && frac - ps->last_fraction < 0.1) return;
-    if (done == 0) return;
-    ps->last = t;
-    ps->last_fraction = frac;
-    fprintf(stderr, "karst ensemble: %.0f of %.0f realisations, %.2f per second, %s\n", done, total,
-            rate, finished ? "done" : eta);
-  }
-  fflush(stderr);
-}
 
 static int run(int argc, char **argv) {
   const char *scenario = NULL, *out = NULL;
@@ -68,8 +15,7 @@ static int run(int argc, char **argv) {
     int more = i + 1 < argc;
     if (strcmp(a, "-n") == 0 && more) {
       const char *v = argv[++i];
-      if (cli_parse_u64(v, &n) || n < 1 ||
-          n > KARST_ENSEMBLE_MAX_MEMBERS)
+      if (cli_parse_u64(v, &n) || n < 1 || n > KARST_ENSEMBLE_MAX_MEMBERS)
         return cli_usage_error("ensemble",
                                "-n must be a whole number of realisations within [1, %d], got '%s'",
                                KARST_ENSEMBLE_MAX_MEMBERS, v);
@@ -78,8 +24,7 @@ static int run(int argc, char **argv) {
       out = argv[++i];
     } else if (strcmp(a, "-j") == 0 && more) {
       const char *v = argv[++i];
-      if (cli_parse_int(v, &threads) || threads < 1 ||
-          threads > KARST_ENSEMBLE_MAX_THREADS)
+      if (cli_parse_int(v, &threads) || threads < 1 || threads > KARST_ENSEMBLE_MAX_THREADS)
         return cli_usage_error("ensemble",
                                "-j must be a whole number of threads within [1, %d], got '%s'",
                                KARST_ENSEMBLE_MAX_THREADS, v);
@@ -109,13 +54,14 @@ static int run(int argc, char **argv) {
   karst_scenario_init(&sc);
   char hash[17] = "";
   char *params = NULL;
-  ens_progress_t ps = {isatty(STDERR_FILENO), 0, 0, 0};
+  cli_count_progress_t ps;
+  cli_count_progress_init(&ps, "ensemble", "realisations", 1);
   karst_error_t err = karst_ensemble_mpi_start(&ctx, &ranks, &rank, &mpi_init);
   if (err) {
     status = cli_fail("ensemble", &ctx, err);
     goto cleanup;
   }
-  ctx.progress = (!quiet && rank == 0) ? show_progress : NULL;
+  ctx.progress = (!quiet && rank == 0) ? cli_count_progress : NULL;
   ctx.progress_user = &ps;
 
   err = karst_scenario_load(&ctx, scenario, &sc);
@@ -145,16 +91,11 @@ static int run(int argc, char **argv) {
   err = karst_ensemble_hooks_pipeline(&ctx, &hooks, &pipe, &sc);
   karst_ensemble_summary_t sum;
   if (!err) err = karst_ensemble_run(&ctx, out, &opt, &hooks, &sum);
-  if (err == KARST_EINTERRUPTED) {
-    if (rank == 0)
-      fprintf(stderr,
-              "karst ensemble: interrupted; the finished realisations are kept in %s; run the "
-              "same command again to compute only the missing ones\n",
-              out);
-    status = CLI_ERROR;
-  } else if (err) {
-    status = cli_fail("ensemble", &ctx, err);
-  } else if (rank == 0 && !quiet) {
+  status = cli_resumable_status("ensemble", &ctx, err, rank,
+                                "the finished realisations are kept in %s; run the same command "
+                                "again to compute only the missing ones",
+                                out);
+  if (!err && rank == 0 && !quiet) {
     fprintf(stderr,
             "karst ensemble: %" PRId64 " realisations in %s (%" PRId64 " computed, %" PRId64
             " already there) in %.1f s on %d thread(s) x %d process(es)\n",

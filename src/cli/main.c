@@ -8,6 +8,7 @@
 /* Each cmd_<name>.c defines its table entry (name, function, summary, usage). */
 extern const cli_command_t cli_cmd_validate, cli_cmd_generate, cli_cmd_metrics, cli_cmd_ensemble,
     cli_cmd_compare, cli_cmd_report, cli_cmd_mesh, cli_cmd_view, cli_cmd_blocks;
+extern const cli_command_t cli_cmd_calibrate;
 extern const cli_command_t cli_cmd_export;
 extern const cli_command_t cli_cmd_completion;
 static int cmd_help(int argc, char **argv);
@@ -25,6 +26,7 @@ static const cli_command_t *const commands[] = {
     &cli_cmd_ensemble, &cli_cmd_compare,  &cli_cmd_report,   &cli_cmd_mesh,
     &cli_cmd_view,       // ParaView on the script beside the outputs
     &cli_cmd_blocks,     // rock blocks (Paris et al. 2020)
+    &cli_cmd_calibrate,  // fit a scenario to a survey (ABC-SMC)
     &cli_cmd_export,     // GeoPackage for QGIS
     &cli_cmd_completion, // shell completion from this table
 };

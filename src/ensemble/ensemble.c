@@ -136,8 +136,9 @@ static karst_error_t remove_stale_temporaries(karst_ctx_t *ctx, const char *dir)
  * the lock on a file that another process has just unlinked; it then checks that the name
  * still refers to the inode it locked and tries again otherwise (the usual pattern for
  * removable lock files). A lock dies with its process, so kill -9 never leaves DIR locked. */
-static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, char **path_out) {
-  char *path = karst_i_path_join(dir, KARST_ENSEMBLE_LOCK_NAME);
+static karst_error_t take_lock_named(karst_ctx_t *ctx, const char *dir, const char *name,
+                                     const char *what, int *fd_out, char **path_out) {
+  char *path = karst_i_path_join(dir, name);
   *fd_out = -1;
   *path_out = NULL;
   if (!path) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
@@ -159,9 +160,9 @@ static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, c
         pid[got > 0 ? got : 0] = '\0';
         pid[strspn(pid, "0123456789")] = '\0';
         err = karst_set_error(ctx, KARST_EBUSY,
-                              "%s is in use by another karst ensemble (pid %s; lock %s); wait "
+                              "%s is in use by another karst %s (pid %s; lock %s); wait "
                               "for it to finish or use another output directory",
-                              dir, pid[0] ? pid : "unknown", path);
+                              dir, what, pid[0] ? pid : "unknown", path);
       } else {
         err = karst_set_error(ctx, KARST_EIO, "%s: cannot lock: %s", path, strerror(e));
       }
@@ -184,7 +185,11 @@ static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, c
   }
   free(path);
   return karst_set_error(ctx, KARST_EBUSY, "%s: cannot take the lock %s (it keeps changing)", dir,
-                         KARST_ENSEMBLE_LOCK_NAME);
+                         name);
+}
+
+static karst_error_t take_lock(karst_ctx_t *ctx, const char *dir, int *fd_out, char **path_out) {
+  return take_lock_named(ctx, dir, KARST_ENSEMBLE_LOCK_NAME, "ensemble", fd_out, path_out);
 }
 
 /* Unlink while still holding the lock, then close (which releases it). */
@@ -199,26 +204,33 @@ static void release_lock(int fd, char *path) {
 /* ------------------------------------------------------------------------ */
 /* The key file: a re-run into DIR must be the same scenario and seed.      */
 /* ------------------------------------------------------------------------ */
-static karst_error_t check_or_write_key(karst_ctx_t *ctx, const char *real_dir,
-                                        const karst_ensemble_options_t *opt) {
+/** Longest key file read back (a key is a few lines). */
+#define KEY_FILE_MAX 4096
+
+/**
+ * A directory's key file (ensemble_internal.h): @p path must hold exactly @p want, or is
+ * created with it (atomically). Time complexity: O(size of the key).
+ */
+karst_error_t karst_i_key_file(karst_ctx_t *ctx, const char *path, const char *want,
+                               const char *holds, const char *advice) {
   karst_error_t err = KARST_SUCCESS;
-  char *path = karst_i_path_join(real_dir, "ensemble.key");
-  char want[256], have[256];
-  FILE *fp = NULL;
-  if (!path) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
-  snprintf(want, sizeof want, "karst ensemble key 1\nscenario_hash %s\nseed %" PRIu64 "\n",
-           opt->scenario_hash ? opt->scenario_hash : "none", opt->seed);
-  fp = fopen(path, "rb");
+  char *have = NULL;
+  FILE *fp = fopen(path, "rb");
   if (fp) {
-    size_t got = fread(have, 1, sizeof have - 1, fp);
+    have = malloc(KEY_FILE_MAX);
+    if (!have) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+      goto cleanup;
+    }
+    size_t got = fread(have, 1, KEY_FILE_MAX - 1, fp);
     have[got] = '\0';
     if (strcmp(have, want) != 0) {
       for (char *c = have; *c; c++)
         if (*c == '\n' || *c == '\r') *c = ' ';
       err = karst_set_error(ctx, KARST_EINVAL,
-                            "%s: this directory holds an ensemble of another scenario or seed "
-                            "(key: %s); use another output directory or the same scenario and seed",
-                            path, have);
+                            "%s: this directory holds %s (key: %.1500s); use another output "
+                            "directory or %s",
+                            path, holds, have, advice);
     }
     goto cleanup;
   }
@@ -229,6 +241,19 @@ static karst_error_t check_or_write_key(karst_ctx_t *ctx, const char *real_dir,
   err = karst_atomic_commit(ctx, &f);
 cleanup:
   if (fp) fclose(fp);
+  free(have);
+  return err;
+}
+
+static karst_error_t check_or_write_key(karst_ctx_t *ctx, const char *real_dir,
+                                        const karst_ensemble_options_t *opt) {
+  char *path = karst_i_path_join(real_dir, "ensemble.key");
+  char want[256];
+  if (!path) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  snprintf(want, sizeof want, "karst ensemble key 1\nscenario_hash %s\nseed %" PRIu64 "\n",
+           opt->scenario_hash ? opt->scenario_hash : "none", opt->seed);
+  karst_error_t err = karst_i_key_file(ctx, path, want, "an ensemble of another scenario or seed",
+                                       "the same scenario and seed");
   free(path);
   return err;
 }
@@ -878,4 +903,38 @@ void karst_ensemble_mpi_finish(int initialised) {
 #else
   (void)initialised;
 #endif
+}
+
+/* ------------------------------------------------------------------------ */
+/* For other stages that run ensembles (src/calibrate/): ensemble_internal.h */
+/* ------------------------------------------------------------------------ */
+/** The lock of take_lock on DIR/@p name (ensemble_internal.h). Time complexity: O(1). */
+karst_error_t karst_i_ensemble_lock(karst_ctx_t *ctx, const char *dir, const char *name,
+                                    const char *what, int *fd, char **path) {
+  return take_lock_named(ctx, dir, name, what, fd, path);
+}
+
+/** Release a lock of karst_i_ensemble_lock (ensemble_internal.h). Time complexity: O(1). */
+void karst_i_ensemble_unlock(int fd, char *path) {
+  release_lock(fd, path);
+}
+
+/** The MPI world as karst_ensemble_run sees it (ensemble_internal.h). Time complexity: O(1). */
+int karst_i_ensemble_world(int use_mpi, int *rank) {
+  return mpi_world(use_mpi, rank);
+}
+
+/** The worst error code over the ranks (ensemble_internal.h). Time complexity: one allreduce. */
+karst_error_t karst_i_ensemble_agree(int ranks, karst_error_t local) {
+  return mpi_agree(ranks, local);
+}
+
+/** Remove a file or directory tree (ensemble_internal.h). Time complexity: O(files). */
+int karst_i_remove_tree(const char *path) {
+  return remove_tree(path);
+}
+
+/** Remove leftovers ".*.tmp.*" of a killed run in @p dir (ensemble_internal.h). O(entries). */
+karst_error_t karst_i_remove_stale_temporaries(karst_ctx_t *ctx, const char *dir) {
+  return remove_stale_temporaries(ctx, dir);
 }

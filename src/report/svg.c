@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "karst/io.h"
 #include "report/svg_internal.h"
 
 /** Relative half-width given to an empty data range (lo = hi) so an axis can still be drawn;
@@ -375,4 +376,18 @@ void karst_i_svg_ylabel(karst_i_buf_t *b, const karst_i_plot_t *p, double widest
   karst_i_buf_printf(b, "<g transform=\"translate(%.2f %.2f) rotate(-90)\">", x, p->y + p->h / 2);
   karst_i_svg_text(b, 0, 0, "middle", "axis", label);
   karst_i_buf_puts(b, "</g>\n");
+}
+
+/**
+ * Write the text of @p b to @p path atomically (karst_atomic_open / commit).
+ * @return KARST_ENOMEM when an append to @p b failed (nothing is written), else the writer's code.
+ * Time complexity: O(length).
+ */
+karst_error_t karst_i_buf_write_file(karst_ctx_t *ctx, const karst_i_buf_t *b, const char *path) {
+  if (b->failed) return karst_set_error(ctx, KARST_ENOMEM, "out of memory while building %s", path);
+  karst_atomic_file_t f;
+  karst_error_t err = karst_atomic_open(ctx, &f, path, "wb");
+  if (err) return err;
+  if (b->len) fwrite(b->s, 1, b->len, f.fp);
+  return karst_atomic_commit(ctx, &f);
 }

@@ -25,6 +25,9 @@ void karst_i_buf_printf(karst_i_buf_t *b, const char *fmt, ...)
 void karst_i_buf_puts(karst_i_buf_t *b, const char *s);
 /** Append @p s with &, <, >, " and ' escaped (valid in XML text and attribute values). */
 void karst_i_buf_escape(karst_i_buf_t *b, const char *s);
+/** Write the text of @p b to @p path atomically; KARST_ENOMEM (nothing written) when an
+ *  append to @p b failed. */
+karst_error_t karst_i_buf_write_file(karst_ctx_t *ctx, const karst_i_buf_t *b, const char *path);
 
 /** Heckbert's nice number: 1, 2, 5 or 10 × 10^k near @p x (> 0); rounded or ceiling. */
 double karst_i_nice_number(double x, int round);

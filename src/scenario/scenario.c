@@ -226,6 +226,7 @@ struct reader {
   yaml_node_t *connectivity; /* likewise */
   yaml_node_t **drains;      /* per key point: its drains_to list, read after all key points */
   int n_drains;
+  karst_i_override_set_t *ovs; /* values put into the document before the walk, or NULL */
 };
 
 /* ------------------------------------------------------------------------ */
@@ -241,7 +242,8 @@ static int col_of(const yaml_node_t *n) {
 
 static karst_error_t fail_at(reader_t *r, const yaml_node_t *n, karst_error_t code, const char *fmt,
                              ...) __attribute__((format(printf, 4, 5)));
-/* "FILE:LINE:COLUMN: message" at node @p n. */
+/* "FILE:LINE:COLUMN: message" at node @p n; "FILE: ORIGIN: message" at a node an override
+ * added (overrides.c). */
 static karst_error_t fail_at(reader_t *r, const yaml_node_t *n, karst_error_t code, const char *fmt,
                              ...) {
   char msg[KARST_ERRMSG_MAX];
@@ -249,7 +251,25 @@ static karst_error_t fail_at(reader_t *r, const yaml_node_t *n, karst_error_t co
   va_start(ap, fmt);
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
+  int k = karst_i_override_of(r->ovs, r->doc, n);
+  if (k >= 0) {
+    char lbl[400];
+    return karst_set_error(r->ctx, code, "%s: %s: %s", r->file,
+                           karst_i_override_label(r->ovs, k, lbl, sizeof lbl), msg);
+  }
   return karst_set_error(r->ctx, code, "%s:%d:%d: %s", r->file, line_of(n), col_of(n), msg);
+}
+
+/* Record what an override's value was read as; a numeric override of a key that holds no
+ * number (@p what: "a string", "one of the names ...") is refused. */
+static karst_error_t read_as(reader_t *r, const yaml_node_t *n, const char *path,
+                             karst_override_type_t type, const char *what) {
+  int k = karst_i_override_of(r->ovs, r->doc, n);
+  if (k < 0) return KARST_SUCCESS;
+  r->ovs->types[k] = type;
+  if (type == KARST_OVERRIDE_TEXT && r->ovs->ov[k].numeric)
+    return fail_at(r, n, KARST_EINVAL, "%s is not a numeric key (it holds %s)", path, what);
+  return KARST_SUCCESS;
 }
 
 static karst_error_t no_memory(reader_t *r) {
@@ -366,6 +386,7 @@ static int in_range(const range_t *g, double v) {
  * overflowing literals such as 1e999 are refused as non-finite. */
 static karst_error_t get_number(reader_t *r, yaml_node_t *n, const char *path, double *out) {
   char d[80];
+  read_as(r, n, path, KARST_OVERRIDE_NUMBER, NULL);
   if (n->type != YAML_SCALAR_NODE || !is_plain(n) || is_null(n))
     return fail_at(r, n, KARST_EINVAL, "%s must be a number, got %s", path,
                    describe(n, d, sizeof d));
@@ -396,6 +417,7 @@ static karst_error_t get_number(reader_t *r, yaml_node_t *n, const char *path, d
 static karst_error_t get_integer(reader_t *r, yaml_node_t *n, const char *path, int64_t lo,
                                  int64_t hi, int64_t mlo, int64_t mhi, int64_t *out) {
   char d[80];
+  read_as(r, n, path, KARST_OVERRIDE_INTEGER, NULL);
   if (n->type != YAML_SCALAR_NODE || !is_plain(n) || is_null(n))
     return fail_at(r, n, KARST_EINVAL, "%s must be an integer, got %s", path,
                    describe(n, d, sizeof d));
@@ -435,6 +457,8 @@ static karst_error_t get_integer(reader_t *r, yaml_node_t *n, const char *path, 
 
 static karst_error_t get_u64(reader_t *r, yaml_node_t *n, const char *path, uint64_t *out) {
   char d[80];
+  karst_error_t err = read_as(r, n, path, KARST_OVERRIDE_TEXT, "a seed, not a model parameter");
+  if (err) return err;
   int ok = n->type == YAML_SCALAR_NODE && is_plain(n) && !is_null(n);
   const char *s = ok ? scalar(n) : "";
   size_t i = ok && *s == '+';
@@ -458,6 +482,8 @@ static karst_error_t get_u64(reader_t *r, yaml_node_t *n, const char *path, uint
 /* A non-empty string without NUL or control characters (names end up in output files). */
 static karst_error_t get_string(reader_t *r, yaml_node_t *n, const char *path, const char **out) {
   char d[80];
+  karst_error_t err = read_as(r, n, path, KARST_OVERRIDE_TEXT, "a string");
+  if (err) return err;
   if (n->type != YAML_SCALAR_NODE || is_null(n) || n->data.scalar.length == 0)
     return fail_at(r, n, KARST_EINVAL, "%s must be a non-empty string, got %s", path,
                    describe(n, d, sizeof d));
@@ -473,9 +499,12 @@ static karst_error_t get_string(reader_t *r, yaml_node_t *n, const char *path, c
 /* One of @p names; returns its index. Misspellings get the allowed values and a suggestion. */
 static karst_error_t get_enum(reader_t *r, yaml_node_t *n, const char *path,
                               const char *const *names, int count, int *out) {
-  char d[80], list[256] = "";
+  char d[80], list[256] = "", what[300];
   for (int i = 0; i < count; i++)
     snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", names[i]);
+  snprintf(what, sizeof what, "one of the names %s", list);
+  karst_error_t err = read_as(r, n, path, KARST_OVERRIDE_TEXT, what);
+  if (err) return err;
   if (n->type != YAML_SCALAR_NODE || is_null(n))
     return fail_at(r, n, KARST_EINVAL, "%s must be one of %s, got %s", path, list,
                    describe(n, d, sizeof d));
@@ -881,13 +910,15 @@ static karst_error_t defer_prescribed(reader_t *r, yaml_node_t *n, void *base, c
 static karst_error_t read_units(reader_t *r, yaml_node_t *n, void *base, const char *path) {
   char d[80];
   (void)base;
+  karst_error_t err = read_as(r, n, path, KARST_OVERRIDE_TEXT, "the name of the unit, m");
+  if (err) return err;
   if (n->type == YAML_SCALAR_NODE && !strcmp(scalar(n), "m") && n->data.scalar.length == 1)
     return KARST_SUCCESS;
   return fail_at(r, n, KARST_EUNSUPPORTED, "%s must be m (metres, the only unit supported), got %s",
                  path, describe(n, d, sizeof d));
 }
 
-static char *resolve_relative(reader_t *r, const char *name);
+static char *resolve_relative(reader_t *r, const char *name, const char *path);
 static karst_error_t read_surface_file(reader_t *r, yaml_node_t *v, const char *path,
                                        const char *file, struct karst_surface **out);
 
@@ -929,7 +960,7 @@ static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const
     join(sub, path, "surface");
     if ((err = get_string(r, v, sub, &name))) return err;
     free(sc->terrain.path);
-    if (!(sc->terrain.path = resolve_relative(r, name))) return no_memory(r);
+    if (!(sc->terrain.path = resolve_relative(r, name, sub))) return no_memory(r);
     if ((err = read_surface_file(r, v, sub, sc->terrain.path, &sc->terrain.surface))) return err;
     double lo[3], hi[3];
     karst_surface_bounds(sc->terrain.surface, lo, hi);
@@ -947,12 +978,7 @@ static karst_error_t read_terrain(reader_t *r, yaml_node_t *n, void *base, const
   join(sub, path, "heightfield");
   const char *hf;
   if ((err = get_string(r, v, sub, &hf))) return err;
-  const char *slash = strrchr(r->file, '/');
-  size_t dirlen = (hf[0] == '/' || !slash) ? 0 : (size_t)(slash - r->file) + 1;
-  resolved = malloc(dirlen + strlen(hf) + 1);
-  if (!resolved) return no_memory(r);
-  memcpy(resolved, r->file, dirlen);
-  strcpy(resolved + dirlen, hf);
+  if (!(resolved = resolve_relative(r, hf, sub))) return no_memory(r);
   if ((err = karst_i_open_regular(r->ctx, resolved, "heightfield", KARST_HEIGHTFIELD_MAX_BYTES,
                                   &fp))) {
     char msg[KARST_ERRMSG_MAX];
@@ -1315,14 +1341,20 @@ static const schema_t geometry_schema = {geometry_fields, 9};
 
 /* --- geological surfaces ------------------------------------------------- */
 
-/* The file @p name resolved relative to the scenario file (caller frees), or NULL (no memory). */
-static char *resolve_relative(reader_t *r, const char *name) {
+/* The file @p name, given at key @p path, resolved relative to the scenario file (caller frees),
+ * or NULL (no memory). A load with overrides notes the key, so that a scenario written elsewhere
+ * can rebase it (karst_scenario_write_with_overrides). */
+static char *resolve_relative(reader_t *r, const char *name, const char *path) {
   const char *slash = strrchr(r->file, '/');
   size_t dirlen = (name[0] == '/' || !slash) ? 0 : (size_t)(slash - r->file) + 1;
   char *out = malloc(dirlen + strlen(name) + 1);
   if (!out) return NULL;
   memcpy(out, r->file, dirlen);
   strcpy(out + dirlen, name);
+  if (r->ovs && karst_i_overrides_note_file(r->ovs, path, name) != 0) {
+    free(out);
+    return NULL;
+  }
   return out;
 }
 
@@ -1353,7 +1385,7 @@ static karst_error_t read_surface_path(reader_t *r, yaml_node_t *n, void *base, 
   karst_error_t err = get_string(r, n, path, &name);
   if (err) return err;
   free(d->path);
-  if (!(d->path = resolve_relative(r, name))) return no_memory(r);
+  if (!(d->path = resolve_relative(r, name, path))) return no_memory(r);
   return load_surface_file(r, n, path, d);
 }
 
@@ -1494,7 +1526,7 @@ static karst_error_t read_horizon_surface(reader_t *r, yaml_node_t *n, void *bas
   karst_error_t err = get_string(r, n, path, &name);
   if (err) return err;
   free(h->path);
-  if (!(h->path = resolve_relative(r, name))) return no_memory(r);
+  if (!(h->path = resolve_relative(r, name, path))) return no_memory(r);
   return read_surface_file(r, n, path, h->path, &h->surface);
 }
 
@@ -2930,6 +2962,28 @@ cleanup:
  * Time complexity: O(file size + heightfield size + n_key_points^2).
  */
 karst_error_t karst_scenario_load(karst_ctx_t *ctx, const char *path, karst_scenario_t *sc) {
+  return karst_i_scenario_load(ctx, path, NULL, sc, NULL, NULL, NULL);
+}
+
+/* " (with KEY=VALUE, ...)" after a cross-field rule broken by a scenario with overrides. */
+static void note_overrides(karst_ctx_t *ctx, const karst_i_override_set_t *set) {
+  size_t len = strlen(ctx->errmsg);
+  for (int k = 0; k < set->n && len + 8 < KARST_ERRMSG_MAX; k++) {
+    snprintf(ctx->errmsg + len, KARST_ERRMSG_MAX - len, "%s%s=%s%s", k ? ", " : " (with ",
+             set->ov[k].key, set->ov[k].value, k == set->n - 1 ? ")" : "");
+    len = strlen(ctx->errmsg);
+  }
+}
+
+/**
+ * karst_scenario_load with the overrides of @p set (NULL: none) put into the document before
+ * the walk (scenario_internal.h, overrides.c); with @p keep_doc the document and the file's
+ * bytes are handed to the caller on success.
+ * Time complexity: that of karst_scenario_load plus O(file size) per override.
+ */
+karst_error_t karst_i_scenario_load(karst_ctx_t *ctx, const char *path, karst_i_override_set_t *set,
+                                    karst_scenario_t *sc, yaml_document_t *keep_doc,
+                                    unsigned char **text, size_t *text_len) {
   karst_error_t err = KARST_SUCCESS;
   karst_scenario_t tmp;
   yaml_parser_t parser;
@@ -2937,7 +2991,7 @@ karst_error_t karst_scenario_load(karst_ctx_t *ctx, const char *path, karst_scen
   int parser_ok = 0, doc_ok = 0;
   unsigned char *buf = NULL;
   size_t len = 0;
-  reader_t r = {ctx, path, &doc, &tmp, 0, NULL, NULL, NULL, 0};
+  reader_t r = {ctx, path, &doc, &tmp, 0, NULL, NULL, NULL, 0, set};
 
   karst_scenario_init(&tmp);
   if (!path || !sc) {
@@ -2991,12 +3045,35 @@ karst_error_t karst_scenario_load(karst_ctx_t *ctx, const char *path, karst_scen
                   describe(root, d, sizeof d));
     goto cleanup;
   }
+  if (set && set->n > 0) {
+    if ((err = karst_i_overrides_apply(ctx, path, &doc, set))) goto cleanup;
+    root = yaml_document_get_root_node(&doc); /* the node array may have moved */
+  }
   if ((err = walk_map(&r, root, &top_schema, &tmp, "", &top_schema))) goto cleanup;
   if ((err = finish(&r))) goto cleanup;
-  if ((err = karst_scenario_check(ctx, &tmp))) goto cleanup;
+  if ((err = karst_scenario_check(ctx, &tmp))) {
+    if (set && set->n > 0) note_overrides(ctx, set);
+    goto cleanup;
+  }
+  for (int k = 0; set && k < set->n; k++) {
+    if (set->ov[k].numeric && set->types[k] != KARST_OVERRIDE_NUMBER &&
+        set->types[k] != KARST_OVERRIDE_INTEGER) {
+      char lbl[400];
+      err = karst_set_error(ctx, KARST_EINVAL, "%s: %s: %s is not a numeric key", path,
+                            karst_i_override_label(set, k, lbl, sizeof lbl), set->ov[k].key);
+      goto cleanup;
+    }
+  }
   karst_scenario_destroy(sc);
   *sc = tmp;
   karst_scenario_init(&tmp); /* ownership moved to sc */
+  if (keep_doc) {
+    *keep_doc = doc;
+    doc_ok = 0;
+    *text = buf;
+    *text_len = len;
+    buf = NULL;
+  }
 
 cleanup:
   if (doc_ok) yaml_document_delete(&doc);
