@@ -23,7 +23,8 @@ extern "C" {
   X(KARST_SAMPLE_PERMEABILITY, "permeability")                                                     \
   X(KARST_SAMPLE_FILL, "fill")                                                                     \
   X(KARST_SAMPLE_AMPLIFICATION, "amplification")                                                   \
-  X(KARST_SAMPLE_PRESCRIBED, "prescribed_path")
+  X(KARST_SAMPLE_PRESCRIBED, "prescribed_path")                                                    \
+  X(KARST_SAMPLE_SURVEY, "survey")
 
 typedef enum {
 #define KARST_X_ENUM(code, name) code,
