@@ -42,6 +42,9 @@ typedef struct karst_samples {
   double *xyz;           /**< 3 * n */
   unsigned char *source; /**< karst_sample_source_t per sample */
   karst_int_t n_key_points;
+  /** The coordinate system of xyz (the scenario's crs, written as field data "crs"), or NULL;
+   *  borrowed: the scenario that karst_generate filled the samples from owns it. */
+  const char *crs;
 } karst_samples_t;
 
 void karst_samples_init(karst_samples_t *s);

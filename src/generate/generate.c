@@ -388,10 +388,11 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
   if ((err = karst_geology_create(ctx, sc, seed, realisation, &geo))) goto cleanup;
   karst_rng_derive(&r, seed, realisation, KARST_I_STREAM_SAMPLING);
   if ((err = karst_sampling_run(ctx, geo, &r, smp))) goto cleanup;
+  smp->crs = sc->crs;
   if (survey) {
     /* The surveyed stations among the samples (src/conditioning/). */
-    station_vertex = malloc((size_t)(survey->n_stations > 0 ? survey->n_stations : 1) *
-                            sizeof *station_vertex);
+    station_vertex =
+        malloc((size_t)(survey->n_stations > 0 ? survey->n_stations : 1) * sizeof *station_vertex);
     if (!station_vertex) {
       err = karst_set_error(ctx, KARST_ENOMEM, "out of memory for the surveyed stations");
       goto cleanup;

@@ -397,7 +397,7 @@ karst_error_t write_atomically(karst_ctx_t *ctx, const char *path, StreamedWrite
     int e = buf.finish();
     if (close(fd) != 0 && e == 0) e = errno;
     if (!ok || catcher->errors > 0 || writer->GetErrorCode() != vtkErrorCode::NoError || e != 0) {
-      std::string why = e != 0               ? std::string(std::strerror(e))
+      std::string why = e != 0                ? std::string(std::strerror(e))
                         : catcher->errors > 0 ? catcher->message()
                                               : error_code_text(writer->GetErrorCode());
       err = karst_set_error(ctx, KARST_EIO, "%s: cannot write: %s", path, why.c_str());
@@ -513,6 +513,7 @@ karst_error_t write_samples(karst_ctx_t *ctx, const char *path, const karst_samp
   nkey->SetName("n_key_points");
   nkey->InsertNextValue(s->n_key_points);
   fd->AddArray(nkey);
+  if (s->crs) fd->AddArray(string_array("crs", 1, &s->crs));
 
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);

@@ -625,6 +625,11 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
     karst_i_buf_escape(&b, v ? v : "–");
     karst_i_buf_puts(&b, "</td></tr>");
   }
+  /* The coordinate system of every coordinate below (docs/scenario.md, "Coordinates"). */
+  const char *crs = json_scalar_text(karst_json_get(params, "crs"));
+  karst_i_buf_puts(&b, "<tr><th class=\"l\">coordinate system</th><td class=\"l\">");
+  karst_i_buf_escape(&b, crs ? crs : "local (no crs given)");
+  karst_i_buf_puts(&b, "</td></tr>");
   karst_i_buf_printf(&b,
                      "<tr><th class=\"l\">members in metrics.csv</th><td class=\"l\">%" PRId64
                      "</td></tr></table>\n",
@@ -669,6 +674,20 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   karst_i_buf_t maps, problems;
   karst_i_buf_init(&maps);
   karst_i_buf_init(&problems);
+  /* The plan-view density of simulated conduits over the domain (drawn when the members are
+   * conditioned on a survey). */
+  karst_i_density_t dens;
+  int have_dens = 0;
+  {
+    const karst_json_t *dmin = karst_json_get(params, "domain_min"),
+                       *dmax = karst_json_get(params, "domain_max");
+    if (dmin && dmax && dmin->type == KARST_JSON_ARRAY && dmax->type == KARST_JSON_ARRAY &&
+        dmin->n >= 2 && dmax->n >= 2) {
+      double lo[2] = {dmin->items[0].number, dmin->items[1].number},
+             hi[2] = {dmax->items[0].number, dmax->items[1].number};
+      have_dens = karst_i_density_init(&dens, lo, hi) == 0;
+    }
+  }
   karst_int_t upto = table.n_rows;
   if (upto > opt->members_pooled) upto = opt->members_pooled;
   for (karst_int_t r = 0; r < upto; r++) {
@@ -696,6 +715,7 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
     }
     free(vtp);
     pooled++;
+    if (have_dens && karst_i_density_add(&dens, &net)) b.failed = 1;
     rose_accumulate(&net, rose, nrose);
     degree_accumulate(&net, deg);
     if (nread < opt->members_drawn) {
@@ -734,6 +754,19 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
                        tunnel_colour[t], karst_tunnel_type_name(t));
   karst_i_buf_printf(&b, "<span><i class=\"sw\" style=\"background:%s\"></i>no type</span></p>\n",
                      no_type_colour);
+  if (have_dens && dens.conditioned) {
+    karst_i_buf_printf(&b,
+                       "<h2>Where the ensemble places the unexplored conduits</h2>\n<p>Plan view "
+                       "of the %d members read: each %.0f m cell is coloured by the fraction of "
+                       "members that have a simulated conduit (edge attribute "
+                       "<code>observed</code> = 0) crossing it; the surveyed legs (observed = 1, "
+                       "the same in every member) are drawn in red.</p>\n<figure id=\"density\">",
+                       dens.members, dens.cell);
+    karst_i_density_plot(&b, &dens, "plan-view density of simulated conduits", survey_colour);
+    karst_i_buf_puts(&b, "<figcaption>density of simulated (not surveyed) conduits, plan view"
+                         "</figcaption></figure>\n");
+  }
+  if (have_dens) karst_i_density_destroy(&dens);
   if (maps.s) karst_i_buf_puts(&b, maps.s);
   if (problems.s) {
     karst_i_buf_puts(&b, "<p>Members that could not be read:</p><ul>\n");

@@ -1837,8 +1837,12 @@ static karst_error_t add_station_key_point(reader_t *r, karst_int_t st, karst_ke
   kp->line = sc->conditioning.line, kp->column = sc->conditioning.column;
   memcpy(kp->p, &s->xyz[3 * st], sizeof kp->p);
   kp->station_index = st;
-  snprintf(kp->name, sizeof kp->name, "%s", name);
-  if (!(kp->station = strdup(s->labels[st] ? s->labels[st] : name))) return no_memory(r);
+  /* Named after its station when the name fits, so the network's node label stays the
+   * station's name; otherwise the description (entrance 1, survey piece 2 ...). */
+  const char *label = s->labels[st];
+  snprintf(kp->name, sizeof kp->name, "%s",
+           label && label[0] && strlen(label) < sizeof kp->name ? label : name);
+  if (!(kp->station = strdup(label ? label : name))) return no_memory(r);
   return KARST_SUCCESS;
 }
 
@@ -2820,6 +2824,9 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
                         tr->elevation, sc->domain_min[2]);
   }
 
+  /* Surveyed stations in the domain and in the bedrock (the message says by how much), before
+   * the key points: the entrance sinks and survey waypoints sit on stations. */
+  if ((err = karst_conditioning_check(ctx, sc))) return err;
   if ((err = check_surface(ctx, sc, &sc->water_table, "water_table"))) return err;
   if ((err = check_water_table(ctx, sc, &sc->water_table, "water_table"))) return err;
   for (int i = 0; i < sc->n_key_points; i++) {
@@ -2980,8 +2987,6 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
                       "sampling.feature_radius (%g m) must not exceed sampling.fill_radius (%g m): "
                       "features are sampled more finely than the fill",
                       sc->sampling.feature_radius, sc->sampling.fill_radius);
-  /* Surveyed stations in the domain and in the bedrock (the message says by how much). */
-  if ((err = karst_conditioning_check(ctx, sc))) return err;
   return KARST_SUCCESS;
 }
 
