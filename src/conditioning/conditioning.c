@@ -113,7 +113,8 @@ static karst_error_t find_components(karst_ctx_t *ctx, karst_survey_set_t *s) {
   s->n_components = nc;
   s->component_station = malloc((size_t)(nc > 0 ? nc : 1) * sizeof *s->component_station);
   free(parent);
-  if (!s->component_station) return karst_set_error(ctx, KARST_ENOMEM, "conditioning: out of memory");
+  if (!s->component_station)
+    return karst_set_error(ctx, KARST_ENOMEM, "conditioning: out of memory");
   for (karst_int_t c = 0; c < nc; c++)
     s->component_station[c] = -1;
   for (karst_int_t i = 0; i < n; i++) {
@@ -133,6 +134,15 @@ static void survey_where(const karst_scenario_t *sc, int i, char *buf, size_t n)
     snprintf(buf, n, "conditioning.surveys[%d] '%s'", i, d->path);
 }
 
+/* Put "WHERE[WHAT]: " before ctx's message: the scenario's position first, as for every file a
+ * scenario names. */
+static void prefix_where(karst_ctx_t *ctx, const char *where, const char *what) {
+  char msg[KARST_ERRMSG_MAX];
+  snprintf(msg, sizeof msg, "%s", ctx->errmsg);
+  snprintf(ctx->errmsg, KARST_ERRMSG_MAX, "%.*s%.64s: %.*s", KARST_ERRMSG_MAX / 2 - 80, where, what,
+           KARST_ERRMSG_MAX / 2 - 8, msg);
+}
+
 /* Read survey @p i into @p s (appending). */
 static karst_error_t load_one(karst_ctx_t *ctx, karst_scenario_t *sc, int i, karst_survey_set_t *s,
                               station_map_t *map) {
@@ -145,8 +155,7 @@ static karst_error_t load_one(karst_ctx_t *ctx, karst_scenario_t *sc, int i, kar
   survey_where(sc, i, where, sizeof where);
   karst_error_t err = karst_read_network(ctx, d->path, KARST_FORMAT_AUTO, &net);
   if (err) {
-    size_t len = strlen(ctx->errmsg);
-    snprintf(ctx->errmsg + len, KARST_ERRMSG_MAX - len, " (the survey of %s)", where);
+    prefix_where(ctx, where, "");
     goto cleanup;
   }
   if (net.n_edges == 0) {
@@ -159,8 +168,7 @@ static karst_error_t load_one(karst_ctx_t *ctx, karst_scenario_t *sc, int i, kar
   if (crs_text && !(s->source_crs[i] = strdup(crs_text))) goto nomem;
   if (crs_text && sc->crs_frame) {
     if ((err = karst_crs_create(ctx, crs_text, &src))) {
-      size_t len = strlen(ctx->errmsg);
-      snprintf(ctx->errmsg + len, KARST_ERRMSG_MAX - len, " (the CRS of %s)", where);
+      prefix_where(ctx, where, d->crs ? " crs" : " (the file's own CRS)");
       goto cleanup;
     }
     char what[512];
@@ -341,8 +349,8 @@ karst_error_t karst_conditioning_check(karst_ctx_t *ctx, const karst_scenario_t 
         "(the domain spans %c in [%g, %g] m), and %lld of the %lld stations are outside; enlarge "
         "the domain or check the survey's coordinate system%s%s",
         where, s->labels[worst] ? s->labels[worst] : "(unnamed)", p[0], p[1], p[2], by,
-        axis[worst_axis], axis[worst_axis], sc->domain_min[worst_axis],
-        sc->domain_max[worst_axis], (long long)n_out, (long long)s->n_stations,
+        axis[worst_axis], axis[worst_axis], sc->domain_min[worst_axis], sc->domain_max[worst_axis],
+        (long long)n_out, (long long)s->n_stations,
         s->source_crs[s->survey[worst]] ? ", here " : "",
         s->source_crs[s->survey[worst]] ? s->source_crs[s->survey[worst]] : "");
   }
@@ -455,7 +463,8 @@ karst_error_t karst_conditioning_assign_springs(karst_ctx_t *ctx, const karst_sc
                                                 const int *key_spring, karst_skeleton_t *sk) {
   const karst_survey_set_t *s = view->conditioning.data;
   if (!s || !station_vertex || !key_spring) return KARST_SUCCESS;
-  int *comp_spring = malloc((size_t)(s->n_components > 0 ? s->n_components : 1) * sizeof *comp_spring);
+  int *comp_spring =
+      malloc((size_t)(s->n_components > 0 ? s->n_components : 1) * sizeof *comp_spring);
   if (!comp_spring) return karst_set_error(ctx, KARST_ENOMEM, "conditioning: out of memory");
   for (karst_int_t c = 0; c < s->n_components; c++)
     comp_spring[c] = -1;
