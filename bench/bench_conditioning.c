@@ -40,6 +40,8 @@ static void bench(const char *label, double radius_scale, int runs, int threads)
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
   karst_scenario_t with, without;
+  karst_scenario_init(&with);
+  karst_scenario_init(&without);
   const char *path = KARST_SOURCE_DIR "/datasets/scenarios/dowprov_extension.yaml";
   if (karst_scenario_load(&ctx, path, &with) || karst_scenario_load(&ctx, path, &without)) {
     fprintf(stderr, "bench_conditioning: %s\n", ctx.errmsg);

@@ -375,6 +375,15 @@ karst_error_t karst_crs_transform(karst_ctx_t *ctx, const karst_crs_t *src, cons
   return err;
 }
 
+/* The WGS 84 longitude/latitude frame (EPSG:4326) of the lon/lat conversions. */
+static void wgs84(karst_crs_t *w) {
+  memset(w, 0, sizeof *w);
+  w->kind = CRS_LONLAT;
+  w->geographic = 1;
+  snprintf(w->text, sizeof w->text, "EPSG:4326");
+  snprintf(w->def, sizeof w->def, "EPSG:4326");
+}
+
 /**
  * WGS 84 longitude/latitude (degrees) of @p n points of @p crs (3 values per point in, 2 out).
  * Time complexity: O(n).
@@ -382,11 +391,7 @@ karst_error_t karst_crs_transform(karst_ctx_t *ctx, const karst_crs_t *src, cons
 karst_error_t karst_crs_to_lonlat(karst_ctx_t *ctx, const karst_crs_t *crs, karst_int_t n,
                                   const double *xyz, double *lonlat) {
   karst_crs_t wgs;
-  memset(&wgs, 0, sizeof wgs);
-  wgs.kind = CRS_LONLAT;
-  wgs.geographic = 1;
-  snprintf(wgs.text, sizeof wgs.text, "EPSG:4326");
-  snprintf(wgs.def, sizeof wgs.def, "EPSG:4326");
+  wgs84(&wgs);
   for (karst_int_t i = 0; i < n; i++) {
     double p[3] = {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
     karst_error_t err = karst_crs_transform(ctx, crs, &wgs, 1, p);
@@ -403,11 +408,7 @@ karst_error_t karst_crs_to_lonlat(karst_ctx_t *ctx, const karst_crs_t *crs, kars
 karst_error_t karst_crs_from_lonlat(karst_ctx_t *ctx, const karst_crs_t *crs, karst_int_t n,
                                     const double *lonlat, double *xyz) {
   karst_crs_t wgs;
-  memset(&wgs, 0, sizeof wgs);
-  wgs.kind = CRS_LONLAT;
-  wgs.geographic = 1;
-  snprintf(wgs.text, sizeof wgs.text, "EPSG:4326");
-  snprintf(wgs.def, sizeof wgs.def, "EPSG:4326");
+  wgs84(&wgs);
   for (karst_int_t i = 0; i < n; i++) {
     if (!(fabs(lonlat[2 * i + 1]) <= 90) || !(fabs(lonlat[2 * i]) <= 540))
       return karst_set_error(ctx, KARST_ERANGE,
