@@ -95,15 +95,21 @@ int karst_i_density_add(karst_i_density_t *d, const karst_network_t *net) {
  *  O(cells + legs). */
 void karst_i_density_plot(karst_i_buf_t *b, const karst_i_density_t *d, const char *title,
                           const char *leg_colour) {
-  const double W = 640, H = 520;
-  karst_i_plot_t p = {70, 12, W - 200, H - 56, 0, 0, 0, 0};
+  /* Room on the left for 7-digit projected coordinates, on the right for the legend. */
+  const double W = 720, H = 520;
+  karst_i_plot_t p = {96, 12, W - 96 - 190, H - 56, 0, 0, 0, 0};
   double ex = d->nx * d->cell, ey = d->ny * d->cell;
   double s = fmin(p.w / ex, p.h / ey);
   double mx = d->lo[0] + ex / 2, my = d->lo[1] + ey / 2;
   p.xmin = mx - p.w / s / 2, p.xmax = mx + p.w / s / 2;
   p.ymin = my - p.h / s / 2, p.ymax = my + p.h / s / 2;
   karst_i_svg_begin(b, W, H, title);
-  karst_i_svg_axes(b, &p, 0, 6, 6, "x (m)", "y (m)");
+  /* The y title further left than karst_i_svg_axes puts it: projected northings are wide. */
+  karst_i_svg_axes(b, &p, 0, 6, 6, "x (m)", NULL);
+  karst_i_buf_printf(b, "<g transform=\"translate(%.2f %.2f) rotate(-90)\">", p.x - 78,
+                     p.y + p.h / 2);
+  karst_i_svg_text(b, 0, 0, "middle", "axis", "y (m)");
+  karst_i_buf_puts(b, "</g>\n");
   for (int k = 0; k < N_CLASSES; k++) {
     int any = 0;
     for (int j = 0; j < d->ny; j++)
@@ -137,12 +143,12 @@ void karst_i_density_plot(karst_i_buf_t *b, const karst_i_density_t *d, const ch
   /* Legend: the classes, then the survey. */
   double lx = p.x + p.w + 16, ly = p.y + 10;
   karst_i_svg_text(b, lx, ly, "start", "note", "members with a");
-  karst_i_svg_text(b, lx, ly + 13, "start", "note", "simulated conduit");
+  karst_i_svg_text(b, lx, ly + 13, "start", "note", "simulated conduit:");
   for (int k = 0; k < N_CLASSES; k++) {
     char txt[48];
     double y = ly + 26 + 18 * k;
     karst_i_svg_rect(b, lx, y, 14, 14, class_colour[k], "#999999", 1);
-    snprintf(txt, sizeof txt, "%s%.0f %% – %.0f %%", k ? "> " : "", k ? 100 * class_top[k - 1] : 0,
+    snprintf(txt, sizeof txt, "%s%.0f – %.0f %%", k ? "> " : "", k ? 100 * class_top[k - 1] : 0,
              100 * class_top[k]);
     karst_i_svg_text(b, lx + 20, y + 11, "start", "note", txt);
   }
