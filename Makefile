@@ -29,6 +29,7 @@ demo: deps build
 	@echo "The network is in $(DEMO_OUT)/: open $(DEMO_OUT)/network.vtp in ParaView"
 	@echo "(File > Open, Apply, then colour by tunnel_type, radius or kind);"
 	@echo "$(DEMO_OUT)/samples.vtp holds the sample cloud, $(DEMO_OUT)/run.json every parameter and timing."
+	@echo "Python: PYTHONPATH=$(CURDIR)/$(BUILD)/python /usr/bin/python3 -c 'import karst' (docs/python.md)."
 
 test-fast: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

@@ -7,6 +7,7 @@ cd "$(dirname "$0")/.."
 KARST=${1:-build/karst}
 analysis/survey_metrics.sh "$KARST"
 if [ -x analysis/presets_table2.sh ]; then analysis/presets_table2.sh "$KARST"; fi
+analysis/presets_realism.sh "$KARST"
 /usr/bin/python3 - <<'PY'
 import re, pathlib
 p = pathlib.Path("paper/paper.md")

@@ -161,7 +161,8 @@ static void run_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc, const cha
 }
 
 /* A 1.5-million-sample block with k = 100 (the size on which the most complete published
- * generator takes 417 s single-threaded): LARGE_SIDE × LARGE_SIDE × 300 m with fill radius
+ * generator, KarstNSim, takes 417 s single-threaded: Gouy et al. 2024, J. Hydrol.,
+ * doi:10.1016/j.jhydrol.2024.130878): LARGE_SIDE × LARGE_SIDE × 300 m with fill radius
  * 5.2 m, 20 key points. 1000 × 1000 × 300 m gave 1 316 588 samples (seed 2021), i.e. one sample
  * per 0.228 m³ (≈ 1.62 r³, a little denser than V / (1.41 r³)); 1070 m per side scales that by
  * 1.145 to ≈ 1.51 M. */

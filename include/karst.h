@@ -10,12 +10,14 @@
 #define KARST_H
 
 #include "karst/amplification.h"
+#include "karst/arrays.h"
 #include "karst/classification.h"
 #include "karst/common.h"
 #include "karst/compare.h"
 #include "karst/cost.h"
 #include "karst/crs.h"
 #include "karst/ensemble.h"
+#include "karst/export.h"
 #include "karst/generate.h"
 #include "karst/geology.h"
 #include "karst/graph.h"
@@ -25,6 +27,7 @@
 #include "karst/mesh.h"
 #include "karst/metrics.h"
 #include "karst/network.h"
+#include "karst/palette.h"
 #include "karst/paths.h"
 #include "karst/readers.h"
 #include "karst/report.h"
@@ -33,6 +36,7 @@
 #include "karst/scenario.h"
 #include "karst/skeleton.h"
 #include "karst/surface.h"
+#include "karst/version.h"
 #include "karst/vtk.h"
 
 #endif

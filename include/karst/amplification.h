@@ -20,12 +20,9 @@ extern "C" {
 /** Constants of the amplification stage; karst_amplification_options_init gives the documented
  * defaults. */
 typedef struct karst_amplification_options {
-  double displacement_at_theta0; /**< max midpoint displacement (m) for θ = 0: 0.05 ("a few
-                                    centimetres") */
-  double displacement_at_theta1; /**< max midpoint displacement (m) for θ = 1: 4.0 (§5.2) */
-  double max_displacement_ratio; /**< displacement ≤ this × segment length, so pieces never fold
-                                    back: 0.5 */
-  double min_segment;            /**< segments shorter than 2 × this (m) are not subdivided: 1.0 */
+  double ratio_at_theta1; /**< largest midpoint displacement as a fraction of the piece split, for
+                               θ = 1: 0.5 (so pieces never fold back); ρ(θ) = θ × this */
+  double min_segment;     /**< segments shorter than 2 × this (m) are not subdivided: 1.0 */
   int max_levels; /**< recursion depth of the subdivision: 3 (an edge becomes ≤ 8 pieces) */
   int max_tries;  /**< rejection-sampling attempts for a point in the bedrock: 32 */
   double loop_separation; /**< an interior point's second path must end farther than
@@ -34,8 +31,9 @@ typedef struct karst_amplification_options {
 
 void karst_amplification_options_init(karst_amplification_options_t *opt);
 
-/** Maximum first-level midpoint displacement (m) for tortuosity θ ∈ [0, 1]. */
-double karst_amplification_max_displacement(const karst_amplification_options_t *opt, double theta);
+/** Largest midpoint displacement as a fraction of the piece split, for tortuosity θ ∈ [0, 1]. */
+double karst_amplification_displacement_ratio(const karst_amplification_options_t *opt,
+                                              double theta);
 
 karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t *geo,
                                          const karst_graph_t *g, const karst_routing_plan_t *plan,

@@ -54,9 +54,6 @@ void karst_report_options_init(karst_report_options_t *opt);
 karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, const char *path,
                                  const karst_report_options_t *opt);
 
-/** Versions of karst and the libraries it was built with, "name version" lines. Caller frees. */
-char *karst_report_versions(void);
-
 #ifdef __cplusplus
 }
 #endif

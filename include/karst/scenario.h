@@ -7,6 +7,8 @@
 #ifndef KARST_SCENARIO_H
 #define KARST_SCENARIO_H
 
+#include <math.h>
+
 #include "karst/common.h"
 #include "karst/network.h"
 
@@ -102,10 +104,10 @@ typedef struct karst_terrain {
   double elevation; /**< flat elevation (m) */
   char *path;       /**< heightfield file as resolved (relative to the scenario), or NULL */
   karst_int_t ncols, nrows;
-  double xll, yll, cellsize; /**< lower-left corner of the grid (cell centres, ESRI "xllcenter"
-                                convention after reading) */
-  double *z;                 /**< nrows*ncols elevations, row 0 = southernmost row */
-  double zmin, zmax;         /**< range of the heightfield */
+  double xll, yll, cellsize;     /**< lower-left corner of the grid (cell centres, ESRI "xllcenter"
+                                    convention after reading) */
+  double *z;                     /**< nrows*ncols elevations, row 0 = southernmost row */
+  double zmin, zmax;             /**< range of the heightfield */
   struct karst_surface *surface; /**< a terrain read from a surface file (terrain.surface: a TSurf
                                       or a grid), or NULL; is_grid is then 0 */
   double lipschitz; /**< max slope |grad h| of the bilinear surface (for implicit terrain, Appendix
@@ -292,11 +294,37 @@ typedef struct karst_sampling {
   karst_int_t max_samples; /**< safety cap, default 5e6 */
 } karst_sampling_t;
 
+/** Where a hierarchical amplification step anchors its points (amplification.anchor). */
+typedef enum {
+  KARST_ANCHOR_PREVIOUS = 0, /**< along the paths the previous step added (tributaries of
+                                  tributaries: a Horton-Strahler hierarchy, branchwork caves) */
+  KARST_ANCHOR_NETWORK = 1   /**< along the whole network grown so far (passages opened along
+                                  every existing passage: mazes, looping caves) */
+} karst_amplification_anchor_t;
+
 typedef struct karst_amplification {
   int steps;                /**< >= 0 */
-  int points;               /**< new points per step, >= 0 */
+  int points;               /**< new points of the first step, >= 0 */
   double dead_end_fraction; /**< [0, 1] */
+  double reach;             /**< m, >= 0: 0 draws each step's points in the network's bounding box
+                                 (Paris et al. 2021, §5.2); > 0 draws the first step's within this
+                                 distance of the network, and each later step's within reach_ratio of
+                                 the previous step's (a Horton hierarchy of tributaries) */
+  double reach_ratio;       /**< (0, 1], default 0.5: reach of step s+1 / reach of step s */
+  double points_ratio;      /**< > 0, default 1: points of step s+1 / points of step s */
+  int anchor; /**< karst_amplification_anchor_t, default KARST_ANCHOR_PREVIOUS (reach > 0) */
 } karst_amplification_t;
+
+/** Largest number of amplification points over all steps (karst_scenario_check refuses more). */
+#define KARST_SCENARIO_MAX_AMPLIFICATION_POINTS 1000000
+
+/** Points of amplification step @p step (1-based): round(points × points_ratio^(step − 1)). */
+static inline double karst_amplification_step_points(const karst_amplification_t *am, int step) {
+  double n = am->points;
+  for (int s = 1; s < step && n >= 0.5; s++)
+    n *= am->points_ratio;
+  return floor(n + 0.5);
+}
 
 /** Radius range per tunnel type (uniform draw in [min, max]). */
 typedef struct karst_radius_range {
@@ -406,11 +434,12 @@ typedef struct karst_scenario {
   uint64_t seed;
   int realisations; /**< >= 1 */
   /* Where blocks named by cross-field messages were given (0 when defaulted or built in code). */
-  karst_srcpos_t pos_domain;      /**< the domain map */
-  karst_srcpos_t pos_terrain;     /**< terrain.elevation or terrain.heightfield value */
-  karst_srcpos_t pos_water_table; /**< the water_table map */
-  karst_srcpos_t pos_key_points;  /**< the key_points list */
-  karst_srcpos_t pos_sampling;    /**< the sampling map */
+  karst_srcpos_t pos_domain;        /**< the domain map */
+  karst_srcpos_t pos_terrain;       /**< terrain.elevation or terrain.heightfield value */
+  karst_srcpos_t pos_amplification; /**< the amplification map */
+  karst_srcpos_t pos_water_table;   /**< the water_table map */
+  karst_srcpos_t pos_key_points;    /**< the key_points list */
+  karst_srcpos_t pos_sampling;      /**< the sampling map */
   /** The coordinate reference system of every coordinate of the file (crs:, docs/scenario.md,
    *  "Coordinates"), as given, or NULL: a local frame. */
   char *crs;

@@ -23,7 +23,14 @@ extern "C" {
  * others Float64, ncomp components), node labels as a string array "label"
  * when present, and the CRS / title as field data. Field data also carries
  * the string arrays "tunnel_type_names" and "node_kind_names" (value i names
- * code i) so a ParaView user can read the integer codes.
+ * code i) so a ParaView user can read the integer codes, and "versions" (one
+ * "name version" string per component of karst_versions()), as every writer
+ * here does.
+ *
+ * Every writer here states what each point and cell array means (include/karst/arrays.h):
+ * its unit as the information key vtkDataArray::UNITS_LABEL, a row (array, unit, meaning)
+ * of the 3-component field-data string table "array_units", and for a categorical array
+ * the field-data array naming its categories ("vadose_names", ...); docs/arrays.md.
  */
 karst_error_t karst_vtk_write_network(karst_ctx_t *ctx, const char *path,
                                       const karst_network_t *net);

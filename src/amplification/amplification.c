@@ -11,9 +11,7 @@
 
 /** Fill @p opt with the documented defaults (see the field comments). O(1). */
 void karst_amplification_options_init(karst_amplification_options_t *opt) {
-  opt->displacement_at_theta0 = 0.05;
-  opt->displacement_at_theta1 = 4.0;
-  opt->max_displacement_ratio = 0.5;
+  opt->ratio_at_theta1 = 0.5;
   opt->min_segment = 1.0;
   opt->max_levels = 3;
   opt->max_tries = 32;
@@ -21,16 +19,19 @@ void karst_amplification_options_init(karst_amplification_options_t *opt) {
 }
 
 /**
- * Tortuosity θ → maximum first-level midpoint displacement, linear between
- * the two ends Paris et al. 2021, §5.2 give: "from a few centimeters (θ = 0)
- * to 4 meters (θ = 1)": A(θ) = A0 + θ (A1 − A0), A0 = 0.05 m, A1 = 4 m by
- * default. θ is clamped to [0, 1]. O(1).
+ * Tortuosity θ → the largest midpoint displacement as a fraction of the piece being split:
+ * ρ(θ) = θ × ratio_at_theta1 (0.5 by default), θ clamped to [0, 1]. The displacement scales with
+ * the length it is applied to, as in the fractal midpoint displacement of Fournier, Fussell &
+ * Carpenter (1982) with Hurst exponent 1, so the tortuosity it adds depends on θ alone — not on
+ * the sampling radius, which sets the length of the graph's edges (Paris et al. 2021, §5.2 give
+ * an absolute amplitude, "from a few centimeters to 4 meters", which on 10 m edges leaves
+ * branchworks straighter than any of the 34 caves of Collon et al. 2017; docs/generation.md).
+ * O(1).
  */
-double karst_amplification_max_displacement(const karst_amplification_options_t *opt,
-                                            double theta) {
+double karst_amplification_displacement_ratio(const karst_amplification_options_t *opt,
+                                              double theta) {
   double t = theta < 0 ? 0 : (theta > 1 ? 1 : theta);
-  return opt->displacement_at_theta0 +
-         t * (opt->displacement_at_theta1 - opt->displacement_at_theta0);
+  return t * opt->ratio_at_theta1;
 }
 
 /**
@@ -46,23 +47,153 @@ static double dist3(const double *a, const double *b) {
   return sqrt(dx * dx + dy * dy + dz * dz);
 }
 
+/* Block (in @p blocked) the graph vertex of every network node of degree >= 3, listing them in
+ * *@p list (grown as needed) for unblock. O(nodes + edges). */
+static karst_error_t block_junctions(karst_ctx_t *ctx, const karst_skeleton_t *sk,
+                                     unsigned char *blocked, karst_int_t **list, karst_int_t *n) {
+  const karst_network_t *net = &sk->net;
+  karst_int_t *deg = calloc((size_t)(net->n_nodes > 0 ? net->n_nodes : 1), sizeof *deg);
+  karst_int_t *l = realloc(*list, (size_t)(net->n_nodes > 0 ? net->n_nodes : 1) * sizeof *l);
+  if (!deg || !l) {
+    free(deg);
+    if (l) *list = l;
+    return karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
+  }
+  *list = l;
+  for (karst_int_t e = 0; e < net->n_edges; e++)
+    deg[net->edges[2 * e]]++, deg[net->edges[2 * e + 1]]++;
+  *n = 0;
+  for (karst_int_t u = 0; u < net->n_nodes; u++)
+    if (deg[u] >= 3) {
+      karst_int_t w = sk->vertex_of_node[u];
+      if (!blocked[w]) blocked[w] = 1, l[(*n)++] = w;
+    }
+  free(deg);
+  return KARST_SUCCESS;
+}
+
+static void unblock(unsigned char *blocked, const karst_int_t *list, karst_int_t n) {
+  for (karst_int_t k = 0; k < n; k++)
+    blocked[list[k]] = 0;
+}
+
+/* The paper's draw (§5.2): @p n points uniformly in the bounding box of @p net clipped to the
+ * domain, each kept only in the bedrock (max_tries draws, else dropped). Returns the count. */
+static int draw_in_box(const karst_geology_t *geo, const karst_amplification_options_t *opt,
+                       karst_rng_t *rng, const karst_network_t *net, int n, double *pts) {
+  const karst_scenario_t *sc = karst_geology_scenario(geo);
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; k++)
+    lo[k] = hi[k] = net->xyz[k];
+  for (karst_int_t v = 1; v < net->n_nodes; v++)
+    for (int k = 0; k < 3; k++) {
+      lo[k] = fmin(lo[k], net->xyz[3 * v + k]);
+      hi[k] = fmax(hi[k], net->xyz[3 * v + k]);
+    }
+  for (int k = 0; k < 3; k++) {
+    lo[k] = fmax(lo[k], sc->domain_min[k]);
+    hi[k] = fmin(hi[k], sc->domain_max[k]);
+  }
+  int n_pts = 0;
+  for (int i = 0; i < n; i++) {
+    for (int t = 0; t < opt->max_tries; t++) {
+      double p[3];
+      for (int k = 0; k < 3; k++)
+        p[k] = karst_rng_uniform_range(rng, lo[k], hi[k] > lo[k] ? hi[k] : lo[k]);
+      if (hi[2] <= lo[2]) p[2] = lo[2];
+      if (karst_amplification_in_bedrock(geo, p)) {
+        memcpy(&pts[3 * n_pts], p, sizeof p);
+        n_pts++;
+        break;
+      }
+    }
+  }
+  return n_pts;
+}
+
+/* The hierarchical draw: each of @p n points picks a point uniformly along the paths the
+ * previous step added (amplification_step == @p parent, the skeleton for the first step) when
+ * @p previous_only, else along the whole network grown so far (amplification_step <= @p parent);
+ * every edge when the previous step added none: an edge with probability proportional to its
+ * length, then a uniform position on it, and moves from it uniformly within the ball of radius @p
+ * reach (rejection from the cube), kept only in the bedrock (max_tries draws of both, else
+ * dropped). Returns the count, or -1 when out of memory. O(E log E + n × max_tries × log E). */
+static int draw_near(const karst_geology_t *geo, const karst_amplification_options_t *opt,
+                     karst_rng_t *rng, const karst_network_t *net, double reach, int parent,
+                     int previous_only, int n, double *pts) {
+  karst_int_t ne = net->n_edges;
+  if (ne == 0) return draw_in_box(geo, opt, rng, net, n, pts);
+  const karst_attr_t *st = karst_network_attr_find(net, KARST_ATTR_EDGE, "amplification_step");
+  double *cum = malloc((size_t)ne * sizeof *cum);
+  if (!cum) return -1;
+  double total = 0;
+  for (int pass = 0; pass < 2 && !(total > 0); pass++) /* pass 1: every edge */
+    for (karst_int_t e = 0; e < ne; e++) {
+      if (pass == 0 && st && (previous_only ? st->data[e] != parent : st->data[e] > parent)) {
+        cum[e] = total;
+        continue;
+      }
+      total += dist3(&net->xyz[3 * net->edges[2 * e]], &net->xyz[3 * net->edges[2 * e + 1]]);
+      cum[e] = total;
+    }
+  int n_pts = 0;
+  for (int i = 0; i < n; i++) {
+    for (int t = 0; t < opt->max_tries; t++) {
+      double x = karst_rng_uniform(rng) * total;
+      karst_int_t lo = 0, hi = ne - 1; /* first edge with cum > x */
+      while (lo < hi) {
+        karst_int_t mid = lo + (hi - lo) / 2;
+        if (cum[mid] > x)
+          hi = mid;
+        else
+          lo = mid + 1;
+      }
+      const double *a = &net->xyz[3 * net->edges[2 * lo]],
+                   *b = &net->xyz[3 * net->edges[2 * lo + 1]];
+      double u = karst_rng_uniform(rng), d[3], r2;
+      do {
+        r2 = 0;
+        for (int k = 0; k < 3; k++) {
+          d[k] = karst_rng_uniform_range(rng, -1, 1);
+          r2 += d[k] * d[k];
+        }
+      } while (r2 > 1);
+      double p[3];
+      for (int k = 0; k < 3; k++)
+        p[k] = a[k] + u * (b[k] - a[k]) + reach * d[k];
+      if (karst_amplification_in_bedrock(geo, p)) {
+        memcpy(&pts[3 * n_pts], p, sizeof p);
+        n_pts++;
+        break;
+      }
+    }
+  }
+  free(cum);
+  return n_pts;
+}
+
 /**
- * Ramification (Paris et al. 2021, §5.2): sc->amplification.steps steps; in
- * each, sc->amplification.points points are drawn uniformly in the bounding
- * box of the current network (clipped to the domain) and kept only inside
- * the bedrock (rejection, at most opt->max_tries draws per point; a point
- * that finds no bedrock is dropped). Each point is snapped to the nearest
- * graph vertex that is not yet on the network (the sample cloud is a Poisson
- * set, so the snap moves it by at most about the fill radius). The first
- * round(dead_end_fraction × points) points of a step are dead ends: one
- * least-cost path to the nearest network vertex (a Dijkstra from the point
- * that stops at the first network vertex it settles — the same as a
- * multi-source Dijkstra from the network, since costs are symmetric). The
- * others are interior points: a second least-cost path, vertex-disjoint from
- * the first, to a network vertex farther than opt->loop_separation ×
- * |p − first end| from the first end, so the two paths close a loop through
+ * Ramification (Paris et al. 2021, §5.2): sc->amplification.steps steps; step
+ * s has karst_amplification_step_points(am, s) points (points × points_ratio^(s−1)).
+ * With reach = 0 (the paper's draw) they are drawn uniformly in the bounding
+ * box of the current network (clipped to the domain); with reach > 0 each is
+ * drawn within reach_ratio^(s−1) × reach of a point taken uniformly along the
+ * previous step's paths (anchor previous) or the whole network (anchor
+ * network): a hierarchy of ever shorter tributaries (docs/generation.md).
+ * Either way a point is kept only inside the bedrock (rejection, at most
+ * opt->max_tries draws per point; a point that finds no bedrock is dropped). Each point is snapped
+ * to the nearest graph vertex that is not yet on the network (the sample cloud is a Poisson set, so
+ * the snap moves it by at most about the fill radius). The first round(dead_end_fraction × points)
+ * points of a step are dead ends: one least-cost path to the nearest network vertex (a Dijkstra
+ * from the point that stops at the first network vertex it settles — the same as a multi-source
+ * Dijkstra from the network, since costs are symmetric). The others are interior points: a second
+ * least-cost path, vertex-disjoint from the first, to a network vertex farther than
+ * opt->loop_separation × |p − first end| from the first end, so the two paths close a loop through
  * distinct parts of the network (when no such path exists the point stays a
  * dead end). Points connect in order, each to the network grown so far.
+ * New paths may not end at a network junction (a vertex of degree >= 3): a
+ * tributary joins a passage, so no amplification raises a node above degree 3
+ * and the degree distribution keeps the spread of real caves.
  * New edges get amplification_step = s (1-based) and a new branch id.
  *
  * @param geo      the geology (bedrock, and its scenario's amplification parameters).
@@ -76,7 +207,8 @@ static double dist3(const double *a, const double *b) {
  * @param n_points receives the number of points connected (may be NULL).
  * @param n_paths  receives the number of paths added (may be NULL).
  * @return KARST_SUCCESS, KARST_EINVAL (bad parameters), KARST_ENOMEM, KARST_EINTERRUPTED.
- * Time complexity: O(steps × points × (n + local Dijkstra)).
+ * Time complexity: O(Σ_s points_s × (n + junctions + local Dijkstra)), points_s the points
+ * of step s.
  */
 karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t *geo,
                                          const karst_graph_t *g, const karst_routing_plan_t *plan,
@@ -93,7 +225,7 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   double *pts = NULL;
   karst_int_t *snap = NULL;
   double *snap_d = NULL;
-  karst_int_t *cleared = NULL;
+  karst_int_t *cleared = NULL, *junc = NULL;
   karst_path_t p1, p2;
   karst_path_init(&p1);
   karst_path_init(&p2);
@@ -109,47 +241,34 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   size_t n = (size_t)(g->n > 0 ? g->n : 1);
   in_net = calloc(n, 1);
   blocked = calloc(n, 1);
-  pts = malloc((size_t)am->points * 3 * sizeof *pts);
-  snap = malloc((size_t)am->points * sizeof *snap);
-  snap_d = malloc((size_t)am->points * sizeof *snap_d);
+  size_t max_pts = 1;
+  for (int step = 1; step <= am->steps; step++) {
+    double n_step = karst_amplification_step_points(am, step);
+    if (n_step < 0.5) break;
+    if (n_step > (double)max_pts) max_pts = (size_t)n_step;
+  }
+  pts = malloc(max_pts * 3 * sizeof *pts);
+  snap = malloc(max_pts * sizeof *snap);
+  snap_d = malloc(max_pts * sizeof *snap_d);
   if (!in_net || !blocked || !pts || !snap || !snap_d) {
     err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
     goto cleanup;
   }
   for (karst_int_t v = 0; v < g->n; v++)
     in_net[v] = sk->node_of_vertex[v] >= 0;
-  const karst_int_t n_dead = (karst_int_t)llround(am->dead_end_fraction * am->points);
-
+  double reach = am->reach;
   for (int step = 1; step <= am->steps; step++) {
-    /* Bounding box of the current network, clipped to the domain. */
-    double lo[3], hi[3];
-    const karst_network_t *net = &sk->net;
-    for (int k = 0; k < 3; k++)
-      lo[k] = hi[k] = net->xyz[k];
-    for (karst_int_t v = 1; v < net->n_nodes; v++)
-      for (int k = 0; k < 3; k++) {
-        lo[k] = fmin(lo[k], net->xyz[3 * v + k]);
-        hi[k] = fmax(hi[k], net->xyz[3 * v + k]);
-      }
-    for (int k = 0; k < 3; k++) {
-      lo[k] = fmax(lo[k], sc->domain_min[k]);
-      hi[k] = fmin(hi[k], sc->domain_max[k]);
+    const int n_step = (int)karst_amplification_step_points(am, step);
+    const int n_dead = (int)llround(am->dead_end_fraction * n_step);
+    if (n_step == 0) break; /* later steps have no more points (points_ratio <= 1) */
+    int n_pts = am->reach > 0 ? draw_near(geo, opt, rng, &sk->net, reach, step - 1,
+                                          am->anchor == KARST_ANCHOR_PREVIOUS, n_step, pts)
+                              : draw_in_box(geo, opt, rng, &sk->net, n_step, pts);
+    if (n_pts < 0) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
+      goto cleanup;
     }
-    /* Draw the step's points (all draws first, so the stream does not depend on the graph). */
-    int n_pts = 0;
-    for (int i = 0; i < am->points; i++) {
-      for (int t = 0; t < opt->max_tries; t++) {
-        double p[3];
-        for (int k = 0; k < 3; k++)
-          p[k] = karst_rng_uniform_range(rng, lo[k], hi[k] > lo[k] ? hi[k] : lo[k]);
-        if (hi[2] <= lo[2]) p[2] = lo[2];
-        if (karst_amplification_in_bedrock(geo, p)) {
-          memcpy(&pts[3 * n_pts], p, sizeof p);
-          n_pts++;
-          break;
-        }
-      }
-    }
+    reach *= am->reach_ratio;
     /* Snap every point to its nearest vertex off the network: one pass over the graph. */
     for (int i = 0; i < n_pts; i++)
       snap[i] = -1, snap_d[i] = INFINITY;
@@ -180,14 +299,24 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
         }
         route = karst_routing_route(plan, spring);
       }
-      if ((err = karst_paths_dijkstra_routed(ctx, s, route, 1, &pv, NULL, in_net, 1, &v1)))
+      /* New paths join a passage, not a junction: vertices of degree >= 3 are blocked. */
+      karst_int_t n_junc = 0;
+      if ((err = block_junctions(ctx, sk, blocked, &junc, &n_junc))) goto cleanup;
+      err = karst_paths_dijkstra_routed(ctx, s, route, 1, &pv, blocked, in_net, 1, &v1);
+      if (err) {
+        unblock(blocked, junc, n_junc);
         goto cleanup;
+      }
       if (v1 < 0) {
+        unblock(blocked, junc, n_junc);
         karst_log(ctx, KARST_LOG_DEBUG,
                   "amplification: point at vertex %lld cannot reach the network", (long long)pv);
         continue;
       }
-      if ((err = karst_search_path_to(ctx, s, v1, &p1))) goto cleanup;
+      if ((err = karst_search_path_to(ctx, s, v1, &p1))) {
+        unblock(blocked, junc, n_junc);
+        goto cleanup;
+      }
       p2.n = 0;
       if (i >= n_dead) {
         /* Interior point: a second path, disjoint from the first, to a distinct part. */
@@ -212,9 +341,10 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
           blocked[p1.v[k]] = 0;
         for (karst_int_t k = 0; k < n_cleared; k++)
           in_net[cleared[k]] = 1;
-        if (err) goto cleanup;
-        if (v2 >= 0 && (err = karst_search_path_to(ctx, s, v2, &p2))) goto cleanup;
+        if (!err && v2 >= 0) err = karst_search_path_to(ctx, s, v2, &p2);
       }
+      unblock(blocked, junc, n_junc);
+      if (err) goto cleanup;
       if ((err = karst_skeleton_add_route(ctx, sk, g, &p1, step, spring))) goto cleanup;
       added_paths++;
       if (p2.n > 0) {
@@ -241,6 +371,7 @@ cleanup:
   free(snap);
   free(snap_d);
   free(cleared);
+  free(junc);
   return err;
 }
 
@@ -281,12 +412,12 @@ static int push_point(subdiv_t *sd, const double p[3]) {
 }
 
 /* Midpoint displacement of segment a–b: emits the interior points in order. */
-static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double amp, int level) {
+static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double ratio, int level) {
   double len = dist3(a, b);
-  if (level >= sd->opt->max_levels || len < 2 * sd->opt->min_segment) return 0;
+  if (level >= sd->opt->max_levels || len < 2 * sd->opt->min_segment || !(ratio > 0)) return 0;
   double t[3] = {(b[0] - a[0]) / len, (b[1] - a[1]) / len, (b[2] - a[2]) / len};
   double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
-  double A = fmin(amp, sd->opt->max_displacement_ratio * len);
+  double A = ratio * len;
   double q[3];
   memcpy(q, m, sizeof q);
   for (int tries = 0; tries < sd->opt->max_tries; tries++) {
@@ -299,23 +430,23 @@ static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double 
       break;
     }
   }
-  if (subdivide(sd, a, q, 0.5 * amp, level + 1)) return -1;
+  if (subdivide(sd, a, q, ratio, level + 1)) return -1;
   if (push_point(sd, q)) return -1;
-  return subdivide(sd, q, b, 0.5 * amp, level + 1);
+  return subdivide(sd, q, b, ratio, level + 1);
 }
 
 /**
  * Stochastic midpoint displacement (Paris et al. 2021, §5.2; Fournier,
  * Fussell & Carpenter 1982): every edge a–b longer than 2 × min_segment is
  * split at its midpoint, displaced perpendicular to a–b in a uniformly random
- * direction by a uniform distance in [0, A], A = min(A(θ) / 2^level,
- * max_displacement_ratio × length), A(θ) from
- * karst_amplification_max_displacement; both halves are refined again up to
- * max_levels. A displacement that would put the point outside the domain or
- * above the terrain is rejected and redrawn (max_tries times; then the
- * midpoint stays on the segment), so no node leaves the bedrock. Original
- * nodes keep their position and attributes; new nodes get zero attributes
- * (kind interior) but their edge's "spring"; each piece copies its edge's
+ * direction by a uniform distance in [0, ρ L], L the length of the piece split and
+ * ρ = karst_amplification_displacement_ratio(θ); both halves are refined again up to
+ * max_levels, each with the same ratio of its own length (so the added tortuosity does
+ * not depend on the length of the graph's edges). A displacement that would put the
+ * point outside the bedrock is rejected and redrawn (max_tries times; then the
+ * midpoint stays on the segment), so no node leaves the bedrock. θ = 0 displaces
+ * nothing. Original nodes keep their position and attributes; new nodes get zero
+ * attributes (kind interior) but their edge's "spring"; each piece copies its edge's
  * attributes, except "cost", which is shared among the pieces in proportion to
  * their length.
  * Edges flagged "observed" (surveyed legs) are copied unchanged, with no draw.
@@ -337,7 +468,7 @@ karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_geology
     return karst_set_error(ctx, KARST_EINVAL, "tortuosity must be within [0, 1], got %g", theta);
   karst_error_t err = KARST_SUCCESS;
   subdiv_t sd = {geo, opt, rng, NULL, 0, 0};
-  const double amp = karst_amplification_max_displacement(opt, theta);
+  const double ratio = karst_amplification_displacement_ratio(opt, theta);
   karst_network_t tmp;
   karst_network_init(&tmp);
   for (karst_int_t v = 0; v < in->n_nodes; v++)
@@ -365,7 +496,7 @@ karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_geology
     karst_int_t u = in->edges[2 * e], w = in->edges[2 * e + 1];
     const double *a = &in->xyz[3 * u], *b = &in->xyz[3 * w];
     sd.n = 0;
-    if (!(observed && observed->data[e] != 0) && subdivide(&sd, a, b, amp, 0)) goto nomem;
+    if (!(observed && observed->data[e] != 0) && subdivide(&sd, a, b, ratio, 0)) goto nomem;
     /* Lengths of the pieces, for sharing the cost. */
     double total = 0;
     const double *prev = a;

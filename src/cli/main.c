@@ -1,5 +1,6 @@
 /* karst: git-style command dispatcher. Each subcommand lives in cmd_<name>.c. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
@@ -7,16 +8,35 @@
 /* Each cmd_<name>.c defines its table entry (name, function, summary, usage). */
 extern const cli_command_t cli_cmd_validate, cli_cmd_generate, cli_cmd_metrics, cli_cmd_ensemble,
     cli_cmd_compare, cli_cmd_report, cli_cmd_mesh;
+extern const cli_command_t cli_cmd_export;
+extern const cli_command_t cli_cmd_completion;
 static int cmd_help(int argc, char **argv);
-static const cli_command_t cli_cmd_help = {"help", cmd_help, "show help for a command",
-                                           "usage: karst help [COMMAND]\n"};
+static const cli_command_t cli_cmd_help = {
+    "help", cmd_help, "show help for a command",
+    "usage: karst help [COMMAND] [--man]\n\n"
+    "Without COMMAND: the commands. With COMMAND: its options.\n"
+    "  --man    print the karst(1) man page (roff) made from the help of every command;\n"
+    "           read it with: karst help --man | man -l -\n"};
 
-/* The command table, in the order of the pipeline. */
+/* The command table, in the order of the pipeline (one line per added command). */
+// clang-format off
 static const cli_command_t *const commands[] = {
     &cli_cmd_help,     &cli_cmd_validate, &cli_cmd_generate, &cli_cmd_metrics,
     &cli_cmd_ensemble, &cli_cmd_compare,  &cli_cmd_report,   &cli_cmd_mesh,
+    &cli_cmd_export,     // GeoPackage for QGIS
+    &cli_cmd_completion, // shell completion from this table
 };
+// clang-format on
 static const size_t n_commands = sizeof commands / sizeof commands[0];
+
+const char cli_description[] =
+    "karst generates 3-D karst cave networks from geology (Paris et al. 2021),\n"
+    "measures networks and cave surveys (Collon et al. 2017) and builds conduit geometry.\n";
+
+const cli_command_t *const *cli_commands(size_t *n) {
+  *n = n_commands;
+  return commands;
+}
 
 const cli_command_t *cli_find_command(const char *name) {
   for (size_t i = 0; i < n_commands; i++)
@@ -25,17 +45,19 @@ const cli_command_t *cli_find_command(const char *name) {
 }
 
 static void print_main_help(FILE *out) {
-  fprintf(out,
-          "usage: karst [--version] [--help] COMMAND [ARGS]\n\n"
-          "karst generates 3-D karst cave networks from geology (Paris et al. 2021),\n"
-          "measures networks and cave surveys (Collon et al. 2017) and builds conduit geometry.\n\n"
-          "Commands:\n");
+  fprintf(out, "usage: karst [--version] [--help] COMMAND [ARGS]\n\n%s\nCommands:\n",
+          cli_description);
   for (size_t i = 1; i < n_commands; i++)
     fprintf(out, "  %-10s %s\n", commands[i]->name, commands[i]->summary);
   fprintf(out, "\nRun 'karst help COMMAND' for the options of one command.\n");
 }
 
 static int cmd_help(int argc, char **argv) {
+  if (argc >= 2 && strcmp(argv[1], "--man") == 0) {
+    if (argc > 2) return cli_usage_error("help", "--man takes no command");
+    cli_doc_man(stdout);
+    return fflush(stdout) == 0 && !ferror(stdout) ? CLI_OK : CLI_ERROR;
+  }
   if (argc < 2) {
     print_main_help(stdout);
     return CLI_OK;
@@ -43,6 +65,19 @@ static int cmd_help(int argc, char **argv) {
   const cli_command_t *c = cli_find_command(argv[1]);
   if (!c) return cli_usage_error("help", "unknown command '%s'", argv[1]);
   cli_print_help(c);
+  return CLI_OK;
+}
+
+/* `karst --version`: karst's version on the first line, then the compiler and every library
+ * (the list that run.json, ensemble.json and the .vtp field data carry). */
+static int print_version(void) {
+  char *text = karst_versions_text();
+  if (!text) {
+    fprintf(stderr, "karst: out of memory\n");
+    return CLI_ERROR;
+  }
+  fputs(text, stdout);
+  free(text);
   return CLI_OK;
 }
 
@@ -55,10 +90,7 @@ int main(int argc, char **argv) {
     print_main_help(stdout);
     return CLI_OK;
   }
-  if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) {
-    printf("karst %s\n", karst_version());
-    return CLI_OK;
-  }
+  if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) return print_version();
   const cli_command_t *c = cli_find_command(argv[1]);
   if (!c) {
     if (argv[1][0] == '-')

@@ -31,6 +31,7 @@
 
 #include "ensemble/ensemble_internal.h"
 #include "karst/io.h"
+#include "karst/version.h"
 
 #if KARST_HAVE_MPI
 #include <mpi.h>
@@ -546,7 +547,7 @@ static karst_error_t write_collection_files(karst_ctx_t *ctx, const char *dir,
                                             const karst_ensemble_summary_t *sum, int nthreads) {
   karst_error_t err = KARST_SUCCESS;
   karst_atomic_file_t f = {0};
-  char *path = NULL, *mpath = NULL, *row = NULL;
+  char *path = NULL, *mpath = NULL, *row = NULL, *versions = NULL;
   char **files = NULL;
   karst_int_t n = opt->n;
 
@@ -599,10 +600,15 @@ static karst_error_t write_collection_files(karst_ctx_t *ctx, const char *dir,
     err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
     goto cleanup;
   }
+  if (!(versions = karst_versions_json())) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
   err = karst_atomic_open(ctx, &f, path, "wb");
   if (err) goto cleanup;
   fprintf(f.fp, "{\n  \"karst_version\": ");
   karst_json_string(f.fp, karst_version());
+  fprintf(f.fp, ",\n  \"versions\": %s", versions);
   fprintf(f.fp, ",\n  \"scenario\": ");
   if (opt->scenario_path)
     karst_json_string(f.fp, opt->scenario_path);
@@ -639,6 +645,7 @@ cleanup:
   free(row);
   free(mpath);
   free(path);
+  free(versions);
   return err;
 }
 

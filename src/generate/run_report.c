@@ -2,6 +2,7 @@
  * every effective parameter) and what it produced (counts, stage times). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "karst/amplification.h"
@@ -9,6 +10,7 @@
 #include "karst/conditioning.h"
 #include "karst/generate.h"
 #include "karst/io.h"
+#include "karst/version.h"
 
 /* A JSON number (shortest round-trip form), or null for NaN / infinities. */
 static void json_num(FILE *fp, double v) {
@@ -378,11 +380,14 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   fprintf(fp, "    \"amplification\": {\"steps\": %d, \"points\": %d, \"dead_end_fraction\": ",
           sc->amplification.steps, sc->amplification.points);
   json_num(fp, sc->amplification.dead_end_fraction);
-  fputs(", \"max_displacement\": ", fp),
-      json_num(fp, karst_amplification_max_displacement(&ao, sc->tortuosity));
-  fputs(", \"displacement_at_theta0\": ", fp), json_num(fp, ao.displacement_at_theta0);
-  fputs(", \"displacement_at_theta1\": ", fp), json_num(fp, ao.displacement_at_theta1);
-  fputs(", \"max_displacement_ratio\": ", fp), json_num(fp, ao.max_displacement_ratio);
+  fputs(", \"reach\": ", fp), json_num(fp, sc->amplification.reach);
+  fputs(", \"reach_ratio\": ", fp), json_num(fp, sc->amplification.reach_ratio);
+  fputs(", \"points_ratio\": ", fp), json_num(fp, sc->amplification.points_ratio);
+  fprintf(fp, ", \"anchor\": \"%s\"",
+          sc->amplification.anchor == KARST_ANCHOR_NETWORK ? "network" : "previous");
+  fputs(", \"displacement_ratio\": ", fp),
+      json_num(fp, karst_amplification_displacement_ratio(&ao, sc->tortuosity));
+  fputs(", \"ratio_at_theta1\": ", fp), json_num(fp, ao.ratio_at_theta1);
   fputs(", \"min_segment\": ", fp), json_num(fp, ao.min_segment);
   fprintf(fp, ", \"max_levels\": %d, \"max_tries\": %d, \"loop_separation\": ", ao.max_levels,
           ao.max_tries);
@@ -406,7 +411,8 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
 }
 
 /**
- * Write run.json for one realisation, atomically: karst version, scenario
+ * Write run.json for one realisation, atomically: karst version and those of
+ * the libraries (karst_versions_json), scenario
  * path and FNV-1a hash (karst_file_hash; null when built in code), seed and
  * realisation, every effective parameter of @p sc and of the amplification
  * constants, the counts and the wall time of each stage of @p stats.
@@ -421,12 +427,18 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   char hash[17] = "";
   karst_error_t err;
   if (sc->path && (err = karst_file_hash(ctx, sc->path, hash))) return err;
+  char *versions = karst_versions_json();
+  if (!versions) return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
   karst_atomic_file_t f;
-  if ((err = karst_atomic_open(ctx, &f, path, "w"))) return err;
+  if ((err = karst_atomic_open(ctx, &f, path, "w"))) {
+    free(versions);
+    return err;
+  }
   FILE *fp = f.fp;
   const char *I = "    ";
   fputs("{\n  \"karst_version\": ", fp);
   karst_json_string(fp, karst_version());
+  fprintf(fp, ",\n  \"versions\": %s", versions);
   fputs(",\n  \"scenario\": ", fp);
   if (sc->path)
     karst_json_string(fp, sc->path);
@@ -478,5 +490,6 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
   for (int s = 0; s < KARST_STAGE_COUNT; s++)
     kv_num(fp, I, karst_stage_name(s), st->stage_seconds[s], s == KARST_STAGE_COUNT - 1);
   fprintf(fp, "  },\n  \"peak_bytes\": %zu\n}\n", st->peak_bytes);
+  free(versions);
   return karst_atomic_commit(ctx, &f);
 }

@@ -20,7 +20,10 @@
  * No C++ exception crosses the extern "C" boundary: each entry point catches
  * std::bad_alloc (KARST_ENOMEM) and anything else (KARST_EEXTERNAL).
  */
+#include "karst/arrays.h"
 #include "karst/io.h"
+#include "karst/palette.h"
+#include "karst/version.h"
 #include "karst/vtk.h"
 
 #include <fcntl.h>
@@ -46,12 +49,14 @@
 #include <vtkCommand.h>
 #include <vtkDataArray.h>
 #include <vtkDataCompressor.h>
+#include <vtkDataSet.h>
 #include <vtkDoubleArray.h>
 #include <vtkErrorCode.h>
 #include <vtkExecutive.h>
 #include <vtkFieldData.h>
 #include <vtkFloatArray.h>
 #include <vtkImageData.h>
+#include <vtkInformation.h>
 #include <vtkIntArray.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
@@ -191,6 +196,63 @@ const char *const sample_source_names[] = {
 void add_lookup_tables(vtkFieldData *fd) {
   fd->AddArray(string_array("tunnel_type_names", KARST_TUNNEL_TYPE_COUNT, tunnel_type_names));
   fd->AddArray(string_array("node_kind_names", KARST_NODE_KIND_COUNT, node_kind_names));
+}
+
+/* The software that wrote a file: field data "versions", one "name version" string per component
+ * (karst_versions), the same list as run.json's "versions" and `karst --version`. */
+void add_versions(vtkFieldData *fd) {
+  karst_component_t c[KARST_COMPONENTS_MAX];
+  const int n = karst_versions(c);
+  auto a = vtkSmartPointer<vtkStringArray>::New();
+  a->SetName("versions");
+  a->SetNumberOfValues(n);
+  for (int i = 0; i < n; i++)
+    a->SetValue(i, std::string(c[i].name) + " " + c[i].version);
+  fd->AddArray(a);
+}
+
+/*
+ * State in the file what every point and cell array means (include/karst/arrays.h): its unit
+ * as VTK's standard information key UNITS_LABEL on the array, and one row (array, unit,
+ * meaning) of the 3-component field-data string table "array_units", in the order point
+ * arrays, cell arrays. A categorical array also gets the field-data array naming its
+ * categories (value i names code i, from include/karst/palette.h) unless the file already
+ * has it. An array karst does not describe gets the unit "unknown".
+ */
+void describe_arrays(vtkDataSet *ds) {
+  auto table = vtkSmartPointer<vtkStringArray>::New();
+  table->SetName("array_units");
+  table->SetNumberOfComponents(3);
+  table->SetComponentName(0, "array");
+  table->SetComponentName(1, "unit");
+  table->SetComponentName(2, "meaning");
+  vtkFieldData *fd = ds->GetFieldData();
+  vtkFieldData *parts[2] = {ds->GetPointData(), ds->GetCellData()};
+  for (vtkFieldData *part : parts)
+    for (int i = 0; i < part->GetNumberOfArrays(); i++) {
+      vtkAbstractArray *a = part->GetAbstractArray(i);
+      if (!a || !a->GetName()) continue;
+      const karst_array_info_t *info = karst_arrays_find(a->GetName());
+      const char *unit = info ? info->unit : "unknown";
+      table->InsertNextValue(a->GetName());
+      table->InsertNextValue(unit);
+      table->InsertNextValue(info ? info->meaning : "not described by karst (docs/arrays.md)");
+      if (vtkDataArray::SafeDownCast(a))
+        a->GetInformation()->Set(vtkDataArray::UNITS_LABEL(), unit);
+      const karst_palette_t *pal = info && info->names ? karst_palette_find(info->name) : nullptr;
+      if (!pal || fd->GetAbstractArray(info->names)) continue;
+      int n = 0; /* codes 0 .. n-1 */
+      for (int k = 0; k < pal->n; k++)
+        if (pal->categories[k].code >= n) n = pal->categories[k].code + 1;
+      auto names = vtkSmartPointer<vtkStringArray>::New();
+      names->SetName(info->names);
+      names->SetNumberOfValues(n);
+      for (int k = 0; k < pal->n; k++)
+        if (pal->categories[k].code >= 0)
+          names->SetValue(pal->categories[k].code, pal->categories[k].name);
+      fd->AddArray(names);
+    }
+  fd->AddArray(table);
 }
 
 bool finite3(const double *p) {
@@ -473,6 +535,8 @@ karst_error_t write_network(karst_ctx_t *ctx, const char *path, const karst_netw
                               (const char *const *)net->strings[i].values));
   if (net->title) fd->AddArray(string_array("title", 1, &net->title));
   add_lookup_tables(fd);
+  add_versions(fd);
+  describe_arrays(pd);
 
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
@@ -514,6 +578,8 @@ karst_error_t write_samples(karst_ctx_t *ctx, const char *path, const karst_samp
   nkey->InsertNextValue(s->n_key_points);
   fd->AddArray(nkey);
   if (s->crs) fd->AddArray(string_array("crs", 1, &s->crs));
+  add_versions(fd);
+  describe_arrays(pd);
 
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
@@ -544,8 +610,9 @@ karst_error_t write_mesh(karst_ctx_t *ctx, const char *path, const karst_mesh_t 
       lab->SetValue(t, m->tri_label[t]);
     pd->GetCellData()->AddArray(lab);
     pd->GetCellData()->SetActiveScalars(name);
-    if (std::strcmp(name, "tunnel_type") == 0) add_lookup_tables(pd->GetFieldData());
   }
+  add_versions(pd->GetFieldData());
+  describe_arrays(pd);
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
@@ -587,6 +654,7 @@ karst_error_t write_polydata(karst_ctx_t *ctx, const char *path, const karst_pol
   for (int i = 0; i < m->n_strings; i++)
     pd->GetFieldData()->AddArray(string_array(m->strings[i].name, m->strings[i].n,
                                               (const char *const *)m->strings[i].values));
+  add_versions(pd->GetFieldData());
   vtkNew<StreamedWriter<vtkXMLPolyDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), pd);
 }
@@ -630,6 +698,8 @@ karst_error_t write_image(karst_ctx_t *ctx, const char *path, const int dims[3],
    * avoid copying a grid that may hold hundreds of millions of values. */
   arr->SetArray(const_cast<float *>(values), (vtkIdType)n, 1);
   img->GetPointData()->SetScalars(arr);
+  add_versions(img->GetFieldData());
+  describe_arrays(img);
   vtkNew<StreamedWriter<vtkXMLImageDataWriter>> writer;
   return write_atomically(ctx, path, writer.GetPointer(), img);
 }

@@ -8,6 +8,7 @@
 
 #include "karst/io.h"
 #include "karst/mesh.h"
+#include "karst/version.h"
 #include "mesh/mesh_internal.h"
 
 static karst_error_t check_mesh_arrays(karst_ctx_t *ctx, const char *path, const karst_mesh_t *m) {
@@ -45,7 +46,7 @@ static void lef64(unsigned char *b, double d) {
 /**
  * Binary little-endian PLY (vertices as double x, y, z; faces as a uchar
  * count and int indices, plus an int "tunnel_type" per face when labelled),
- * written atomically.
+ * with a header comment per component of karst_versions(), written atomically.
  * @return KARST_SUCCESS; KARST_EINVAL (bad mesh); KARST_ERANGE (more than
  *         2^31-1 vertices); KARST_EIO. Time complexity: O(V + T).
  */
@@ -57,11 +58,17 @@ karst_error_t karst_mesh_write_ply(karst_ctx_t *ctx, const char *path, const kar
                            (long long)m->n_vertices);
   karst_atomic_file_t f;
   if ((err = karst_atomic_open(ctx, &f, path, "wb"))) return err;
+  /* One comment per component of karst_versions(), "karst VERSION" first. */
+  karst_component_t comp[KARST_COMPONENTS_MAX];
+  int n_comp = karst_versions(comp);
+  fprintf(f.fp, "ply\nformat binary_little_endian 1.0\n");
+  for (int i = 0; i < n_comp; i++)
+    fprintf(f.fp, "comment %s %s\n", comp[i].name, comp[i].version);
   fprintf(f.fp,
-          "ply\nformat binary_little_endian 1.0\ncomment karst %s\nelement vertex %lld\n"
+          "element vertex %lld\n"
           "property double x\nproperty double y\nproperty double z\nelement face %lld\n"
           "property list uchar int vertex_indices\n",
-          karst_version(), (long long)m->n_vertices, (long long)m->n_triangles);
+          (long long)m->n_vertices, (long long)m->n_triangles);
   if (m->tri_label)
     fprintf(f.fp, "property int %s\n", m->tri_label_name ? m->tri_label_name : "label");
   fprintf(f.fp, "end_header\n");

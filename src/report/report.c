@@ -13,6 +13,7 @@
 #include "karst/json.h"
 #include "karst/metrics.h"
 #include "karst/readers.h"
+#include "karst/version.h"
 #include "report/svg_internal.h"
 
 /** Orientation rose: bins of this width over [0, 180) degrees, as the orientation entropy of
@@ -560,7 +561,7 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
   }
   jpath = karst_i_path_join(ensemble_dir, "ensemble.json");
   mpath = karst_i_path_join(ensemble_dir, "metrics.csv");
-  versions = karst_report_versions();
+  versions = karst_versions_text();
   if (!jpath || !mpath || !versions) {
     err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
     goto cleanup;

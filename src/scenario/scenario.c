@@ -54,6 +54,8 @@ void karst_scenario_init(karst_scenario_t *sc) {
   sc->reuse = KARST_SCENARIO_DEFAULT_REUSE;
   sc->cost.fracture_combine = KARST_FRACTURE_SUM;
   sc->tortuosity = 0.1;
+  sc->amplification.reach_ratio = 0.5;
+  sc->amplification.points_ratio = 1.0;
   sc->classification.vertical_angle = 60.0;
   sc->routing.vadose_factor = 2.0;
   sc->routing.rise_cost = 4.0;
@@ -2066,6 +2068,9 @@ static const field_t skeleton_fields[] = {
 };
 static const schema_t skeleton_schema = {skeleton_fields, 2};
 
+/* Indexed by karst_amplification_anchor_t. */
+static const char *const amplification_anchor_names[] = {"previous", "network"};
+
 static const field_t amplification_fields[] = {
     {.key = "steps",
      .type = T_INT,
@@ -2079,8 +2084,25 @@ static const field_t amplification_fields[] = {
      .type = T_NUM,
      .off = offsetof(karst_amplification_t, dead_end_fraction),
      .range = RANGE_CLOSED(0, 1, "")},
+    {.key = "reach",
+     .type = T_NUM,
+     .off = offsetof(karst_amplification_t, reach),
+     .range = RANGE_GE(0, " m")},
+    {.key = "reach_ratio",
+     .type = T_NUM,
+     .off = offsetof(karst_amplification_t, reach_ratio),
+     .range = RANGE_OPEN_CLOSED(0, 1, "")},
+    {.key = "points_ratio",
+     .type = T_NUM,
+     .off = offsetof(karst_amplification_t, points_ratio),
+     .range = RANGE_GT(0, "")},
+    {.key = "anchor",
+     .type = T_ENUM,
+     .off = offsetof(karst_amplification_t, anchor),
+     .names = amplification_anchor_names,
+     .n_names = 2},
 };
-static const schema_t amplification_schema = {amplification_fields, 3};
+static const schema_t amplification_schema = {amplification_fields, 7};
 
 static const field_t classification_fields[] = {
     {.key = "vertical_angle",
@@ -2151,7 +2173,8 @@ static const field_t top_fields[] = {
     {.key = "amplification",
      .type = T_MAP,
      .off = offsetof(karst_scenario_t, amplification),
-     .sub = &amplification_schema},
+     .sub = &amplification_schema,
+     .pos = offsetof(karst_scenario_t, pos_amplification)},
     {.key = "tortuosity",
      .type = T_NUM,
      .off = offsetof(karst_scenario_t, tortuosity),
@@ -2776,6 +2799,20 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
                         "classification.radius.%s must have 0 < min <= max, got [%g, %g]",
                         karst_tunnel_type_name((karst_tunnel_type_t)t), rr->min, rr->max);
   }
+
+  double am_total = 0, am_n = sc->amplification.points;
+  for (int st = 1; st <= sc->amplification.steps && am_n >= 0.5; st++) {
+    am_total += floor(am_n + 0.5); /* karst_amplification_step_points(.., st) */
+    if (am_total > KARST_SCENARIO_MAX_AMPLIFICATION_POINTS) break;
+    am_n *= sc->amplification.points_ratio;
+  }
+  if (am_total > KARST_SCENARIO_MAX_AMPLIFICATION_POINTS)
+    return check_fail(
+        ctx, sc, sc->pos_amplification.line, sc->pos_amplification.column, KARST_ERANGE,
+        "amplification: %d steps of %d points growing by points_ratio %g make %.4g "
+        "points, more than %d",
+        sc->amplification.steps, sc->amplification.points, sc->amplification.points_ratio, am_total,
+        KARST_SCENARIO_MAX_AMPLIFICATION_POINTS);
 
   for (int a = 0; a < 3; a++) {
     if (!(sc->domain_min[a] < sc->domain_max[a]))

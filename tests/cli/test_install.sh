@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
 # The library as a package: `cmake --install` into a temporary prefix, then a consumer program
 # built twice, once with find_package(karst) (karst::karst) and once with pkg-config (karst.pc),
-# must compile, link and call the library.
+# must compile, link and call the library. Then `DESTDIR=... cmake --install` (the configured
+# prefix under a staging root, as a packager runs it): the binary, the library, the headers, the
+# man page, the bash completion, the data table and the Python package are installed, and each
+# works from there: the binary runs, man renders the page, bash completes with the installed
+# script, and /usr/bin/python3 imports the installed package, which loads the staged libkarst.
 set -u
 KARST=$1
 SRC=$2
@@ -49,3 +53,51 @@ cc $SAN -std=c11 "$T/consumer/main.c" $(pkg-config --cflags karst) $(pkg-config 
   -Wl,-rpath,"$T/prefix/lib" -o "$T/consumer_pc" || fail "consumer with pkg-config"
 "$T/consumer_pc" | grep -q "^karst [0-9.]* 5.0$" || fail "consumer (pkg-config) output"
 echo "ok: pkg-config consumer"
+
+# --- DESTDIR install of everything -------------------------------------------------------
+cache() { sed -n "s/^$1:[A-Z]*=//p" "$BUILD/CMakeCache.txt"; }
+PREFIX=$(cache CMAKE_INSTALL_PREFIX)
+D="$T/stage"
+DESTDIR="$D" cmake --install "$BUILD" >"$T/destdir.log" 2>&1 || { cat "$T/destdir.log"; fail "DESTDIR cmake --install"; }
+R="$D$PREFIX"
+LIBDIR=$(cache CMAKE_INSTALL_LIBDIR)
+for f in bin/karst include/karst.h include/karst/export.h include/karst/version.h \
+  share/man/man1/karst.1 share/bash-completion/completions/karst share/karst/published_metrics.csv; do
+  [ -e "$R/$f" ] || { find "$D" | head -60; fail "DESTDIR: $f not installed"; }
+done
+ls "$R/$LIBDIR"/libkarst.so* >/dev/null 2>&1 || fail "DESTDIR: libkarst not installed in $LIBDIR"
+cmp -s "$R/share/man/man1/karst.1" "$BUILD/karst.1" || fail "installed man page differs from the build's"
+LD_LIBRARY_PATH="$R/$LIBDIR" "$R/bin/karst" --version | head -n 1 | grep -q "^karst [0-9.]*$" \
+  || fail "installed karst --version"
+LC_ALL=C.UTF-8 MANWIDTH=100 man -l "$R/share/man/man1/karst.1" 2>&1 | grep -q "karst export" \
+  || fail "man -l of the installed page"
+got=$(bash -c 'source "$1"; COMP_WORDS=(karst expo); COMP_CWORD=1; _karst; echo "${COMPREPLY[*]}"' _ \
+  "$R/share/bash-completion/completions/karst")
+[ "$got" = "export" ] || fail "installed completion: karst expo<TAB> gave '$got'"
+echo "ok: DESTDIR install of the binary, library, headers, man page, completion and data"
+if [ "$(cache KARST_WITH_PYTHON)" = "ON" ]; then
+  PYDIR="$R/$(cache KARST_PYTHON_INSTALL_DIR)"
+  ls "$PYDIR"/karst/_karst*.so "$PYDIR/karst/__init__.py" >/dev/null 2>&1 \
+    || { find "$D" -name '*.py' | head; fail "Python package not installed in $PYDIR"; }
+  PRE=""
+  if [ "$(cache KARST_SANITIZE)" = "ON" ]; then PRE=$(cc -print-file-name=libasan.so); fi
+  # The installed extension must load the staged libkarst (its RPATH is relative to itself), not
+  # one installed earlier elsewhere; with ASan, the runtime is preloaded and leaks are not
+  # checked here (tests/python/run_python_tests.sh does).
+  KARST_DATA_DIR="$R/share/karst" LD_PRELOAD="$PRE" ASAN_OPTIONS=detect_leaks=0 PYTHONPATH="$PYDIR" \
+    /usr/bin/python3 - "$SRC" "$R/$LIBDIR" <<'PY' \
+    || fail "import karst from the DESTDIR install"
+import os, sys
+import karst
+src, libdir = sys.argv[1:]
+assert os.path.dirname(karst.__file__) == os.path.join(os.environ["PYTHONPATH"], "karst"), karst.__file__
+maps = open("/proc/self/maps").read()
+loaded = {l.split()[-1] for l in maps.splitlines() if "libkarst.so" in l}
+assert loaded and all(os.path.realpath(p).startswith(os.path.realpath(libdir)) for p in loaded), loaded
+m = karst.metrics(os.path.join(src, "datasets/surveys/karstnet/Monachou.pl"))
+assert (m["nodes"], m["edges"]) == (251, 258), m
+pub = karst.published()
+assert pub["n_caves"] == 34 and pub["path"] == os.environ["KARST_DATA_DIR"] + "/published_metrics.csv", pub
+print("ok: the installed package loads", *loaded)
+PY
+fi

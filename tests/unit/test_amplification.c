@@ -1,7 +1,9 @@
 /* Amplification (src/amplification, Paris et al. 2021 §5.2): the θ mapping,
  * midpoint displacement (bounds, bedrock, subdivision count, attributes,
  * determinism) and ramification (dead ends keep a tree, interior points make
- * loops, everything stays connected). */
+ * loops, everything stays connected; the hierarchical draw stays near the previous
+ * step and tributaries join passages, not junctions). */
+#include <limits.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -13,15 +15,15 @@
 #include "graph_fixture.h"
 #include "test_util.h"
 
-/* θ → maximum displacement, from the paper's two ends: 0.05 m at θ = 0, 4 m at θ = 1, linear. */
+/* θ → the largest displacement as a fraction of the piece split: θ × 0.5, clamped. */
 static void test_theta_mapping(void **state) {
   (void)state;
   karst_amplification_options_t opt;
   karst_amplification_options_init(&opt);
-  assert_close(karst_amplification_max_displacement(&opt, 0.0), 0.05, 1e-15);
-  assert_close(karst_amplification_max_displacement(&opt, 1.0), 4.0, 1e-15);
-  assert_close(karst_amplification_max_displacement(&opt, 0.5), 2.025, 1e-15);
-  assert_close(karst_amplification_max_displacement(&opt, 7.0), 4.0, 1e-15); /* clamped */
+  assert_close(karst_amplification_displacement_ratio(&opt, 0.0), 0.0, 0);
+  assert_close(karst_amplification_displacement_ratio(&opt, 1.0), 0.5, 1e-15);
+  assert_close(karst_amplification_displacement_ratio(&opt, 0.5), 0.25, 1e-15);
+  assert_close(karst_amplification_displacement_ratio(&opt, 7.0), 0.5, 1e-15); /* clamped */
 }
 
 /* Distance from p to the line through a and b. */
@@ -34,10 +36,12 @@ static double line_dist(const double *p, const double *a, const double *b) {
          sqrt(ab[0] * ab[0] + ab[1] * ab[1] + ab[2] * ab[2]);
 }
 
-/* One 16 m edge just below a flat terrain (z = 10, edge at z = 9.9), min segment 1 m, 3 levels:
- * 16 → 8 → 4 → 2 m pieces, so 7 new nodes and 8 edges (displaced pieces are longer than half
- * their parent, so every split still happens). Displacements sum to at most A(1 + 1/2 + 1/4) <
- * 2A from the original line; no point rises to the terrain. */
+/* One 16 m edge just below a flat terrain (z = 10, edge at z = 9.9), min segment 1 m, 3 levels.
+ * θ = 1 (ρ = 0.5): 16 → 8 → 4 → 2 m pieces (displaced pieces are longer than half their parent,
+ * so every split happens), 7 new nodes and 8 edges. A piece of length L split with displacement
+ * h <= ρ L gives halves of length <= (L/2) sqrt(1 + 4ρ²), so the point of level k lies at most
+ * ρ (L0 + L1 + L2) from the original line, L_{k+1} = L_k/2 sqrt(1 + 4ρ²). θ = 0 displaces
+ * nothing: the edge is kept whole. No point rises to the terrain. */
 static void test_displacement(void **state) {
   (void)state;
   karst_ctx_t ctx;
@@ -50,7 +54,10 @@ static void test_displacement(void **state) {
   karst_amplification_options_t opt;
   karst_amplification_options_init(&opt);
   for (int th = 0; th <= 1; th++) {
-    double A = karst_amplification_max_displacement(&opt, th);
+    double rho = karst_amplification_displacement_ratio(&opt, th);
+    double L1 = 8 * sqrt(1 + 4 * rho * rho), L2 = L1 / 2 * sqrt(1 + 4 * rho * rho);
+    double A = rho * (16 + L1 + L2);
+    const karst_int_t nn = th ? 9 : 2, ne = th ? 8 : 1;
     double maxdev_all = 0;
     for (uint64_t seed = 1; seed <= 30; seed++) {
       karst_network_t in, out, out2;
@@ -74,31 +81,31 @@ static void test_displacement(void **state) {
                        KARST_SUCCESS);
       assert_int_equal(karst_amplification_displace(&ctx, geo, th, &r2, &opt, &in, &out2),
                        KARST_SUCCESS);
-      assert_int_equal(out.n_nodes, 9);
-      assert_int_equal(out.n_edges, 8);
-      assert_memory_equal(out.xyz, out2.xyz, 9 * 3 * sizeof(double)); /* same stream, same result */
+      assert_int_equal(out.n_nodes, nn);
+      assert_int_equal(out.n_edges, ne);
+      assert_memory_equal(out.xyz, out2.xyz, (size_t)nn * 3 * sizeof(double)); /* same stream */
       assert_string_equal(out.node_labels[0], "sink1");
       /* endpoints unchanged; the pieces form one chain 0 → ... → 1 */
       assert_memory_equal(out.xyz, in.xyz, 6 * sizeof(double));
       double csum = 0;
       const double *oc = karst_network_attr_find(&out, KARST_ATTR_EDGE, "cost")->data;
       const double *ob = karst_network_attr_find(&out, KARST_ATTR_EDGE, "branch_id")->data;
-      for (karst_int_t e = 0; e < 8; e++) {
+      for (karst_int_t e = 0; e < ne; e++) {
         csum += oc[e];
         assert_close(ob[e], 7, 0);
       }
       assert_close(csum, 32.0, 1e-12);
       karst_int_t deg[9] = {0};
-      for (karst_int_t e = 0; e < 8; e++)
+      for (karst_int_t e = 0; e < ne; e++)
         deg[out.edges[2 * e]]++, deg[out.edges[2 * e + 1]]++;
       assert_int_equal(deg[0], 1);
       assert_int_equal(deg[1], 1);
-      for (int v = 2; v < 9; v++)
+      for (int v = 2; v < nn; v++)
         assert_int_equal(deg[v], 2);
-      for (karst_int_t v = 0; v < 9; v++) {
+      for (karst_int_t v = 0; v < nn; v++) {
         assert_true(out.xyz[3 * v + 2] < 10.0); /* never above the terrain */
         double dev = line_dist(&out.xyz[3 * v], &in.xyz[0], &in.xyz[3]);
-        assert_true(dev <= 2 * A);
+        assert_true(dev <= A + 1e-12);
         maxdev_all = fmax(maxdev_all, dev);
       }
       karst_geology_free(geo);
@@ -106,8 +113,9 @@ static void test_displacement(void **state) {
       karst_network_destroy(&out);
       karst_network_destroy(&out2);
     }
-    print_message("theta %d: max deviation %.3f m (bound 2A = %.3f m)\n", th, maxdev_all, 2 * A);
+    print_message("theta %d: max deviation %.3f m (bound %.3f m)\n", th, maxdev_all, A);
     if (th == 1) assert_true(maxdev_all > 1.0); /* θ = 1 does displace by metres */
+    if (th == 0) assert_close(maxdev_all, 0.0, 0);
   }
   karst_rng_t r;
   karst_rng_init(&r, 1, 0);
@@ -223,11 +231,178 @@ static void test_ramify(void **state) {
                 (long long)cyc);
 }
 
+/* Distance from p to the segment [a, b]. */
+static double seg_dist(const double *p, const double *a, const double *b) {
+  double ab[3], ap[3], t = 0, l2 = 0;
+  for (int k = 0; k < 3; k++)
+    ab[k] = b[k] - a[k], ap[k] = p[k] - a[k], t += ab[k] * ap[k], l2 += ab[k] * ab[k];
+  t = l2 > 0 ? fmax(0, fmin(1, t / l2)) : 0;
+  double d2 = 0;
+  for (int k = 0; k < 3; k++)
+    d2 += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
+  return sqrt(d2);
+}
+
+/* Hierarchical ramification on the lattice of run_ramify (spacing h = 5 m): 2 steps, 8 then
+ * 8 × points_ratio 4 = 32 dead ends, first reach 30 m, second 30 × reach_ratio 1/12 = 2.5 m,
+ * anchored on the previous step. Returns the largest distance from a step-2 amplification node
+ * (the vertex a step-2 path starts from) to the step-1 paths, the number of step-2 nodes, and
+ * the largest node degree. */
+static void run_hierarchy(double reach, double *far, int *n2, int *max_degree) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_rng_t r;
+  karst_rng_init(&r, 4, 0);
+  const double o[3] = {0, 0, 0};
+  double *xyz = fx_jittered_grid(20, 20, 4, 5.0, o, 0.3, &r);
+  const karst_int_t n = 20 * 20 * 4;
+  karst_graph_t g;
+  fx_knn_graph(&g, n, xyz, 14, fx_euclid_cost, NULL);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  sc.terrain.elevation = 1000;
+  sc.domain_min[0] = sc.domain_min[1] = sc.domain_min[2] = -10;
+  sc.domain_max[0] = sc.domain_max[1] = sc.domain_max[2] = 110;
+  sc.amplification.steps = 2;
+  sc.amplification.points = 8;
+  sc.amplification.points_ratio = 4;
+  sc.amplification.reach = reach;
+  sc.amplification.reach_ratio = 1.0 / 12;
+  sc.amplification.anchor = KARST_ANCHOR_PREVIOUS;
+  sc.amplification.dead_end_fraction = 1;
+  karst_search_t *s;
+  karst_search_create(&ctx, &g, &s);
+  karst_path_t p;
+  karst_path_init(&p);
+  assert_int_equal(karst_paths_astar(&ctx, s, 0, n - 1, 1.0, &p), KARST_SUCCESS);
+  karst_skeleton_t sk;
+  assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+  assert_int_equal(karst_skeleton_add_path(&ctx, &sk, &g, &p, 0), KARST_SUCCESS);
+  karst_rng_t ra;
+  karst_rng_init(&ra, 78, 0);
+  karst_geology_t *geo = geo_make(&sc);
+  assert_int_equal(karst_amplification_ramify(&ctx, geo, &g, NULL, &ra, NULL, &sk, NULL, NULL),
+                   KARST_SUCCESS);
+  karst_geology_free(geo);
+  const karst_network_t *net = &sk.net;
+  const double *kind = karst_network_attr_find(net, KARST_ATTR_NODE, "kind")->data;
+  const double *step = karst_network_attr_find(net, KARST_ATTR_EDGE, "amplification_step")->data;
+  int *deg = calloc((size_t)net->n_nodes, sizeof *deg);
+  for (karst_int_t e = 0; e < net->n_edges; e++)
+    deg[net->edges[2 * e]]++, deg[net->edges[2 * e + 1]]++;
+  *far = 0, *n2 = 0, *max_degree = 0;
+  for (karst_int_t v = 0; v < net->n_nodes; v++) {
+    if (deg[v] > *max_degree) *max_degree = deg[v];
+    if (kind[v] != KARST_NODE_AMPLIFICATION) continue;
+    int vstep = INT_MAX; /* the step of the path that starts at v (a later one may end there) */
+    for (karst_int_t e = 0; e < net->n_edges; e++)
+      if ((net->edges[2 * e] == v || net->edges[2 * e + 1] == v) && (int)step[e] < vstep)
+        vstep = (int)step[e];
+    if (vstep != 2) continue;
+    (*n2)++;
+    double d = INFINITY;
+    for (karst_int_t e = 0; e < net->n_edges; e++)
+      if ((int)step[e] == 1)
+        d = fmin(d, seg_dist(&net->xyz[3 * v], &net->xyz[3 * net->edges[2 * e]],
+                             &net->xyz[3 * net->edges[2 * e + 1]]));
+    if (d > *far) *far = d;
+  }
+  free(deg);
+  karst_skeleton_destroy(&sk);
+  karst_path_destroy(&p);
+  karst_search_free(s);
+  fx_graph_free(&g);
+  free(xyz);
+  karst_scenario_destroy(&sc);
+}
+
+/* A step-2 point is drawn within reach_2 = 2.5 m of a step-1 path and snapped to the nearest
+ * free vertex, which lies at most reach_2 + (reach_2 + 2h) from that path (triangle inequality,
+ * the free vertex nearest a point of a path being within about 2h = 10 m on this lattice): so
+ * every step-2 node is within 2 × 2.5 + 10 = 15 m of the step-1 paths. The paper's draw
+ * (reach 0: the network's bounding box, 95 × 95 × 15 m) puts some farther: the bound tests the
+ * draw. Amplification paths join passages, not junctions: the skeleton is one path (degree
+ * <= 2) and each dead end raises one passage vertex to 3, so no node exceeds degree 3. */
+static void test_ramify_hierarchy(void **state) {
+  (void)state;
+  double far;
+  int n2, max_degree;
+  run_hierarchy(30, &far, &n2, &max_degree);
+  print_message("hierarchical: %d step-2 nodes, farthest %.2f m from step 1, max degree %d\n", n2,
+                far, max_degree);
+  /* 32 drawn; within 2.5 m of eight short paths on a 5 m lattice there are few free vertices,
+   * and a point whose nearest free vertex an earlier point took is dropped */
+  assert_true(n2 >= 16 && n2 <= 32);
+  assert_true(far <= 15.0);
+  assert_int_equal(max_degree, 3);
+  run_hierarchy(0, &far, &n2, &max_degree);
+  print_message("bounding box: %d step-2 nodes, farthest %.2f m from step 1\n", n2, far);
+  assert_true(n2 >= 24 && n2 <= 32);
+  assert_true(far > 15.0);
+  assert_int_equal(max_degree, 3);
+}
+
+/* Length of the chain @p out after displacing one straight edge of length L (ends at
+ * (0,0,-500) and (L,0,-500), deep in a 10 km box). */
+static double displaced_length(double L, double theta, uint64_t seed) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  sc.terrain.elevation = 0;
+  for (int a = 0; a < 3; a++)
+    sc.domain_min[a] = -5000, sc.domain_max[a] = 5000;
+  sc.domain_max[2] = 0;
+  karst_network_t in, out;
+  karst_network_init(&in);
+  karst_network_init(&out);
+  karst_network_add_node(&in, 0, 0, -500, NULL);
+  karst_network_add_node(&in, L, 0, -500, NULL);
+  karst_network_add_edge(&in, 0, 1, NULL);
+  karst_rng_t r;
+  karst_rng_init(&r, seed, 0);
+  karst_geology_t *geo = geo_make(&sc);
+  assert_int_equal(karst_amplification_displace(&ctx, geo, theta, &r, NULL, &in, &out),
+                   KARST_SUCCESS);
+  double len = 0;
+  for (karst_int_t e = 0; e < out.n_edges; e++)
+    len += karst_network_edge_length(&out, e);
+  karst_geology_free(geo);
+  karst_network_destroy(&in);
+  karst_network_destroy(&out);
+  karst_scenario_destroy(&sc);
+  return len;
+}
+
+/* The tortuosity the displacement adds depends on θ, not on the edge's length: with the same
+ * draws a 20 m and a 200 m edge (both split 3 times) give the same length ratio to rounding, it
+ * grows with θ, and for θ = 1 it is that of three levels of splits with h uniform in [0, L/2]:
+ * E[sqrt(1 + 4 h²/L²)] = E[sqrt(1 + U²)] = (√2 + asinh 1)/2 = 1.1478 per level, at most
+ * 1.1478³ = 1.512 (the directions of successive levels are random, so a little less). */
+static void test_displacement_scale_invariant(void **state) {
+  (void)state;
+  double prev = 1.0;
+  for (int k = 1; k <= 4; k++) {
+    double theta = 0.25 * k, m20 = 0, m200 = 0;
+    for (uint64_t s = 1; s <= 400; s++) {
+      m20 += displaced_length(20, theta, s) / 20 / 400;
+      m200 += displaced_length(200, theta, s) / 200 / 400;
+    }
+    print_message("theta %.2f: mean length ratio %.4f (20 m), %.4f (200 m)\n", theta, m20, m200);
+    assert_rel(m20, m200, 1e-9);
+    assert_true(m20 > prev);
+    prev = m20;
+    if (k == 4) assert_true(m20 > 1.3 && m20 <= 1.512);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_theta_mapping),
       cmocka_unit_test(test_displacement),
+      cmocka_unit_test(test_displacement_scale_invariant),
       cmocka_unit_test(test_ramify),
+      cmocka_unit_test(test_ramify_hierarchy),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -67,6 +67,10 @@ static void test_init_defaults(void **state) {
   assert_int_equal(sc.amplification.steps, 0);
   assert_int_equal(sc.amplification.points, 0);
   assert_close(sc.amplification.dead_end_fraction, 0, 0);
+  assert_close(sc.amplification.reach, 0, 0); /* the paper's bounding-box draw */
+  assert_close(sc.amplification.reach_ratio, 0.5, 0);
+  assert_close(sc.amplification.points_ratio, 1, 0);
+  assert_int_equal(sc.amplification.anchor, KARST_ANCHOR_PREVIOUS);
   assert_close(sc.tortuosity, 0.1, 0);
   assert_close(sc.classification.vertical_angle, 60, 0);
   assert_close(sc.classification.epikarst_depth, 10, 0);
@@ -104,7 +108,9 @@ static void test_branchwork(void **state) {
   assert_int_equal(sc.n_horizons, 1);
   assert_int_equal(sc.n_fractures, 1);
   assert_close(sc.gamma, 2.0, 0);
-  assert_close(sc.tortuosity, 0.1, 0);
+  assert_close(sc.tortuosity, 0.4, 0);
+  assert_close(sc.amplification.reach, 250, 0);
+  assert_int_equal(sc.amplification.anchor, KARST_ANCHOR_PREVIOUS);
   assert_int_equal(sc.sampling.k, 40);
   assert_int_equal(sc.terrain.is_grid, 0);
   assert_close(sc.terrain.elevation, 100.0, 0);
@@ -234,6 +240,13 @@ static void test_full_file(void **state) {
   assert_int_equal(sc.cost.fracture_combine, KARST_FRACTURE_MIN);
   assert_int_equal(sc.amplification.steps, 3);
   assert_int_equal(sc.amplification.points, 12);
+  assert_close(sc.amplification.reach, 40, 0);
+  assert_close(sc.amplification.reach_ratio, 0.25, 0);
+  assert_close(sc.amplification.points_ratio, 3, 0);
+  assert_int_equal(sc.amplification.anchor, KARST_ANCHOR_NETWORK);
+  /* points × points_ratio^(s-1), by hand: 12, 36, 108 */
+  assert_close(karst_amplification_step_points(&sc.amplification, 1), 12, 0);
+  assert_close(karst_amplification_step_points(&sc.amplification, 3), 108, 0);
   assert_close(sc.tortuosity, 0.4, 0);
   assert_close(sc.classification.radius[KARST_TUNNEL_TUBE].min, 1, 0);
   assert_close(sc.classification.radius[KARST_TUNNEL_EPIKARST].min, 0.25, 0);
@@ -357,6 +370,14 @@ BAD(k_zero, KARST_ERANGE, 14, 6, "sampling.k must be >= 1, got 0")
 BAD(weight_negative, KARST_ERANGE, 14, 42, "fractures[0].weight must be >= 0, got -1")
 BAD(fraction_range, KARST_ERANGE, 14, 22,
     "amplification.dead_end_fraction must be within [0, 1], got 1.5")
+BAD(reach_ratio_zero, KARST_ERANGE, 14, 16,
+    "amplification.reach_ratio must be within (0, 1], got 0")
+BAD(points_ratio_zero, KARST_ERANGE, 14, 17, "amplification.points_ratio must be > 0, got 0")
+BAD(anchor_typo, KARST_EINVAL, 14, 11,
+    "amplification.anchor must be one of previous, network, got 'previos'")
+/* 1000 × (2^30 − 1) points (by hand: about 1.07e12) are refused before any work is done. */
+BAD(amplification_points_total, KARST_ERANGE, 14, 3,
+    "amplification: 30 steps of 1000 points growing by points_ratio 2 make")
 BAD(realisations_zero, KARST_ERANGE, 14, 17, "random.realisations must be >= 1, got 0")
 BAD(radius_min_max, KARST_ERANGE, 15, 11,
     "classification.radius.tube: min must be <= max, got [4, 1]")
@@ -941,6 +962,10 @@ int main(void) {
       cmocka_unit_test(test_bad_k_zero),
       cmocka_unit_test(test_bad_weight_negative),
       cmocka_unit_test(test_bad_fraction_range),
+      cmocka_unit_test(test_bad_reach_ratio_zero),
+      cmocka_unit_test(test_bad_points_ratio_zero),
+      cmocka_unit_test(test_bad_anchor_typo),
+      cmocka_unit_test(test_bad_amplification_points_total),
       cmocka_unit_test(test_bad_realisations_zero),
       cmocka_unit_test(test_bad_radius_min_max),
       cmocka_unit_test(test_bad_radius_min_zero),
