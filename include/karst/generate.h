@@ -10,6 +10,7 @@
 #include <stdio.h>
 
 #include "karst/common.h"
+#include "karst/generations.h"
 #include "karst/graph.h"
 #include "karst/network.h"
 #include "karst/scenario.h"
@@ -40,6 +41,11 @@ typedef struct karst_generate_stats {
   double skeleton_length;       /**< total length (m) of S before amplification */
   double stage_seconds[KARST_STAGE_COUNT];
   size_t peak_bytes; /**< peak resident memory of the process (getrusage), for benchmarks */
+  uint64_t seed, realisation; /**< of the realisation */
+  int n_generations;          /**< generations run (1 without a generations section) */
+  karst_generation_stats_t generations[KARST_SCENARIO_MAX_GENERATIONS];
+  karst_int_t n_observed_edges; /**< surveyed legs in the network (edge attribute observed = 1) */
+  double observed_length;       /**< their length (m) */
 } karst_generate_stats_t;
 
 /**

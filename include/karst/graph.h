@@ -23,7 +23,8 @@ extern "C" {
   X(KARST_SAMPLE_PERMEABILITY, "permeability")                                                     \
   X(KARST_SAMPLE_FILL, "fill")                                                                     \
   X(KARST_SAMPLE_AMPLIFICATION, "amplification")                                                   \
-  X(KARST_SAMPLE_PRESCRIBED, "prescribed_path")
+  X(KARST_SAMPLE_PRESCRIBED, "prescribed_path")                                                    \
+  X(KARST_SAMPLE_SURVEY, "survey")
 
 typedef enum {
 #define KARST_X_ENUM(code, name) code,
@@ -41,6 +42,9 @@ typedef struct karst_samples {
   double *xyz;           /**< 3 * n */
   unsigned char *source; /**< karst_sample_source_t per sample */
   karst_int_t n_key_points;
+  /** The coordinate system of xyz (the scenario's crs, written as field data "crs"), or NULL;
+   *  borrowed: the scenario that karst_generate filled the samples from owns it. */
+  const char *crs;
 } karst_samples_t;
 
 void karst_samples_init(karst_samples_t *s);

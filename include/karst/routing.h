@@ -39,6 +39,8 @@ typedef struct karst_routing_plan {
   int32_t *succ;         /**< n_targets x n successor rows (plain union), or NULL */
   unsigned char *closed; /**< n flags: sinks and springs, which a path may not pass through */
   int *key_spring;       /**< per key point: the spring it drains to (a spring: itself), -1 */
+  unsigned char *active; /**< per key point: 1 when it takes part in the generation routed
+                              (scenario.active_generation; without generations every one) */
   int n_pairs;           /**< kept routes, in the order they are laid: increasing d */
   karst_route_pair_t *pairs;
   int n_candidates; /**< routes the rules allowed, before the γ rule */
@@ -52,7 +54,8 @@ const karst_route_t *karst_routing_route(const karst_routing_plan_t *plan, int s
 
 /**
  * Build the routing plan of graph @p g (whose vertices 0 .. n_keys − 1 are the scenario's key
- * points) under geology @p geo: per spring the vertex depths below its water table; one backward
+ * points) under geology @p geo, for the key points of the generation the geology's scenario
+ * routes (karst_generation_key_active; the others are plain vertices): per spring the vertex depths below its water table; one backward
  * search per spring, then one per waypoint (each waypoint drains to the spring it reaches most
  * cheaply); each sink's springs (required ones from the connectivity matrix or drains_to, else
  * the cheapest allowed one); the candidate routes sink → spring, sink → waypoint (whose spring the

@@ -88,6 +88,14 @@ typedef struct karst_keypoint {
   int n_drains_to;
   int drains_to[KARST_SCENARIO_MAX_SPRINGS];
   int drains_line, drains_column; /**< position of drains_to in the file, 0 when not given */
+  /** The generation (speleogenetic phase, 1-based) the key point belongs to; 0: every generation
+   *  (a top-level key point, or a scenario without generations). */
+  int generation;
+  /** latitude, longitude (degrees, WGS 84) and elevation (m, the scenario's vertical datum) when
+   *  the file gave those instead of position; NAN otherwise. Converted into p at load. */
+  double geographic[3];
+  char *station; /**< the survey station the key point sits on (conditioning), or NULL */
+  karst_int_t station_index; /**< its index among the conditioning stations, -1 when none */
 } karst_keypoint_t;
 
 /** Terrain: flat, or an ESRI ASCII grid heightfield (bilinear interpolation). */
@@ -375,6 +383,61 @@ typedef struct karst_geometry {
 
 /** Fill @p g with the documented defaults (docs/geometry.md). */
 void karst_geometry_init(karst_geometry_t *g);
+/**
+ * A speleogenetic phase (docs/generation.md, "Generations"): its own base level (water_table: the
+ * default water table of its springs), key points (karst_keypoint_t.generation), routing and
+ * skeleton parameters, and the cost factor at which it follows the conduits of the phases before
+ * it (KarstNSim's polyphasic cohesion factor, Gouy et al. 2024).
+ */
+typedef struct karst_generation {
+  char name[KARST_SCENARIO_NAME_MAX]; /**< "generation1", ... when the file gives none */
+  karst_surface_def_t water_table;    /**< default water table of its springs; not given: the
+                                           scenario's water_table rule */
+  karst_routing_t routing;            /**< default: the scenario's routing */
+  double gamma, reuse;                /**< default: the scenario's skeleton.gamma, .reuse */
+  karst_amplification_t amplification; /**< default: the scenario's amplification */
+  double cohesion; /**< cost factor of the earlier generations' conduits, (0, 1], default
+                        KARST_SCENARIO_DEFAULT_COHESION */
+  int line, column;
+} karst_generation_t;
+
+/** Default of generations[i].cohesion (KarstNSim's fraction_old_karst_perm default, 0.5). */
+#define KARST_SCENARIO_DEFAULT_COHESION 0.5
+/** Most generations of a scenario. */
+#define KARST_SCENARIO_MAX_GENERATIONS 16
+
+/** A survey file the realisations are conditioned on (docs/scenario.md, "Conditioning"). */
+typedef struct karst_survey_def {
+  char *path; /**< as resolved relative to the scenario */
+  char *crs;  /**< its CRS when the scenario states it (it overrides the file's), or NULL */
+  int line, column;
+} karst_survey_def_t;
+
+/** Which survey stations become sinks (conditioning.sinks). */
+typedef enum {
+  KARST_CONDITIONING_SINKS_NONE = 0,      /**< none (default) */
+  KARST_CONDITIONING_SINKS_ENTRANCES = 1, /**< every station the survey flags as an entrance */
+  KARST_CONDITIONING_SINKS_LIST = 2       /**< the stations named in sink_stations */
+} karst_conditioning_sinks_t;
+
+struct karst_survey_set; /* include/karst/conditioning.h: stations and legs in the scenario frame */
+
+/** Conditioning on surveyed passages (docs/scenario.md, "Conditioning"). */
+typedef struct karst_conditioning {
+  int n_surveys;
+  karst_survey_def_t *surveys;
+  double cost_factor; /**< a surveyed metre costs this times the cheapest metre of rock, (0, 1],
+                           default KARST_SCENARIO_DEFAULT_LEG_COST_FACTOR */
+  int sinks;          /**< karst_conditioning_sinks_t */
+  int n_sink_stations;
+  char **sink_stations; /**< station names (sinks: [names]) */
+  int generation;       /**< generation (1-based) whose routes join the survey; 0: the last */
+  struct karst_survey_set *data; /**< the surveys as read, in the scenario frame, or NULL */
+  int line, column;
+} karst_conditioning_t;
+
+/** Default of conditioning.cost_factor: a surveyed metre costs 1 % of the cheapest metre of rock. */
+#define KARST_SCENARIO_DEFAULT_LEG_COST_FACTOR 0.01
 
 typedef struct karst_scenario {
   char *path; /**< file the scenario was read from (NULL if built in code) */
@@ -421,6 +484,17 @@ typedef struct karst_scenario {
   karst_srcpos_t pos_sampling;      /**< the sampling map */
   karst_geometry_t geometry;        /**< `karst mesh`: blending, wall details, speleothems */
   struct karst_blocks_section *blocks; /**< the blocks section (karst blocks), NULL when absent */
+  /** The coordinate reference system of every coordinate of the file (crs:, docs/scenario.md,
+   *  "Coordinates"), as given, or NULL: a local frame. */
+  char *crs;
+  struct karst_crs *crs_frame; /**< crs parsed (include/karst/crs.h), or NULL */
+  karst_srcpos_t pos_crs;
+  int n_generations; /**< 0: one phase with the top-level parameters */
+  karst_generation_t *generations;
+  karst_conditioning_t conditioning;
+  /** The generation a view of the scenario routes (karst_generation_view): its key points and
+   *  the top-level ones take part; 0 (a loaded scenario): every key point. */
+  int active_generation;
 } karst_scenario_t;
 
 /** Fill @p sc with every documented default (docs/scenario.md): no key points, flat terrain at 100

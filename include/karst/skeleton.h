@@ -28,6 +28,9 @@ extern "C" {
  * (node and edge: the index among the springs of the spring the first route laying it drains
  * to, -1 unknown).
  */
+/** Called by karst_skeleton_add_route after each path it lays (in laying order). */
+typedef karst_error_t (*karst_skeleton_path_fn)(void *arg, const karst_path_t *path);
+
 typedef struct karst_skeleton {
   karst_network_t net;
   karst_int_t n_graph;         /**< vertices of the graph the network lives on */
@@ -37,6 +40,8 @@ typedef struct karst_skeleton {
   karst_int_t n_paths;         /**< paths added so far (the next branch id) */
   uint64_t *edge_keys;         /**< open-addressing set of node pairs (min << 32 | max) + 1 */
   size_t edge_set_cap;
+  karst_skeleton_path_fn on_path; /**< NULL, or told of every path laid (src/generations/) */
+  void *on_path_arg;
 } karst_skeleton_t;
 
 karst_error_t karst_skeleton_init(karst_ctx_t *ctx, karst_skeleton_t *sk, const karst_graph_t *g);

@@ -448,7 +448,9 @@ static int subdivide(subdiv_t *sd, const double a[3], const double b[3], double 
  * nothing. Original nodes keep their position and attributes; new nodes get zero
  * attributes (kind interior) but their edge's "spring"; each piece copies its edge's
  * attributes, except "cost", which is shared among the pieces in proportion to
- * their length. Edges are processed in index order with @p rng, so the output is
+ * their length.
+ * Edges flagged "observed" (surveyed legs) are copied unchanged, with no draw.
+ * Edges are processed in index order with @p rng, so the output is
  * deterministic.
  *
  * @param in   the network to refine (unchanged).
@@ -488,11 +490,13 @@ karst_error_t karst_amplification_displace(karst_ctx_t *ctx, const karst_geology
     if (karst_network_attr_add(&tmp, KARST_ATTR_EDGE, a->name, a->ncomp, a->integer, &d))
       goto nomem;
   }
+  /* A surveyed leg (edge attribute "observed", src/conditioning/) stays where it was surveyed. */
+  const karst_attr_t *observed = karst_network_attr_find(in, KARST_ATTR_EDGE, "observed");
   for (karst_int_t e = 0; e < in->n_edges; e++) {
     karst_int_t u = in->edges[2 * e], w = in->edges[2 * e + 1];
     const double *a = &in->xyz[3 * u], *b = &in->xyz[3 * w];
     sd.n = 0;
-    if (subdivide(&sd, a, b, ratio, 0)) goto nomem;
+    if (!(observed && observed->data[e] != 0) && subdivide(&sd, a, b, ratio, 0)) goto nomem;
     /* Lengths of the pieces, for sharing the cost. */
     double total = 0;
     const double *prev = a;

@@ -1,7 +1,10 @@
 // Thin extern "C" shim over GeographicLib (C. F. F. Karney, "Transverse
 // Mercator with an accuracy of a few nanometers", J. Geodesy 85, 475-485,
 // 2011): the meridian convergence of UTM, the British National Grid and
-// general transverse Mercator grids. All parsing lives in crs.c.
+// general transverse Mercator grids, UTM/UPS conversions (crs_frame.c) and
+// geodesics on WGS 84 (Karney, "Algorithms for geodesics", J. Geodesy 87,
+// 43-55, 2013). All parsing lives in crs.c and crs_frame.c.
+#include <GeographicLib/Geodesic.hpp>
 #include <GeographicLib/OSGB.hpp>
 #include <GeographicLib/TransverseMercator.hpp>
 #include <GeographicLib/UTMUPS.hpp>
@@ -45,5 +48,46 @@ extern "C" karst_error_t karst_i_geo_convergence(karst_ctx_t *ctx, const char *n
                            x, y);
   }
   *gamma = g;
+  return KARST_SUCCESS;
+}
+
+extern "C" karst_error_t karst_i_geo_utm_forward(karst_ctx_t *ctx, int zone, int northp, double lat,
+                                                 double lon, double *x, double *y) {
+  try {
+    int z = 0;
+    bool n = false;
+    double g = 0, k = 0;
+    GeographicLib::UTMUPS::Forward(lat, lon, z, n, *x, *y, g, k, zone);
+    // Forward chooses the hemisphere from the latitude; the scenario's grid fixes it.
+    if (n != (northp != 0)) *y += (northp ? -1 : 1) * GeographicLib::UTMUPS::UTMShift();
+  } catch (const std::exception &e) {
+    return karst_set_error(ctx, KARST_ERANGE,
+                           "latitude %.9f, longitude %.9f cannot be put in %s %d%s: %s", lat, lon,
+                           zone ? "UTM zone" : "UPS", zone, northp ? "N" : "S", e.what());
+  }
+  return KARST_SUCCESS;
+}
+
+extern "C" karst_error_t karst_i_geo_utm_reverse(karst_ctx_t *ctx, int zone, int northp, double x,
+                                                 double y, double *lat, double *lon) {
+  try {
+    double g = 0, k = 0;
+    GeographicLib::UTMUPS::Reverse(zone, northp != 0, x, y, *lat, *lon, g, k);
+  } catch (const std::exception &e) {
+    return karst_set_error(ctx, KARST_ERANGE, "grid point (%.3f, %.3f) is outside %s %d%s: %s", x,
+                           y, zone ? "UTM zone" : "UPS", zone, northp ? "N" : "S", e.what());
+  }
+  return KARST_SUCCESS;
+}
+
+extern "C" karst_error_t karst_i_geo_inverse(karst_ctx_t *ctx, double lat1, double lon1,
+                                             double lat2, double lon2, double *s12, double *azi1,
+                                             double *azi2) {
+  try {
+    GeographicLib::Geodesic::WGS84().Inverse(lat1, lon1, lat2, lon2, *s12, *azi1, *azi2);
+  } catch (const std::exception &e) {
+    return karst_set_error(ctx, KARST_ERANGE, "geodesic from (%g, %g) to (%g, %g): %s", lat1, lon1,
+                           lat2, lon2, e.what());
+  }
   return KARST_SUCCESS;
 }

@@ -55,12 +55,13 @@ static char *where(const char *file, const karst_json_t *v) {
   return w;
 }
 
-/* The "crs" member of @p root (top level, else in "parameters"): a string, an EPSG number
- * or null. */
+/* The "crs" member of @p root (top level, else in "parameters": run.json writes both, null
+ * without a crs): a string, an EPSG number or null. */
 static karst_error_t read_crs(karst_ctx_t *ctx, const char *file, const karst_json_t *root,
                               karst_export_source_t *s) {
   const karst_json_t *c = karst_json_get(root, "crs");
-  if (!c) c = karst_json_get(karst_json_get(root, "parameters"), "crs");
+  if (!c || c->type == KARST_JSON_NULL)
+    c = karst_json_get(karst_json_get(root, "parameters"), "crs");
   if (!c || c->type == KARST_JSON_NULL) return KARST_SUCCESS;
   char buf[32];
   const char *text = NULL;

@@ -11,7 +11,9 @@
 #include "generate/generate_internal.h"
 #include "karst/amplification.h"
 #include "karst/classification.h"
+#include "karst/conditioning.h"
 #include "karst/cost.h"
+#include "karst/generations.h"
 #include "karst/geology.h"
 #include "karst/routing.h"
 #include "karst/sampling.h"
@@ -113,20 +115,110 @@ static double total_length(const karst_network_t *net) {
   return s;
 }
 
+/* Mark the key points generation @p plan routed (kind, spring, name). */
+static karst_error_t mark_key_points(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                                     const karst_graph_t *g, const karst_routing_plan_t *plan,
+                                     karst_skeleton_t *sk) {
+  karst_error_t err;
+  for (karst_int_t i = 0; i < sc->n_key_points; i++) {
+    if (plan->active && !plan->active[i]) continue;
+    if ((err = karst_skeleton_mark_node(ctx, sk, g, i, key_kind(sc->key_points[i].type))))
+      return err;
+    karst_int_t node = sk->node_of_vertex[i];
+    karst_network_attr_find(&sk->net, KARST_ATTR_NODE, "spring")->data[node] = plan->key_spring[i];
+    if (karst_network_set_label(&sk->net, node, sc->key_points[i].name))
+      return karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  }
+  return KARST_SUCCESS;
+}
+
+/* One generation (docs/generation.md, "Generations"): its routing on the graph whose inherited
+ * conduits cost cohesion × their cost, its skeleton routes and ramification laid into @p sk.
+ * @p lb is the lower bound of the graph's base cost per metre before the discount. */
+static karst_error_t run_generation(karst_ctx_t *ctx, const karst_geology_t *geo, uint64_t seed,
+                                    uint64_t realisation, int gi, karst_graph_t *g,
+                                    const karst_int_t *station_vertex, double lb,
+                                    karst_rng_t *r_amp, karst_skeleton_t *sk,
+                                    karst_generate_stats_t *stats) {
+  const karst_scenario_t *sc = karst_geology_scenario(geo);
+  karst_error_t err = KARST_SUCCESS;
+  karst_scenario_t view;
+  karst_generation_view(sc, gi, &view);
+  karst_geology_t *own = NULL;
+  const karst_geology_t *geo_g = geo;
+  karst_routing_plan_t plan;
+  karst_routing_plan_init(&plan);
+  karst_inherited_t saved;
+  karst_inherited_init(&saved);
+  karst_generation_track_t track;
+  karst_generation_stats_t gst = {0, 0, 0, 0};
+  int tracking = 0;
+  double t = karst_i_now();
+  if (sc->n_generations > 0) {
+    /* The generation's own routing, skeleton and amplification parameters; the same seed gives
+     * the same fracture discs as the scenario's geology. */
+    if ((err = karst_geology_create(ctx, &view, seed, realisation, &own))) goto cleanup;
+    geo_g = own;
+  }
+  double cohesion = karst_generation_cohesion(sc, gi);
+  if (cohesion < 1.0 && (err = karst_generation_discount(ctx, g, sk, cohesion, &saved)))
+    goto cleanup;
+  const double lb_g = lb * fmin(1.0, cohesion);
+  /* One backward search per spring and per waypoint gives the routed costs and what the skeleton
+   * needs to lay its paths: with plain union (reuse = 1) the successor rows it reads the paths
+   * from; with path sharing the rows that make its A* heuristic tight. */
+  err = karst_routing_plan(ctx, geo_g, g, view.reuse >= 1.0, &plan);
+  if (err == KARST_EUNREACHABLE) explain_pieces(ctx, g, sc->n_key_points);
+  if (err) goto cleanup;
+  if (stats) stats->stage_seconds[KARST_STAGE_PATHS] += karst_i_now() - t;
+
+  karst_progress(ctx, "skeleton", 0, 1);
+  t = karst_i_now();
+  karst_generation_track_begin(&track, sk, gi);
+  tracking = 1;
+  karst_int_t kept = 0;
+  if ((err = karst_skeleton_build_routes(ctx, g, &plan, view.reuse, lb_g, sk, &kept))) goto cleanup;
+  if ((err = mark_key_points(ctx, sc, g, &plan, sk))) goto cleanup;
+  if (station_vertex &&
+      (err = karst_conditioning_assign_springs(ctx, &view, station_vertex, plan.key_spring, sk)))
+    goto cleanup;
+  gst.n_routes = kept;
+  if (stats) {
+    stats->n_skeleton_paths += kept;
+    stats->stage_seconds[KARST_STAGE_SKELETON] += karst_i_now() - t;
+  }
+  karst_progress(ctx, "amplification", 0, 1);
+  t = karst_i_now();
+  if ((err = karst_amplification_ramify(ctx, geo_g, g, &plan, r_amp, NULL, sk, NULL, NULL)))
+    goto cleanup;
+  if (stats) stats->stage_seconds[KARST_STAGE_AMPLIFICATION] += karst_i_now() - t;
+cleanup:
+  if (tracking) {
+    karst_error_t e2 = karst_generation_track_finish(ctx, &track, sk, &gst);
+    if (!err) err = e2;
+  }
+  if (stats && gi >= 1 && gi <= KARST_SCENARIO_MAX_GENERATIONS) stats->generations[gi - 1] = gst;
+  karst_generation_restore(g, &saved);
+  karst_inherited_destroy(&saved);
+  karst_routing_plan_destroy(&plan);
+  karst_geology_free(own);
+  return err;
+}
+
 /*
- * Everything after the graph: routing (two-stage paths between the key points), skeleton,
- * amplification (ramification + midpoint displacement), classification. Samples 0 ..
- * n_key_points-1 of the graph are the scenario's key points.
+ * Everything after the graph: per generation routing (two-stage paths between its key points),
+ * skeleton and ramification, then for the whole network midpoint displacement and
+ * classification. Samples 0 .. n_key_points-1 of the graph are the scenario's key points;
+ * @p station_vertex (NULL without conditioning) the graph vertex of each surveyed station, whose
+ * legs the graph already carries (karst_conditioning_add_legs) and which are laid first.
  */
-karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_t *geo,
-                                          uint64_t seed, uint64_t realisation,
-                                          const karst_graph_t *g, double lb_per_metre,
-                                          karst_network_t *net, karst_generate_stats_t *stats) {
+karst_error_t karst_i_generate_network(karst_ctx_t *ctx, const karst_geology_t *geo, uint64_t seed,
+                                       uint64_t realisation, karst_graph_t *g,
+                                       const karst_int_t *station_vertex, double lb_per_metre,
+                                       karst_network_t *net, karst_generate_stats_t *stats) {
   karst_error_t err = KARST_SUCCESS;
   const karst_scenario_t *sc = karst_geology_scenario(geo);
   const karst_int_t n = sc->n_key_points;
-  karst_routing_plan_t plan;
-  karst_routing_plan_init(&plan);
   karst_skeleton_t sk;
   int sk_ready = 0;
   karst_network_t out;
@@ -142,57 +234,46 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_
   if (!(sc->tortuosity >= 0 && sc->tortuosity <= 1))
     return karst_set_error(ctx, KARST_EINVAL, "tortuosity must be within [0, 1], got %g",
                            sc->tortuosity);
+  if (stats) {
+    stats->seed = seed, stats->realisation = realisation;
+    stats->n_skeleton_paths = 0;
+    for (int st = KARST_STAGE_PATHS; st < KARST_STAGE_COUNT; st++)
+      stats->stage_seconds[st] = 0;
+  }
 
-  t = karst_i_now();
-  /* One backward search per spring and per waypoint gives the routed costs and what the skeleton
-   * needs to lay its paths: with plain union (reuse = 1) the successor rows it reads the paths
-   * from; with path sharing the rows that make its A* heuristic tight. */
-  err = karst_routing_plan(ctx, geo, g, sc->reuse >= 1.0, &plan);
-  if (err == KARST_EUNREACHABLE) explain_pieces(ctx, g, n);
-  if (err) goto cleanup;
-  if (stats) stats->stage_seconds[KARST_STAGE_PATHS] = karst_i_now() - t;
-
-  karst_progress(ctx, "skeleton", 0, 1);
   t = karst_i_now();
   if ((err = karst_skeleton_init(ctx, &sk, g))) goto cleanup;
   sk_ready = 1;
-  karst_int_t kept = 0;
-  if ((err = karst_skeleton_build_routes(ctx, g, &plan, sc->reuse, lb_per_metre, &sk, &kept)))
-    goto cleanup;
+  /* The surveyed legs first (edge attribute "observed"), so that every route may follow them. */
+  if ((err = karst_conditioning_lay(ctx, sc, g, station_vertex, &sk))) goto cleanup;
+  if (stats) stats->stage_seconds[KARST_STAGE_SKELETON] += karst_i_now() - t;
+  karst_rng_derive(&r_amp, seed, realisation, KARST_I_STREAM_AMPLIFICATION);
+  const int G = karst_generation_count(sc);
+  if (stats) stats->n_generations = G;
+  const double lb = karst_conditioning_lower_bound_per_metre(sc, lb_per_metre);
+  for (int gi = 1; gi <= G; gi++)
+    if ((err = run_generation(ctx, geo, seed, realisation, gi, g, station_vertex, lb, &r_amp, &sk,
+                              stats)))
+      goto cleanup;
   if (stats) {
     stats->n_skeleton_nodes = sk.net.n_nodes;
     stats->skeleton_length = total_length(&sk.net);
   }
-  double *nspring = karst_network_attr_find(&sk.net, KARST_ATTR_NODE, "spring")->data;
-  for (karst_int_t i = 0; i < n; i++) {
-    if ((err = karst_skeleton_mark_node(ctx, &sk, g, i, key_kind(sc->key_points[i].type))))
-      goto cleanup;
-    karst_int_t node = sk.node_of_vertex[i];
-    nspring[node] = plan.key_spring[i];
-    if (karst_network_set_label(&sk.net, node, sc->key_points[i].name)) {
-      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
-      goto cleanup;
-    }
-  }
-  if (stats) {
-    stats->n_skeleton_paths = kept;
-    stats->stage_seconds[KARST_STAGE_SKELETON] = karst_i_now() - t;
-  }
 
   karst_progress(ctx, "amplification", 0, 1);
   t = karst_i_now();
-  karst_rng_derive(&r_amp, seed, realisation, KARST_I_STREAM_AMPLIFICATION);
-  if ((err = karst_amplification_ramify(ctx, geo, g, &plan, &r_amp, NULL, &sk, NULL, NULL)))
-    goto cleanup;
   karst_skeleton_mark_junctions(&sk);
   if ((err = karst_amplification_displace(ctx, geo, sc->tortuosity, &r_amp, NULL, &sk.net, &out)))
     goto cleanup;
-  if (stats) stats->stage_seconds[KARST_STAGE_AMPLIFICATION] = karst_i_now() - t;
+  if (stats) stats->stage_seconds[KARST_STAGE_AMPLIFICATION] += karst_i_now() - t;
 
   karst_progress(ctx, "classification", 0, 1);
   t = karst_i_now();
   karst_rng_derive(&r_class, seed, realisation, KARST_I_STREAM_CLASSIFICATION);
   if ((err = karst_classification_run(ctx, geo, &r_class, &out))) goto cleanup;
+  if (station_vertex &&
+      (err = karst_conditioning_passage_radius(ctx, sc, station_vertex, &sk, &out)))
+    goto cleanup;
   {
     /* What the integer codes of "zone" and "spring" stand for, as field data of network.vtp. */
     const char *zones[KARST_ZONE_COUNT], *springs[KARST_SCENARIO_MAX_SPRINGS];
@@ -208,6 +289,16 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_
       err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
       goto cleanup;
     }
+    if (sc->n_generations > 0) {
+      const char *gens[KARST_SCENARIO_MAX_GENERATIONS + 1];
+      gens[0] = "observed";
+      for (int i = 0; i < sc->n_generations && i < KARST_SCENARIO_MAX_GENERATIONS; i++)
+        gens[i + 1] = sc->generations[i].name;
+      if (karst_network_set_strings(&out, "generation_names", sc->n_generations + 1, gens)) {
+        err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+        goto cleanup;
+      }
+    }
   }
   if (sc->name && !out.title) {
     out.title = strdup(sc->name);
@@ -216,12 +307,22 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_
       goto cleanup;
     }
   }
+  if (sc->crs && karst_network_set_crs(&out, sc->crs)) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
   if (stats) {
     stats->stage_seconds[KARST_STAGE_CLASSIFICATION] = karst_i_now() - t;
     stats->n_key_points = n;
     stats->n_nodes = out.n_nodes;
     stats->n_edges = out.n_edges;
     stats->total_length = total_length(&out);
+    const karst_attr_t *obs = karst_network_attr_find(&out, KARST_ATTR_EDGE, "observed");
+    stats->n_observed_edges = 0;
+    stats->observed_length = 0;
+    for (karst_int_t e = 0; obs && e < out.n_edges; e++)
+      if (obs->data[e] != 0)
+        stats->n_observed_edges++, stats->observed_length += karst_network_edge_length(&out, e);
   }
   karst_network_destroy(net);
   *net = out;
@@ -230,8 +331,15 @@ karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_
 cleanup:
   if (sk_ready) karst_skeleton_destroy(&sk);
   karst_network_destroy(&out);
-  karst_routing_plan_destroy(&plan);
   return err;
+}
+
+/* The pipeline after the graph on a graph without surveyed legs (tests and benchmarks). */
+karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_t *geo,
+                                          uint64_t seed, uint64_t realisation, karst_graph_t *g,
+                                          double lb_per_metre, karst_network_t *net,
+                                          karst_generate_stats_t *stats) {
+  return karst_i_generate_network(ctx, geo, seed, realisation, g, NULL, lb_per_metre, net, stats);
 }
 
 /**
@@ -262,6 +370,8 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
   karst_graph_t g;
   karst_rng_t r;
   karst_geology_t *geo = NULL;
+  karst_int_t *station_vertex = NULL;
+  const karst_survey_set_t *survey = sc ? sc->conditioning.data : NULL;
   karst_samples_init(&own);
   karst_graph_init(&g);
   if (stats) memset(stats, 0, sizeof *stats);
@@ -278,6 +388,17 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
   if ((err = karst_geology_create(ctx, sc, seed, realisation, &geo))) goto cleanup;
   karst_rng_derive(&r, seed, realisation, KARST_I_STREAM_SAMPLING);
   if ((err = karst_sampling_run(ctx, geo, &r, smp))) goto cleanup;
+  smp->crs = sc->crs;
+  if (survey) {
+    /* The surveyed stations among the samples (src/conditioning/). */
+    station_vertex =
+        malloc((size_t)(survey->n_stations > 0 ? survey->n_stations : 1) * sizeof *station_vertex);
+    if (!station_vertex) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory for the surveyed stations");
+      goto cleanup;
+    }
+    if ((err = karst_conditioning_add_samples(ctx, sc, smp, station_vertex))) goto cleanup;
+  }
   if (stats) stats->stage_seconds[KARST_STAGE_SAMPLING] = karst_i_now() - t;
 
   karst_progress(ctx, "graph", 0, 1);
@@ -297,12 +418,19 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
     goto cleanup;
   }
   double lb = karst_cost_lower_bound_per_metre(sc);
-  if ((err = karst_i_generate_from_graph(ctx, geo, seed, realisation, &g, lb, net, stats)))
+  if (survey) {
+    t = karst_i_now();
+    if ((err = karst_conditioning_add_legs(ctx, sc, station_vertex, lb, &g))) goto cleanup;
+    if (stats) stats->stage_seconds[KARST_STAGE_GRAPH] += karst_i_now() - t;
+  }
+  if ((err = karst_i_generate_network(ctx, geo, seed, realisation, &g, station_vertex, lb, net,
+                                      stats)))
     goto cleanup;
   if (stats) stats->peak_bytes = karst_i_peak_bytes();
 cleanup:
   karst_graph_destroy(&g);
   karst_geology_free(geo);
+  free(station_vertex);
   karst_samples_destroy(&own);
   if (err && samples) {
     karst_samples_destroy(samples);

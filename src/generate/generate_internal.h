@@ -16,9 +16,16 @@
 #define KARST_I_TREE_BUDGET ((size_t)1 << 30)
 
 karst_error_t karst_i_generate_from_graph(karst_ctx_t *ctx, const karst_geology_t *geo,
-                                          uint64_t seed, uint64_t realisation,
-                                          const karst_graph_t *g, double lb_per_metre,
-                                          karst_network_t *net, karst_generate_stats_t *stats);
+                                          uint64_t seed, uint64_t realisation, karst_graph_t *g,
+                                          double lb_per_metre, karst_network_t *net,
+                                          karst_generate_stats_t *stats);
+
+/* The same with surveyed stations (karst_conditioning_add_samples; NULL: none) whose legs @p g
+ * carries. The graph's costs are changed while a generation runs and put back bit for bit. */
+karst_error_t karst_i_generate_network(karst_ctx_t *ctx, const karst_geology_t *geo, uint64_t seed,
+                                       uint64_t realisation, karst_graph_t *g,
+                                       const karst_int_t *station_vertex, double lb_per_metre,
+                                       karst_network_t *net, karst_generate_stats_t *stats);
 
 /* Random stream of each drawing stage (karst_rng_derive's substream). Fixed numbers, not the
  * stage indices: they are the indices the stages had while a "cost" stage was listed, kept so

@@ -7,6 +7,7 @@
 
 #include "karst/amplification.h"
 #include "karst/classification.h"
+#include "karst/conditioning.h"
 #include "karst/generate.h"
 #include "karst/io.h"
 #include "karst/version.h"
@@ -105,6 +106,72 @@ static void surface_json(FILE *fp, const karst_surface_def_t *d) {
 
 static const char *keypoint_type(karst_keypoint_type_t t) {
   return t == KARST_KEYPOINT_SINK ? "sink" : (t == KARST_KEYPOINT_SPRING ? "spring" : "waypoint");
+}
+
+/* The coordinate system, the conditioning surveys and the generations (docs/scenario.md,
+ * "Coordinates", "Conditioning", "Generations"): the last members of "parameters". */
+static void frame_json(FILE *fp, const karst_scenario_t *sc) {
+  fputs("    \"crs\": ", fp);
+  if (sc->crs)
+    karst_json_string(fp, sc->crs);
+  else
+    fputs("null", fp);
+  fputs(",\n    \"conditioning\": ", fp);
+  const karst_conditioning_t *c = &sc->conditioning;
+  const karst_survey_set_t *s = c->data;
+  if (c->n_surveys > 0) {
+    fputs("{\"surveys\": [", fp);
+    for (int i = 0; i < c->n_surveys; i++) {
+      fputs(i ? ", {\"file\": " : "{\"file\": ", fp);
+      karst_json_string(fp, c->surveys[i].path);
+      fputs(", \"crs\": ", fp);
+      const char *from = c->surveys[i].crs       ? c->surveys[i].crs
+                         : s && s->source_crs[i] ? s->source_crs[i]
+                                                 : NULL;
+      if (from)
+        karst_json_string(fp, from);
+      else
+        fputs("null", fp);
+      fputs(", \"conversion\": ", fp);
+      if (s && s->conversion[i])
+        karst_json_string(fp, s->conversion[i]);
+      else
+        fputs("null", fp);
+      fputs(", \"conversion_accuracy\": ", fp);
+      json_num(fp, s && s->accuracy[i] >= 0 ? s->accuracy[i] : NAN);
+      fputc('}', fp);
+    }
+    fputs("], \"cost_factor\": ", fp);
+    json_num(fp, c->cost_factor);
+    static const char *const sinks[] = {"none", "entrances", "list"};
+    fprintf(fp, ", \"sinks\": \"%s\", \"generation\": %d", sinks[c->sinks % 3], c->generation);
+    fprintf(fp, ", \"stations\": %lld, \"legs\": %lld, \"pieces\": %lld, \"length\": ",
+            (long long)(s ? s->n_stations : 0), (long long)(s ? s->n_legs : 0),
+            (long long)(s ? s->n_components : 0));
+    json_num(fp, s ? s->length : 0);
+    fputc('}', fp);
+  } else {
+    fputs("null", fp);
+  }
+  fputs(",\n    \"generations\": [", fp);
+  for (int i = 0; i < sc->n_generations; i++) {
+    const karst_generation_t *G = &sc->generations[i];
+    fputs(i ? ",\n      {\"name\": " : "\n      {\"name\": ", fp);
+    karst_json_string(fp, G->name);
+    fputs(", \"water_table\": ", fp), surface_json(fp, &G->water_table);
+    fputs(", \"key_points\": [", fp);
+    for (int k = 0, n = 0; k < sc->n_key_points; k++)
+      if (sc->key_points[k].generation == i + 1) {
+        fputs(n++ ? ", " : "", fp);
+        karst_json_string(fp, sc->key_points[k].name);
+      }
+    fputs("], \"cohesion\": ", fp), json_num(fp, G->cohesion);
+    fputs(", \"gamma\": ", fp), json_num(fp, G->gamma);
+    fputs(", \"reuse\": ", fp), json_num(fp, G->reuse);
+    fputs(", \"vadose_factor\": ", fp), json_num(fp, G->routing.vadose_factor);
+    fprintf(fp, ", \"amplification_steps\": %d}", G->amplification.steps);
+  }
+  fputs("]\n", fp);
 }
 
 /**
@@ -339,7 +406,8 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
     json_num(fp, sc->classification.radius[t].max);
     fputc(']', fp);
   }
-  fputs("}}\n", fp);
+  fputs("}},\n", fp);
+  frame_json(fp, sc);
 }
 
 /**
@@ -394,8 +462,31 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
       (long long)st->n_skeleton_paths, (long long)st->n_nodes, (long long)st->n_edges);
   fprintf(fp, "    \"skeleton_nodes\": %lld,\n", (long long)st->n_skeleton_nodes);
   kv_num(fp, I, "skeleton_length", st->skeleton_length, 0);
+  fprintf(fp, "    \"observed_edges\": %lld,\n", (long long)st->n_observed_edges);
+  kv_num(fp, I, "observed_length", st->observed_length, 0);
   kv_num(fp, I, "total_length", st->total_length, 1);
-  fputs("  },\n  \"stage_seconds\": {\n", fp);
+  fputs("  },\n  \"generations\": [", fp);
+  for (int g = 0; g < st->n_generations && g < KARST_SCENARIO_MAX_GENERATIONS; g++) {
+    const karst_generation_stats_t *gs = &st->generations[g];
+    fprintf(fp, "%s{\"generation\": %d, \"name\": ", g ? ",\n    " : "\n    ", g + 1);
+    if (g < sc->n_generations)
+      karst_json_string(fp, sc->generations[g].name);
+    else
+      fputs("null", fp);
+    fprintf(fp,
+            ", \"routes\": %lld, \"new_edges\": %lld, \"new_length\": ", (long long)gs->n_routes,
+            (long long)gs->n_new_edges);
+    json_num(fp, gs->new_length);
+    fputs(", \"reactivated_length\": ", fp);
+    json_num(fp, gs->reactivated_length);
+    fputc('}', fp);
+  }
+  fputs(st->n_generations > 0 ? "\n  ],\n  \"crs\": " : "],\n  \"crs\": ", fp);
+  if (sc->crs)
+    karst_json_string(fp, sc->crs);
+  else
+    fputs("null", fp);
+  fputs(",\n  \"stage_seconds\": {\n", fp);
   for (int s = 0; s < KARST_STAGE_COUNT; s++)
     kv_num(fp, I, karst_stage_name(s), st->stage_seconds[s], s == KARST_STAGE_COUNT - 1);
   fprintf(fp, "  },\n  \"peak_bytes\": %zu\n}\n", st->peak_bytes);

@@ -938,7 +938,15 @@ karst_error_t karst_geology_create(karst_ctx_t *ctx, const karst_scenario_t *sc,
     int s = g->n_springs++;
     g->spring_key[s] = k;
     g->key_spring[k] = s;
+    /* Its own, else its generation's base level (generations[].water_table), else the
+     * scenario's, else the plane through it. */
+    const karst_surface_def_t *gen_wt =
+        kp->generation > 0 && kp->generation <= sc->n_generations &&
+                sc->generations[kp->generation - 1].water_table.given
+            ? &sc->generations[kp->generation - 1].water_table
+            : NULL;
     const karst_surface_def_t *def = kp->water_table.given   ? &kp->water_table
+                                     : gen_wt                ? gen_wt
                                      : sc->water_table.given ? &sc->water_table
                                                              : NULL;
     g->water_table[s] =

@@ -330,7 +330,7 @@ karst_error_t karst_geology_write_vtp(karst_ctx_t *ctx, const karst_geology_t *g
     const char **springs = malloc(sizeof(char *) * (size_t)(ns + 1));
     const char **strata = malloc(sizeof(char *) * (size_t)(nst + 1));
     const char **faults = malloc(sizeof(char *) * (size_t)(nf + 1));
-    karst_strings_t lists[4];
+    karst_strings_t lists[5];
     memset(lists, 0, sizeof lists);
     if (!springs || !strata || !faults) {
       free(springs), free(strata), free(faults);
@@ -348,9 +348,13 @@ karst_error_t karst_geology_write_vtp(karst_ctx_t *ctx, const karst_geology_t *g
     strcpy(lists[1].name, "spring_names"), lists[1].n = ns, lists[1].values = (char **)springs;
     strcpy(lists[2].name, "stratum_names"), lists[2].n = nst, lists[2].values = (char **)strata;
     strcpy(lists[3].name, "fault_names"), lists[3].n = nf, lists[3].values = (char **)faults;
+    /* The scenario's coordinate system, as in network.vtp (docs/scenario.md, "Coordinates"). */
+    char *crs = sc->crs;
+    strcpy(lists[4].name, "crs"), lists[4].n = 1, lists[4].values = &crs;
     const char *names[2] = {"feature", "feature_id"};
     const int *arrays[2] = {P.feature, P.id};
-    karst_polydata_t pd = {P.np, P.xyz, P.nc, P.off, P.conn, 2, names, arrays, 4, lists, "geology"};
+    karst_polydata_t pd = {P.np,   P.xyz,           P.nc,  P.off,    P.conn, 2, names,
+                           arrays, sc->crs ? 5 : 4, lists, "geology"};
     err = karst_vtk_write_polydata(ctx, path, &pd);
     free(springs), free(strata), free(faults);
   }

@@ -21,6 +21,8 @@ static const char MAGIC[] = "Survex 3D Image File\n";
 #define LEG_SPLAY 0x04
 /* LINE item code bit: the label is omitted (no change to the label buffer). */
 #define LINE_NO_LABEL 0x20
+/* LABEL flags (item code & 0x7f): the station is an entrance. */
+#define STATION_ENTRANCE 0x04
 /* STYLE_NORMAL: when the style is already normal, a 0x00 byte ends the data. */
 #define STYLE_NORMAL 0
 #define STYLE_UNKNOWN (-1)
@@ -261,6 +263,7 @@ static karst_error_t read_items(reader_t *r, karst_i_survey_t *sv, counts_t *c) 
       if ((err = get_key(r, at, "LABEL item", &k))) return err;
       if ((err = karst_i_survey_point(sv, k, &p)) || (err = karst_i_survey_name(sv, p, r->label)))
         goto item_error;
+      if (opt & STATION_ENTRANCE) sv->points[p].entrance = 1;
     } else {
       return fail(r, at, KARST_EPARSE, "unknown item code 0x%02x", opt);
     }
@@ -279,7 +282,8 @@ item_error:
  * and a leg whose ends fall on one node is dropped; nodes that no kept leg
  * uses are dropped. Node labels are the first LABEL name seen at a point;
  * LRUD from XSECT items become the node attribute "lrud" (L, R, U, D in
- * metres, NAN where absent); the coordinate-system string goes to net->crs
+ * metres, NAN where absent); stations flagged as entrances give the node attribute "entrance"
+ * (1 there, 0 elsewhere); the coordinate-system string goes to net->crs
  * and the title to net->title.
  *
  * @param ctx  context for the error message ("FILE: byte OFFSET: message")

@@ -87,6 +87,7 @@ karst_error_t karst_i_survey_point(karst_i_survey_t *s, karst_i_cmkey_t key, kar
   karst_i_survey_point_t *p = &s->points[s->n_points];
   p->key = key;
   p->label = NULL;
+  p->entrance = 0;
   for (int c = 0; c < 4; c++)
     p->lrud[c] = NAN;
   s->slots[h] = ++s->n_points;
@@ -199,6 +200,15 @@ karst_error_t karst_i_survey_build(karst_ctx_t *ctx, const karst_i_survey_t *s, 
     if ((err = karst_network_attr_add(net, KARST_ATTR_NODE, "lrud", 4, 0, &lrud))) goto nomem;
     for (karst_int_t p = 0; p < s->n_points; p++)
       if (node_of[p] >= 0) memcpy(lrud + 4 * node_of[p], s->points[p].lrud, sizeof(double[4]));
+  }
+  int any_entrance = 0;
+  for (karst_int_t p = 0; p < s->n_points && !any_entrance; p++)
+    any_entrance = node_of[p] >= 0 && s->points[p].entrance;
+  if (any_entrance) {
+    double *ent = NULL;
+    if ((err = karst_network_attr_add(net, KARST_ATTR_NODE, "entrance", 1, 1, &ent))) goto nomem;
+    for (karst_int_t p = 0; p < s->n_points; p++)
+      if (node_of[p] >= 0) ent[node_of[p]] = s->points[p].entrance;
   }
   if (n_zero) *n_zero = zero;
   goto cleanup;

@@ -30,6 +30,7 @@ typedef struct karst_i_survey_point {
   karst_i_cmkey_t key;
   const char *label; /**< first name seen at this point (owned by the label table) or NULL */
   double lrud[4];    /**< left, right, up, down in metres; NAN when absent */
+  unsigned char entrance; /**< 1 when a station at this point is flagged an entrance */
 } karst_i_survey_point_t;
 
 typedef struct karst_i_survey {
@@ -64,7 +65,8 @@ karst_error_t karst_i_survey_leg(karst_i_survey_t *s, karst_int_t a, karst_int_t
  * between two stations Survex equated) carries no passage and is dropped;
  * their number goes to @p n_zero (may be NULL). Labels become
  * net->node_labels; with @p with_lrud the node attribute "lrud" (4
- * components) is added. On failure @p net is left empty.
+ * components) is added; when a point is flagged an entrance, the integer node attribute
+ * "entrance" (1 at entrances, 0 elsewhere). On failure @p net is left empty.
  * Time complexity: O(points + legs).
  */
 karst_error_t karst_i_survey_build(karst_ctx_t *ctx, const karst_i_survey_t *s, int with_lrud,

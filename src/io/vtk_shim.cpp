@@ -579,6 +579,7 @@ karst_error_t write_samples(karst_ctx_t *ctx, const char *path, const karst_samp
   nkey->SetName("n_key_points");
   nkey->InsertNextValue(s->n_key_points);
   fd->AddArray(nkey);
+  if (s->crs) fd->AddArray(string_array("crs", 1, &s->crs));
   add_versions(fd);
   describe_arrays(pd, "samples");
 

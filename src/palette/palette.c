@@ -41,7 +41,8 @@ static const karst_palette_category_t sample_source[] = {{0, "key_point", OI_BLA
                                                          {3, "permeability", OI_BLUISH_GREEN},
                                                          {4, "fill", NEUTRAL_GREY},
                                                          {5, "amplification", OI_SKY_BLUE},
-                                                         {6, "prescribed_path", OI_REDDISH_PURPLE}};
+                                                         {6, "prescribed_path", OI_REDDISH_PURPLE},
+                                                         {7, "survey", OI_VERMILLION}};
 
 /* Hydrological zones, from dry to flooded: the blues deepen with saturation. */
 static const karst_palette_category_t zone[] = {

@@ -476,6 +476,11 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
     karst_i_buf_puts(&b, "</td></tr>");
     free(norm);
   }
+  /* The coordinate system of every coordinate below (docs/scenario.md, "Coordinates"). */
+  const char *crs = json_scalar_text(karst_json_get(params, "crs"));
+  karst_i_buf_puts(&b, "<tr><th class=\"l\">coordinate system</th><td class=\"l\">");
+  karst_i_buf_escape(&b, crs ? crs : "local (no crs given)");
+  karst_i_buf_puts(&b, "</td></tr>");
   karst_i_buf_printf(&b,
                      "<tr><th class=\"l\">members in metrics.csv</th><td class=\"l\">%" PRId64
                      "</td></tr></table>\n",
@@ -534,6 +539,20 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
 
   /* --- member networks: pooled for the rose, degrees and stereonet; the first drawn --- */
   karst_int_t pooled = 0;
+  /* The plan-view density of simulated conduits over the domain (drawn when the members are
+   * conditioned on a survey). */
+  karst_i_density_t dens;
+  int have_dens = 0;
+  {
+    const karst_json_t *dmin = karst_json_get(params, "domain_min"),
+                       *dmax = karst_json_get(params, "domain_max");
+    if (dmin && dmax && dmin->type == KARST_JSON_ARRAY && dmax->type == KARST_JSON_ARRAY &&
+        dmin->n >= 2 && dmax->n >= 2) {
+      double lo[2] = {dmin->items[0].number, dmin->items[1].number},
+             hi[2] = {dmax->items[0].number, dmax->items[1].number};
+      have_dens = karst_i_density_init(&dens, lo, hi) == 0;
+    }
+  }
   karst_int_t upto = table.n_rows;
   if (upto > opt->members_pooled) upto = opt->members_pooled;
   int want = opt->members_drawn > 0 ? opt->members_drawn : 0;
@@ -569,6 +588,7 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
       continue;
     }
     pooled++;
+    if (have_dens && karst_i_density_add(&dens, &net)) b.failed = 1;
     karst_i_rose_accumulate(&net, rose, nrose);
     karst_i_degree_accumulate(&net, deg, DEGREE_PLOT_MAX);
     karst_i_stereo_accumulate(&stereo, &net);
@@ -639,6 +659,20 @@ karst_error_t karst_report_write(karst_ctx_t *ctx, const char *ensemble_dir, con
     karst_i_plot_views(&maps, &frame, sv_net, sv_net, "survey");
     karst_i_buf_puts(&maps, "</div>\n");
   }
+  if (have_dens && dens.conditioned) {
+    karst_i_buf_printf(&b,
+                       "<h2>Where the ensemble places the unexplored conduits</h2>\n<p>Plan view "
+                       "of the %d members read: each %.0f m cell is coloured by the fraction of "
+                       "members that have a simulated conduit (edge attribute "
+                       "<code>observed</code> = 0) crossing it; the surveyed legs (observed = 1, "
+                       "the same in every member) are drawn in red.</p>\n<figure id=\"density\">",
+                       dens.members, dens.cell);
+    karst_i_density_plot(&b, &dens, "plan-view density of simulated conduits",
+                         karst_palette_role(KARST_PALETTE_ROLE_SURVEY));
+    karst_i_buf_puts(&b, "<figcaption>density of simulated (not surveyed) conduits, plan view"
+                         "</figcaption></figure>\n");
+  }
+  if (have_dens) karst_i_density_destroy(&dens);
   if (maps.s) karst_i_buf_puts(&b, maps.s);
   if (problems.s) {
     karst_i_buf_puts(&b, "<p>Members that could not be read:</p><ul>\n");

@@ -113,4 +113,22 @@ void karst_i_svg_ylabel(karst_i_buf_t *b, const karst_i_plot_t *p, double widest
 int karst_i_svg_axes(karst_i_buf_t *b, karst_i_plot_t *p, int expand, int xticks, int yticks,
                      const char *xlabel, const char *ylabel);
 
+/* --- density.c: the plan-view density map of simulated conduits ----------------------------- */
+struct karst_network;
+typedef struct karst_i_density {
+  double lo[2], cell; /**< grid origin (x, y) and cell size (m) */
+  int nx, ny;
+  int *count;      /**< per cell: members with a simulated conduit in it */
+  int *stamp;      /**< per cell: the last member that counted it */
+  int members;     /**< members added */
+  int conditioned; /**< 1 when some member has a surveyed edge (observed = 1) */
+  double *legs;    /**< 4 per surveyed leg of the first member: x0 y0 x1 y1 */
+  long long n_legs, cap_legs;
+} karst_i_density_t;
+int karst_i_density_init(karst_i_density_t *d, const double lo[2], const double hi[2]);
+void karst_i_density_destroy(karst_i_density_t *d);
+int karst_i_density_add(karst_i_density_t *d, const struct karst_network *net);
+void karst_i_density_plot(karst_i_buf_t *b, const karst_i_density_t *d, const char *title,
+                          const char *leg_colour);
+
 #endif

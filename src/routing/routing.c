@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "core/memory_internal.h"
+#include "karst/generations.h"
 
 /** Memory (bytes) the plan may spend on its per-target rows (4 bytes per vertex per target);
  *  beyond it no rows are kept and the skeleton's searches use the Euclidean bound alone. 1 GiB. */
@@ -25,6 +26,7 @@ void karst_routing_plan_destroy(karst_routing_plan_t *plan) {
   free(plan->succ);
   free(plan->closed);
   free(plan->key_spring);
+  free(plan->active);
   free(plan->pairs);
   memset(plan, 0, sizeof *plan);
 }
@@ -61,10 +63,12 @@ static int connectivity_of(const karst_scenario_t *sc, int s, int p) {
   return c->matrix[row * c->n_springs + col];
 }
 
-/* Whether sink s has any required spring. */
+/* Whether sink s has any required spring among those taking part in the generation routed. */
 static int has_required(const karst_scenario_t *sc, const karst_geology_t *geo, int s) {
-  for (int i = 0; i < karst_geology_n_springs(geo); i++)
-    if (connectivity_of(sc, s, karst_geology_spring_key(geo, i)) == 2) return 1;
+  for (int i = 0; i < karst_geology_n_springs(geo); i++) {
+    int key = karst_geology_spring_key(geo, i);
+    if (karst_generation_key_active(sc, key) && connectivity_of(sc, s, key) == 2) return 1;
+  }
   return 0;
 }
 
@@ -115,6 +119,7 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
   double *rows = NULL, *D = NULL;
   const karst_route_t **troutes = NULL;
   unsigned char *perm = NULL;
+  int *tspring = NULL;
   karst_routing_plan_t P;
   karst_routing_plan_init(&P);
   if (K < 1 || n < K)
@@ -138,8 +143,10 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
   troutes = malloc((size_t)K * sizeof *troutes);
   allowed = malloc((size_t)K * (size_t)S * sizeof *allowed);
   perm = calloc((size_t)K * (size_t)K, 1);
+  P.active = malloc((size_t)K);
+  tspring = malloc((size_t)K * sizeof *tspring);
   if (!P.dz || !P.routes || !P.closed || !P.key_spring || !P.targets || !srcs || !tv || !sv || !D ||
-      !troutes || !allowed || !perm) {
+      !troutes || !allowed || !perm || !P.active || !tspring) {
     err = karst_set_error(ctx, KARST_ENOMEM, "routing: out of memory for %lld vertices",
                           (long long)n);
     goto cleanup;
@@ -155,9 +162,13 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
     P.routes[s] = (karst_route_t){dz, (float)rt->water_table_band, rt->vadose_factor, rt->rise_cost,
                                   1.0 / rt->phreatic_depth};
   }
+  /* Only the key points of the generation routed take part (generations.h); the others are
+   * ordinary vertices that paths may cross. */
   int n_src = 0;
   for (int k = 0; k < K; k++) {
-    P.key_spring[k] = karst_geology_spring_of_key(geo, k);
+    P.active[k] = (unsigned char)karst_generation_key_active(sc, k);
+    P.key_spring[k] = P.active[k] ? karst_geology_spring_of_key(geo, k) : -1;
+    if (!P.active[k]) continue;
     if (sc->key_points[k].type != KARST_KEYPOINT_WAYPOINT) P.closed[k] = 1;
     if (sc->key_points[k].type != KARST_KEYPOINT_SPRING) srcs[n_src] = k, sv[n_src++] = k;
   }
@@ -165,13 +176,20 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
     D[i] = INFINITY;
   for (int k = 0; k < K; k++)
     D[k * K + k] = 0.0;
-  /* Targets: the springs, then the waypoints. */
+  /* Targets: the springs, then the waypoints (tspring: the spring of a spring target). */
   int T = 0;
   for (int s = 0; s < S; s++)
-    P.targets[T++] = karst_geology_spring_key(geo, s);
+    if (P.active[karst_geology_spring_key(geo, s)])
+      tspring[T] = s, P.targets[T++] = karst_geology_spring_key(geo, s);
   int n_spring_targets = T;
+  if (n_spring_targets == 0) {
+    err = karst_set_error(ctx, KARST_EINVAL,
+                          "routing: generation %d has no spring; every sink must drain to one",
+                          sc->active_generation);
+    goto cleanup;
+  }
   for (int k = 0; k < K; k++)
-    if (sc->key_points[k].type == KARST_KEYPOINT_WAYPOINT) P.targets[T++] = k;
+    if (P.active[k] && sc->key_points[k].type == KARST_KEYPOINT_WAYPOINT) P.targets[T++] = k;
   P.n_targets = T;
   size_t row_bytes = (size_t)T * (size_t)n * 4;
   if (row_bytes <= KARST_ROUTING_ROW_BUDGET) {
@@ -190,27 +208,28 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
     goto cleanup;
   }
   /* 1. One backward search per spring: every sink's and waypoint's cost to it. */
-  for (int s = 0; s < S; s++)
-    tv[s] = P.targets[s], troutes[s] = &P.routes[s];
+  for (int t = 0; t < n_spring_targets; t++)
+    tv[t] = P.targets[t], troutes[t] = &P.routes[tspring[t]];
   karst_progress(ctx, "paths", 0, 1);
-  if ((err = karst_paths_target_rows(ctx, g, S, tv, troutes, P.closed, n_src, sv, rows, P.bound,
-                                     P.succ)))
+  if ((err = karst_paths_target_rows(ctx, g, n_spring_targets, tv, troutes, P.closed, n_src, sv,
+                                     rows, P.bound, P.succ)))
     goto cleanup;
-  for (int s = 0; s < S; s++)
+  for (int t = 0; t < n_spring_targets; t++)
     for (int j = 0; j < n_src; j++)
-      D[srcs[j] * K + P.targets[s]] = rows[s * n_src + j];
+      D[srcs[j] * K + P.targets[t]] = rows[t * n_src + j];
   /* 2. Each waypoint drains to the spring it reaches most cheaply (ties: the first). */
   for (int t = n_spring_targets; t < T; t++) {
     int w = P.targets[t], best = -1;
-    for (int s = 0; s < S; s++)
-      if (D[w * K + P.targets[s]] < INFINITY &&
-          (best < 0 || D[w * K + P.targets[s]] < D[w * K + P.targets[best]]))
-        best = s;
+    for (int q = 0; q < n_spring_targets; q++)
+      if (D[w * K + P.targets[q]] < INFINITY &&
+          (best < 0 || D[w * K + P.targets[q]] < D[w * K + P.targets[best]]))
+        best = q;
     if (best < 0) {
-      err = unreachable(ctx, sc, w, P.targets[0], S > 1 ? " nor any other spring" : "");
+      err = unreachable(ctx, sc, w, P.targets[0],
+                        n_spring_targets > 1 ? " nor any other spring" : "");
       goto cleanup;
     }
-    P.key_spring[w] = best;
+    P.key_spring[w] = tspring[best];
   }
   /* 3. One backward search per waypoint, on the routed costs of its spring. */
   if (T > n_spring_targets) {
@@ -229,43 +248,45 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
   karst_progress(ctx, "paths", 1, 1);
   /* 4. Each sink's springs: the required ones, else the cheapest allowed one. */
   for (int k = 0; k < K; k++) {
-    if (sc->key_points[k].type != KARST_KEYPOINT_SINK) continue;
+    if (!P.active[k] || sc->key_points[k].type != KARST_KEYPOINT_SINK) continue;
     int req = has_required(sc, geo, k), best = -1;
-    for (int s = 0; s < S; s++) {
-      int c = connectivity_of(sc, k, P.targets[s]);
-      allowed[k * S + s] = c != 0;
-      if (req && c == 2 && !(D[k * K + P.targets[s]] < INFINITY)) {
-        err = unreachable(ctx, sc, k, P.targets[s], ", which the connectivity requires");
+    for (int s = 0; s < S; s++)
+      allowed[k * S + s] = 0;
+    for (int q = 0; q < n_spring_targets; q++) {
+      int c = connectivity_of(sc, k, P.targets[q]);
+      allowed[k * S + tspring[q]] = c != 0;
+      if (req && c == 2 && !(D[k * K + P.targets[q]] < INFINITY)) {
+        err = unreachable(ctx, sc, k, P.targets[q], ", which the connectivity requires");
         goto cleanup;
       }
-      if (!req && c != 0 && D[k * K + P.targets[s]] < INFINITY &&
-          (best < 0 || D[k * K + P.targets[s]] < D[k * K + P.targets[best]]))
-        best = s;
+      if (!req && c != 0 && D[k * K + P.targets[q]] < INFINITY &&
+          (best < 0 || D[k * K + P.targets[q]] < D[k * K + P.targets[best]]))
+        best = q;
     }
     if (!req && best < 0) {
       int first = 0, n_allowed = 0;
-      while (first < S - 1 && !allowed[k * S + first])
+      while (first < n_spring_targets - 1 && !allowed[k * S + tspring[first]])
         first++;
-      for (int q = 0; q < S; q++)
-        n_allowed += allowed[k * S + q];
+      for (int q = 0; q < n_spring_targets; q++)
+        n_allowed += allowed[k * S + tspring[q]];
       err = unreachable(ctx, sc, k, P.targets[first],
                         n_allowed > 1 ? " nor any other spring it may drain to" : "");
       goto cleanup;
     }
-    for (int s = 0; s < S; s++) /* the sink's own routes: required springs, or the best one */
-      perm[k * K + P.targets[s]] = req ? connectivity_of(sc, k, P.targets[s]) == 2 : s == best;
+    for (int q = 0; q < n_spring_targets; q++) /* its routes: required springs, or the best one */
+      perm[k * K + P.targets[q]] = req ? connectivity_of(sc, k, P.targets[q]) == 2 : q == best;
     P.key_spring[k] = -1;
-    for (int s = 0; s < S && P.key_spring[k] < 0; s++)
-      if (perm[k * K + P.targets[s]]) P.key_spring[k] = s;
+    for (int q = 0; q < n_spring_targets && P.key_spring[k] < 0; q++)
+      if (perm[k * K + P.targets[q]]) P.key_spring[k] = tspring[q];
   }
   /* 5. Candidate routes (perm[a][b]): sink → its springs, sink → a waypoint whose spring it may
    *    drain to, waypoint → its spring, waypoint → waypoint of the same spring. */
   for (int t = n_spring_targets; t < T; t++) {
     int w = P.targets[t], sw = P.key_spring[w];
-    perm[w * K + P.targets[sw]] = 1;
+    perm[w * K + karst_geology_spring_key(geo, sw)] = 1;
     for (int k = 0; k < K; k++) {
       const karst_keypoint_t *kp = &sc->key_points[k];
-      if (k == w || !(D[k * K + w] < INFINITY)) continue;
+      if (k == w || !P.active[k] || !(D[k * K + w] < INFINITY)) continue;
       if (kp->type == KARST_KEYPOINT_SINK && allowed[k * S + sw]) perm[k * K + w] = 1;
       if (kp->type == KARST_KEYPOINT_WAYPOINT && P.key_spring[k] == sw) perm[k * K + w] = 1;
     }
@@ -312,7 +333,7 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
     }
   qsort(P.pairs, (size_t)P.n_pairs, sizeof *P.pairs, pair_cmp);
   for (int k = 0; k < K; k++)
-    if (sc->key_points[k].type == KARST_KEYPOINT_SPRING)
+    if (P.active[k] && sc->key_points[k].type == KARST_KEYPOINT_SPRING)
       P.key_spring[k] = karst_geology_spring_of_key(geo, k);
   karst_routing_plan_destroy(plan);
   *plan = P;
@@ -327,5 +348,6 @@ cleanup:
   free(troutes);
   free(allowed);
   free(perm);
+  free(tspring);
   return err;
 }

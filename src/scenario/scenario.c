@@ -18,6 +18,8 @@
 #include <yaml.h>
 
 #include "karst/blocks.h"
+#include "karst/conditioning.h"
+#include "karst/crs.h"
 #include "karst/geology.h"
 #include "karst/surface.h"
 #include "scenario_internal.h"
@@ -70,6 +72,7 @@ void karst_scenario_init(karst_scenario_t *sc) {
   sc->classification.radius[KARST_TUNNEL_EPIKARST].max = 0.5;
   sc->seed = 1;
   sc->realisations = 1;
+  sc->conditioning.cost_factor = KARST_SCENARIO_DEFAULT_LEG_COST_FACTOR;
   karst_geometry_init(&sc->geometry);
 }
 
@@ -140,7 +143,20 @@ void karst_scenario_destroy(karst_scenario_t *sc) {
   free(sc->water_table.path), karst_surface_free(sc->water_table.surface);
   for (int i = 0; i < sc->n_key_points; i++)
     free(sc->key_points[i].water_table.path),
-        karst_surface_free(sc->key_points[i].water_table.surface);
+        karst_surface_free(sc->key_points[i].water_table.surface), free(sc->key_points[i].station);
+  for (int i = 0; i < sc->n_generations; i++)
+    free(sc->generations[i].water_table.path),
+        karst_surface_free(sc->generations[i].water_table.surface);
+  free(sc->generations);
+  for (int i = 0; i < sc->conditioning.n_surveys; i++)
+    free(sc->conditioning.surveys[i].path), free(sc->conditioning.surveys[i].crs);
+  free(sc->conditioning.surveys);
+  for (int i = 0; i < sc->conditioning.n_sink_stations; i++)
+    free(sc->conditioning.sink_stations[i]);
+  free(sc->conditioning.sink_stations);
+  karst_survey_set_free(sc->conditioning.data);
+  free(sc->crs);
+  karst_crs_free(sc->crs_frame);
   for (int i = 0; i < sc->n_strata; i++) {
     free(sc->strata[i].top.path), karst_surface_free(sc->strata[i].top.surface);
     free(sc->strata[i].bottom.path), karst_surface_free(sc->strata[i].bottom.surface);
@@ -227,6 +243,8 @@ struct reader {
   yaml_node_t **drains;      /* per key point: its drains_to list, read after all key points */
   int n_drains;
   karst_i_override_set_t *ovs; /* values put into the document before the walk, or NULL */
+  yaml_node_t *generations; /* read after the top-level keys, whose values are its defaults */
+  int generation;           /* the generation whose key points are being read (1-based), or 0 */
 };
 
 /* ------------------------------------------------------------------------ */
@@ -752,6 +770,7 @@ static karst_error_t read_horizon_surface(reader_t *r, yaml_node_t *n, void *bas
                                           const char *path);
 static karst_error_t read_kp_water_table(reader_t *r, yaml_node_t *n, void *base, const char *path);
 static karst_error_t defer_drains(reader_t *r, yaml_node_t *n, void *base, const char *path);
+static karst_error_t read_kp_station(reader_t *r, yaml_node_t *n, void *base, const char *path);
 
 static const field_t horizon_fields[] = {
     {.key = "name", .type = T_FN, .fn = read_horizon_name},
@@ -856,11 +875,23 @@ static const field_t keypoint_fields[] = {
      .required = 1,
      .names = keypoint_type_names,
      .n_names = 3},
-    {.key = "position", .type = T_VEC3, .off = offsetof(karst_keypoint_t, p), .required = 1},
+    {.key = "position", .type = T_VEC3, .off = offsetof(karst_keypoint_t, p)},
     {.key = "water_table", .type = T_FN, .fn = read_kp_water_table},
     {.key = "drains_to", .type = T_FN, .fn = defer_drains},
+    {.key = "latitude",
+     .type = T_NUM,
+     .off = offsetof(karst_keypoint_t, geographic),
+     .range = RANGE_CLOSED(-90, 90, " degrees")},
+    {.key = "longitude",
+     .type = T_NUM,
+     .off = offsetof(karst_keypoint_t, geographic) + sizeof(double),
+     .range = RANGE_CLOSED(-180, 360, " degrees")},
+    {.key = "elevation",
+     .type = T_NUM,
+     .off = offsetof(karst_keypoint_t, geographic) + 2 * sizeof(double)},
+    {.key = "station", .type = T_FN, .fn = read_kp_station},
 };
-static const schema_t keypoint_schema = {keypoint_fields, 5};
+static const schema_t keypoint_schema = {keypoint_fields, 9};
 
 static void init_horizon(void *item) {
   karst_horizon_t *h = item;
@@ -876,8 +907,13 @@ static void init_fracture(void *item) {
   f->factor = 0.5;
   f->influence = NAN; /* sampling.feature_radius, once sampling is read */
 }
+/* A key point's position comes from position, latitude/longitude/elevation or station: NAN marks
+ * what the file did not give (finish checks that exactly one form is given). */
 static void init_keypoint(void *item) {
-  (void)item;
+  karst_keypoint_t *kp = item;
+  for (int a = 0; a < 3; a++)
+    kp->p[a] = NAN, kp->geographic[a] = NAN;
+  kp->station_index = -1;
 }
 
 static karst_error_t read_horizons(reader_t *r, yaml_node_t *n, void *base, const char *path) {
@@ -1478,9 +1514,12 @@ static karst_error_t defer_drains(reader_t *r, yaml_node_t *n, void *base, const
   karst_keypoint_t *kp = base;
   long idx = kp - r->sc->key_points;
   if (idx < 0 || idx >= r->sc->n_key_points) return KARST_SUCCESS;
-  if (!r->drains) {
-    r->drains = calloc((size_t)r->sc->n_key_points, sizeof *r->drains);
-    if (!r->drains) return no_memory(r);
+  if (!r->drains || idx >= r->n_drains) { /* generations append key points after the first read */
+    yaml_node_t **d = realloc(r->drains, (size_t)r->sc->n_key_points * sizeof *d);
+    if (!d) return no_memory(r);
+    for (int i = r->drains ? r->n_drains : 0; i < r->sc->n_key_points; i++)
+      d[i] = NULL;
+    r->drains = d;
     r->n_drains = r->sc->n_key_points;
   }
   r->drains[idx] = n;
@@ -1772,6 +1811,395 @@ static karst_error_t moved_water_table_band(reader_t *r, yaml_node_t *n, void *b
                  path);
 }
 
+/* --- coordinates, conditioning and generations (docs/scenario.md) --------- */
+
+/* key_points[i].station: the name of a surveyed station (conditioning), resolved in finish. */
+static karst_error_t read_kp_station(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_keypoint_t *kp = base;
+  const char *name = NULL;
+  karst_error_t err = get_string(r, n, path, &name);
+  if (err) return err;
+  free(kp->station);
+  if (!(kp->station = strdup(name))) return no_memory(r);
+  return KARST_SUCCESS;
+}
+
+/* crs: the scenario's coordinate reference system, parsed at once so a mistake names its line. */
+static karst_error_t read_crs(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_scenario_t *sc = base;
+  const char *text = NULL;
+  karst_error_t err = get_string(r, n, path, &text);
+  if (err) return err;
+  karst_crs_free(sc->crs_frame);
+  sc->crs_frame = NULL;
+  free(sc->crs);
+  if (!(sc->crs = strdup(text))) return no_memory(r);
+  karst_ctx_t c;
+  karst_ctx_init(&c);
+  if ((err = karst_crs_create(&c, text, &sc->crs_frame)))
+    return fail_at(r, n, err, "%s: %s", path, c.errmsg);
+  sc->pos_crs.line = line_of(n);
+  sc->pos_crs.column = col_of(n);
+  return KARST_SUCCESS;
+}
+
+static const field_t survey_fields[] = {
+    {.key = "file", .type = T_STR, .off = offsetof(karst_survey_def_t, path), .required = 1},
+    {.key = "crs", .type = T_STR, .off = offsetof(karst_survey_def_t, crs)},
+};
+static const schema_t survey_schema = {survey_fields, 2};
+
+/* conditioning.surveys: a list of file names, or of {file, crs} maps. */
+static karst_error_t read_surveys(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_conditioning_t *c = base;
+  char d[80], sub[PATH_LEN];
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of survey files, got %s", path,
+                   describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m < 1 || m > 1000)
+    return fail_at(r, n, KARST_ERANGE, "%s must name 1 to 1000 surveys, got %ld", path, m);
+  for (int i = 0; i < c->n_surveys; i++)
+    free(c->surveys[i].path), free(c->surveys[i].crs);
+  free(c->surveys);
+  c->n_surveys = 0;
+  if (!(c->surveys = calloc((size_t)m, sizeof *c->surveys))) return no_memory(r);
+  for (long i = 0; i < m; i++) {
+    yaml_node_t *in = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    karst_survey_def_t *sd = &c->surveys[c->n_surveys++];
+    index_path(sub, path, i);
+    sd->line = line_of(in), sd->column = col_of(in);
+    const char *name = NULL;
+    karst_error_t err;
+    if (in->type == YAML_MAPPING_NODE) {
+      if ((err = walk_map(r, in, &survey_schema, sd, sub, NULL))) return err;
+      name = sd->path;
+    } else if ((err = get_string(r, in, sub, &name))) {
+      return err;
+    }
+    char *resolved = resolve_relative(r, name, sub);
+    if (!resolved) return no_memory(r);
+    free(sd->path);
+    sd->path = resolved;
+  }
+  c->line = line_of(n), c->column = col_of(n);
+  return KARST_SUCCESS;
+}
+
+/* conditioning.sinks: entrances, none, or a list of station names. */
+static karst_error_t read_cond_sinks(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_conditioning_t *c = base;
+  char d[80], sub[PATH_LEN];
+  for (int i = 0; i < c->n_sink_stations; i++)
+    free(c->sink_stations[i]);
+  free(c->sink_stations);
+  c->sink_stations = NULL;
+  c->n_sink_stations = 0;
+  if (n->type == YAML_SCALAR_NODE) {
+    static const char *const modes[] = {"none", "entrances"};
+    int v = 0;
+    karst_error_t err = get_enum(r, n, path, modes, 2, &v);
+    if (err) return err;
+    c->sinks = v ? KARST_CONDITIONING_SINKS_ENTRANCES : KARST_CONDITIONING_SINKS_NONE;
+    return KARST_SUCCESS;
+  }
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s must be 'entrances', 'none' or a list of station names, got %s", path,
+                   describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m > 10000)
+    return fail_at(r, n, KARST_ERANGE, "%s names %ld stations, at most 10000", path, m);
+  if (m > 0 && !(c->sink_stations = calloc((size_t)m, sizeof *c->sink_stations)))
+    return no_memory(r);
+  for (long i = 0; i < m; i++) {
+    yaml_node_t *in = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    const char *name;
+    index_path(sub, path, i);
+    karst_error_t err = get_string(r, in, sub, &name);
+    if (err) return err;
+    if (!(c->sink_stations[c->n_sink_stations++] = strdup(name))) return no_memory(r);
+  }
+  c->sinks = KARST_CONDITIONING_SINKS_LIST;
+  return KARST_SUCCESS;
+}
+
+static const field_t conditioning_fields[] = {
+    {.key = "surveys", .type = T_FN, .fn = read_surveys, .required = 1},
+    {.key = "cost_factor",
+     .type = T_NUM,
+     .off = offsetof(karst_conditioning_t, cost_factor),
+     .range = RANGE_OPEN_CLOSED(0, 1, "")},
+    {.key = "sinks", .type = T_FN, .fn = read_cond_sinks},
+    {.key = "generation",
+     .type = T_INT,
+     .off = offsetof(karst_conditioning_t, generation),
+     .range = RANGE_GE(0, " (0: the last generation)")},
+};
+static const schema_t conditioning_schema = {conditioning_fields, 4};
+
+static karst_error_t defer_generations(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  (void)base;
+  (void)path;
+  r->generations = n;
+  return KARST_SUCCESS;
+}
+
+static karst_error_t read_gen_name(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  return read_name_into(r, n, ((karst_generation_t *)base)->name, path);
+}
+static karst_error_t read_gen_water_table(reader_t *r, yaml_node_t *n, void *base,
+                                          const char *path) {
+  return read_surface_def(r, n, &((karst_generation_t *)base)->water_table, path);
+}
+
+/* generations[i].key_points: appended to the scenario's key points, tagged with the generation. */
+static karst_error_t read_gen_key_points(reader_t *r, yaml_node_t *n, void *base,
+                                         const char *path) {
+  (void)base;
+  karst_scenario_t *sc = r->sc;
+  char d[80], sub[PATH_LEN];
+  if (is_null(n)) return KARST_SUCCESS;
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of maps, got %s", path,
+                   describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m > INT_MAX / 4 - sc->n_key_points)
+    return fail_at(r, n, KARST_ERANGE, "%s has too many items (%ld)", path, m);
+  for (long i = 0; i < m; i++) {
+    yaml_node_t *in = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    karst_keypoint_t *kps = realloc(sc->key_points, (size_t)(sc->n_key_points + 1) * sizeof *kps);
+    if (!kps) return no_memory(r);
+    sc->key_points = kps;
+    karst_keypoint_t *kp = &kps[sc->n_key_points++];
+    memset(kp, 0, sizeof *kp);
+    init_keypoint(kp);
+    kp->line = line_of(in), kp->column = col_of(in);
+    kp->generation = r->generation;
+    index_path(sub, path, i);
+    karst_error_t err = walk_map(r, in, &keypoint_schema, kp, sub, NULL);
+    if (err) return err;
+  }
+  return KARST_SUCCESS;
+}
+
+static const range_t cohesion_range = RANGE_OPEN_CLOSED(0, 1, "");
+static const field_t gen_skeleton_fields[] = {
+    {.key = "gamma",
+     .type = T_NUM,
+     .off = offsetof(karst_generation_t, gamma),
+     .range = RANGE_GT(0, "")},
+    {.key = "reuse",
+     .type = T_NUM,
+     .off = offsetof(karst_generation_t, reuse),
+     .range = RANGE_OPEN_CLOSED(0, 1, "")},
+};
+static const schema_t gen_skeleton_schema = {gen_skeleton_fields, 2};
+static const schema_t amplification_schema; /* defined with the top-level tables below */
+static const field_t generation_fields[] = {
+    {.key = "name", .type = T_FN, .fn = read_gen_name},
+    {.key = "water_table", .type = T_FN, .fn = read_gen_water_table},
+    {.key = "key_points", .type = T_FN, .fn = read_gen_key_points},
+    {.key = "routing",
+     .type = T_MAP,
+     .off = offsetof(karst_generation_t, routing),
+     .sub = &routing_schema},
+    {.key = "skeleton", .type = T_MAP, .sub = &gen_skeleton_schema},
+    {.key = "amplification",
+     .type = T_MAP,
+     .off = offsetof(karst_generation_t, amplification),
+     .sub = &amplification_schema},
+    {.key = "cohesion",
+     .type = T_NUM,
+     .off = offsetof(karst_generation_t, cohesion),
+     .range = cohesion_range},
+};
+static const schema_t generation_schema = {generation_fields, 7};
+
+/* generations: oldest first; each starts from the top-level routing, skeleton and amplification
+ * values, which must therefore be read first (finish). */
+static karst_error_t read_generations(reader_t *r, yaml_node_t *n) {
+  karst_scenario_t *sc = r->sc;
+  char d[80], sub[PATH_LEN];
+  const char *path = "generations";
+  if (is_null(n)) return KARST_SUCCESS;
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL, "%s must be a list of maps (oldest first), got %s", path,
+                   describe(n, d, sizeof d));
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  if (m < 1 || m > KARST_SCENARIO_MAX_GENERATIONS)
+    return fail_at(r, n, KARST_ERANGE, "%s must list 1 to %d generations, got %ld", path,
+                   KARST_SCENARIO_MAX_GENERATIONS, m);
+  if (!(sc->generations = calloc((size_t)m, sizeof *sc->generations))) return no_memory(r);
+  for (long i = 0; i < m; i++) {
+    yaml_node_t *in = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    karst_generation_t *G = &sc->generations[sc->n_generations++];
+    G->routing = sc->routing;
+    G->gamma = sc->gamma;
+    G->reuse = sc->reuse;
+    G->amplification = sc->amplification;
+    G->cohesion = KARST_SCENARIO_DEFAULT_COHESION;
+    G->line = line_of(in), G->column = col_of(in);
+    snprintf(G->name, sizeof G->name, "generation%ld", i + 1);
+    index_path(sub, path, i);
+    r->generation = (int)i + 1;
+    karst_error_t err = walk_map(r, in, &generation_schema, G, sub, NULL);
+    r->generation = 0;
+    if (err) return err;
+  }
+  return KARST_SUCCESS;
+}
+
+/* A key point placed by the conditioning (an entrance sink, a survey piece's waypoint). */
+static karst_error_t add_station_key_point(reader_t *r, karst_int_t st, karst_keypoint_type_t type,
+                                           const char *name, int gen) {
+  karst_scenario_t *sc = r->sc;
+  const karst_survey_set_t *s = sc->conditioning.data;
+  karst_keypoint_t *kps = realloc(sc->key_points, (size_t)(sc->n_key_points + 1) * sizeof *kps);
+  if (!kps) return no_memory(r);
+  sc->key_points = kps;
+  karst_keypoint_t *kp = &kps[sc->n_key_points++];
+  memset(kp, 0, sizeof *kp);
+  init_keypoint(kp);
+  kp->type = type;
+  kp->generation = gen;
+  kp->line = sc->conditioning.line, kp->column = sc->conditioning.column;
+  memcpy(kp->p, &s->xyz[3 * st], sizeof kp->p);
+  kp->station_index = st;
+  /* Named after its station when the name fits, so the network's node label stays the
+   * station's name; otherwise the description (entrance 1, survey piece 2 ...). */
+  const char *label = s->labels[st];
+  snprintf(kp->name, sizeof kp->name, "%s",
+           label && label[0] && strlen(label) < sizeof kp->name ? label : name);
+  if (!(kp->station = strdup(label ? label : name))) return no_memory(r);
+  return KARST_SUCCESS;
+}
+
+/* A key point is on the survey when it names a station or sits exactly on one. */
+static karst_int_t station_of_key_point(const karst_survey_set_t *s, const karst_keypoint_t *kp) {
+  if (kp->station) return kp->station_index;
+  for (karst_int_t i = 0; i < s->n_stations; i++)
+    if (s->xyz[3 * i] == kp->p[0] && s->xyz[3 * i + 1] == kp->p[1] && s->xyz[3 * i + 2] == kp->p[2])
+      return i;
+  return -1;
+}
+
+/* After the walk: positions from latitude/longitude and from stations, the surveys read into the
+ * scenario's frame, the key points the conditioning adds. */
+static karst_error_t finish_frame(reader_t *r) {
+  karst_scenario_t *sc = r->sc;
+  karst_conditioning_t *c = &sc->conditioning;
+  karst_error_t err;
+  if (c->generation > 0 && c->generation > (sc->n_generations > 0 ? sc->n_generations : 1))
+    return karst_set_error(r->ctx, KARST_ERANGE,
+                           "%s:%d:%d: conditioning.generation is %d but the scenario has %d "
+                           "generation%s",
+                           r->file, c->line, c->column, c->generation,
+                           sc->n_generations > 0 ? sc->n_generations : 1,
+                           sc->n_generations > 1 ? "s" : "");
+  if (c->n_surveys > 0 && (err = karst_conditioning_load(r->ctx, sc))) return err;
+  const karst_survey_set_t *s = c->data;
+  const int cgen =
+      sc->n_generations > 0 ? (c->generation > 0 ? c->generation : sc->n_generations) : 0;
+  for (int i = 0; i < sc->n_key_points; i++) {
+    karst_keypoint_t *kp = &sc->key_points[i];
+    int has_pos = !isnan(kp->p[0]) || !isnan(kp->p[1]) || !isnan(kp->p[2]);
+    int has_geo =
+        !isnan(kp->geographic[0]) || !isnan(kp->geographic[1]) || !isnan(kp->geographic[2]);
+    int forms = has_pos + has_geo + (kp->station != NULL);
+    char kpath[PATH_LEN];
+    index_path(kpath, "key_points", i);
+    if (forms != 1)
+      return karst_set_error(r->ctx, KARST_EINVAL,
+                             "%s:%d:%d: %s%s%s needs exactly one of position: [x, y, z], "
+                             "latitude/longitude/elevation, or station: NAME; it gives %d",
+                             r->file, kp->line, kp->column, kpath, kp->name[0] ? " " : "", kp->name,
+                             forms);
+    if (has_geo) {
+      if (isnan(kp->geographic[0]) || isnan(kp->geographic[1]) || isnan(kp->geographic[2]))
+        return karst_set_error(r->ctx, KARST_EINVAL,
+                               "%s:%d:%d: %s needs all of latitude, longitude and elevation",
+                               r->file, kp->line, kp->column, kpath);
+      if (!sc->crs_frame)
+        return karst_set_error(r->ctx, KARST_EINVAL,
+                               "%s:%d:%d: %s is given in latitude/longitude but the scenario "
+                               "states no crs to convert it into (crs: 'UTM 30N', 'EPSG:27700' "
+                               "...)",
+                               r->file, kp->line, kp->column, kpath);
+      double ll[2] = {kp->geographic[1], kp->geographic[0]};
+      if ((err = karst_crs_from_lonlat(r->ctx, sc->crs_frame, 1, ll, kp->p))) {
+        size_t len = strlen(r->ctx->errmsg);
+        snprintf(r->ctx->errmsg + len, KARST_ERRMSG_MAX - len, " (%s:%d:%d: %s)", r->file, kp->line,
+                 kp->column, kpath);
+        return err;
+      }
+      kp->p[2] = kp->geographic[2];
+    }
+    if (kp->station) {
+      karst_int_t st = s ? karst_survey_find_station(s, kp->station) : -1;
+      if (st < 0)
+        return karst_set_error(r->ctx, KARST_ENOTFOUND, "%s:%d:%d: %s names station '%s', which %s",
+                               r->file, kp->line, kp->column, kpath, kp->station,
+                               s ? "no survey of conditioning.surveys has"
+                                 : "needs a conditioning section with the survey");
+      kp->station_index = st;
+      memcpy(kp->p, &s->xyz[3 * st], sizeof kp->p);
+    }
+  }
+  if (!s) return KARST_SUCCESS;
+  /* Entrance sinks. */
+  if (c->sinks == KARST_CONDITIONING_SINKS_ENTRANCES) {
+    int found = 0;
+    for (karst_int_t i = 0; i < s->n_stations; i++) {
+      if (!s->entrance[i]) continue;
+      found++;
+      int taken = 0;
+      for (int k = 0; k < sc->n_key_points && !taken; k++)
+        taken = station_of_key_point(s, &sc->key_points[k]) == i;
+      if (taken) continue;
+      char name[KARST_SCENARIO_NAME_MAX];
+      snprintf(name, sizeof name, "entrance %d", found);
+      if ((err = add_station_key_point(r, i, KARST_KEYPOINT_SINK, name, cgen))) return err;
+    }
+    if (!found)
+      return karst_set_error(r->ctx, KARST_EINVAL,
+                             "%s:%d:%d: conditioning.sinks is 'entrances' but no survey flags an "
+                             "entrance (Survex *entrance); name the stations instead",
+                             r->file, c->line, c->column);
+  } else if (c->sinks == KARST_CONDITIONING_SINKS_LIST) {
+    for (int j = 0; j < c->n_sink_stations; j++) {
+      karst_int_t st = karst_survey_find_station(s, c->sink_stations[j]);
+      if (st < 0)
+        return karst_set_error(r->ctx, KARST_ENOTFOUND,
+                               "%s:%d:%d: conditioning.sinks[%d] names station '%s', which no "
+                               "survey has",
+                               r->file, c->line, c->column, j, c->sink_stations[j]);
+      char name[KARST_SCENARIO_NAME_MAX];
+      snprintf(name, sizeof name, "sink at %.50s", c->sink_stations[j]);
+      if ((err = add_station_key_point(r, st, KARST_KEYPOINT_SINK, name, cgen))) return err;
+    }
+  }
+  /* Every piece of the survey that no key point sits on gets a waypoint at its lowest station,
+   * so the routing joins it to the simulated network. */
+  unsigned char *covered = calloc((size_t)(s->n_components > 0 ? s->n_components : 1), 1);
+  if (!covered) return no_memory(r);
+  for (int k = 0; k < sc->n_key_points; k++) {
+    karst_int_t st = station_of_key_point(s, &sc->key_points[k]);
+    if (st >= 0) {
+      sc->key_points[k].station_index = st;
+      covered[s->component[st]] = 1;
+    }
+  }
+  for (karst_int_t cc = 0; cc < s->n_components && !err; cc++) {
+    if (covered[cc]) continue;
+    char name[KARST_SCENARIO_NAME_MAX];
+    snprintf(name, sizeof name, "survey piece %lld", (long long)cc + 1);
+    err = add_station_key_point(r, s->component_station[cc], KARST_KEYPOINT_WAYPOINT, name, cgen);
+  }
+  free(covered);
+  return err;
+}
+
 /* --- the top level --------------------------------------------------------- */
 
 static const field_t domain_fields[] = {
@@ -1990,8 +2418,14 @@ static const field_t top_fields[] = {
      .off = offsetof(karst_scenario_t, geometry),
      .sub = &geometry_schema},
     {.key = "blocks", .type = T_FN, .fn = read_blocks},
+    {.key = "crs", .type = T_FN, .fn = read_crs},
+    {.key = "conditioning",
+     .type = T_MAP,
+     .off = offsetof(karst_scenario_t, conditioning),
+     .sub = &conditioning_schema},
+    {.key = "generations", .type = T_FN, .fn = defer_generations},
 };
-static const schema_t top_schema = {top_fields, 24};
+static const schema_t top_schema = {top_fields, 27};
 _Static_assert(sizeof top_fields / sizeof top_fields[0] <= MAX_FIELDS, "raise MAX_FIELDS");
 
 /* ------------------------------------------------------------------------ */
@@ -2041,7 +2475,7 @@ static karst_error_t read_prescribed(reader_t *r, yaml_node_t *n) {
     for (int e = 0; e < 2 && !err; e++) {
       yaml_node_t *v = yaml_document_get_node(r->doc, it->data.sequence.items.start[e]);
       char esub[PATH_LEN];
-      const char *name;
+      const char *name = NULL;
       index_path(esub, sub, e);
       if ((err = get_string(r, v, esub, &name))) break;
       ends[e] = find_key_point(sc, name);
@@ -2361,6 +2795,8 @@ static karst_error_t finish(reader_t *r) {
   }
   for (int i = 0; i < sc->n_fractures; i++)
     if (isnan(sc->fractures[i].influence)) sc->fractures[i].influence = sc->sampling.feature_radius;
+  if (r->generations && (err = read_generations(r, r->generations))) return err;
+  if ((err = finish_frame(r))) return err;
   if ((err = name_key_points(r))) return err;
   if (r->prescribed && (err = read_prescribed(r, r->prescribed))) return err;
   for (int i = 0; i < r->n_drains; i++)
@@ -2659,6 +3095,9 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
                         tr->elevation, sc->domain_min[2]);
   }
 
+  /* Surveyed stations in the domain and in the bedrock (the message says by how much), before
+   * the key points: the entrance sinks and survey waypoints sit on stations. */
+  if ((err = karst_conditioning_check(ctx, sc))) return err;
   if ((err = check_surface(ctx, sc, &sc->water_table, "water_table"))) return err;
   if ((err = check_water_table(ctx, sc, &sc->water_table, "water_table"))) return err;
   for (int i = 0; i < sc->n_key_points; i++) {
@@ -2991,7 +3430,7 @@ karst_error_t karst_i_scenario_load(karst_ctx_t *ctx, const char *path, karst_i_
   int parser_ok = 0, doc_ok = 0;
   unsigned char *buf = NULL;
   size_t len = 0;
-  reader_t r = {ctx, path, &doc, &tmp, 0, NULL, NULL, NULL, 0, set};
+  reader_t r = {ctx, path, &doc, &tmp, 0, NULL, NULL, NULL, 0, set, NULL, 0};
 
   karst_scenario_init(&tmp);
   if (!path || !sc) {

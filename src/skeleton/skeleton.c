@@ -227,7 +227,7 @@ karst_error_t karst_skeleton_add_route(karst_ctx_t *ctx, karst_skeleton_t *sk,
     prev = node;
   }
   sk->n_paths++;
-  return KARST_SUCCESS;
+  return sk->on_path ? sk->on_path(sk->on_path_arg, path) : KARST_SUCCESS;
 }
 
 /** Make graph vertex @p vertex a node (if not yet) and set its kind. O(1) amortised. */
@@ -688,7 +688,8 @@ cleanup:
  * towards the same spring at reuse × their cost; the heuristic rows are the plan's backward rows)
  * or as the plain union of least-cost paths read from the plan's successor rows (reuse = 1). A
  * route never passes through a sink or a spring (plan->closed). New edges and nodes get the
- * route's spring. Key-point nodes get kind interior here; the caller marks them.
+ * route's spring. The plan's key points (plan->active) get nodes of kind interior here; the caller
+ * marks them.
  * Same-network guarantee as karst_skeleton_build on any thread count.
  * @return KARST_SUCCESS, KARST_EINVAL (reuse), KARST_EUNREACHABLE, KARST_ENOMEM,
  *         KARST_EINTERRUPTED.
@@ -704,7 +705,9 @@ karst_error_t karst_skeleton_build_routes(karst_ctx_t *ctx, const karst_graph_t 
     return karst_set_error(ctx, KARST_EINVAL, "skeleton.reuse must be within (0, 1], got %g",
                            reuse);
   for (int k = 0; k < plan->n_keys; k++)
-    if ((err = karst_skeleton_mark_node(ctx, sk, g, k, KARST_NODE_INTERIOR))) return err;
+    if ((!plan->active || plan->active[k]) &&
+        (err = karst_skeleton_mark_node(ctx, sk, g, k, KARST_NODE_INTERIOR)))
+      return err;
   pair_t *pairs = malloc((size_t)(plan->n_pairs > 0 ? plan->n_pairs : 1) * sizeof *pairs);
   if (!pairs) return karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
   for (int i = 0; i < plan->n_pairs; i++) {
