@@ -58,8 +58,14 @@ static const karst_array_info_t entries[] = {
      "1 for conduits laid along an observed (surveyed) path, 0 for generated ones", CAT,
      "observed_names", NULL},
     {"generation", "network.vtp cell data", KARST_ARRAYS_UNIT_INDEX,
-     "speleogenetic generation (index)",
-     "0-based generation of the conduit: 0 formed first, higher values later", SEQ, NULL, NULL},
+     "speleogenetic phase (index)",
+     "1-based phase (generations, oldest first) that dissolved the conduit; 0 for surveyed legs "
+     "(docs/conditioning.md)",
+     SEQ, NULL, NULL},
+    {"reactivated", "network.vtp cell data", KARST_ARRAYS_UNIT_INDEX,
+     "reactivating phase (index)",
+     "the last younger phase whose routes followed this conduit, 0 if none (docs/conditioning.md)",
+     SEQ, NULL, NULL},
     /* survey networks read by karst (kept when a survey is written back) */
     {"lrud", "survey networks, point data (4 components)", "m", "passage dimensions (m)",
      "distances from the station to the left, right, up and down walls (components 0-3); NaN "
@@ -87,6 +93,9 @@ static const karst_array_info_t entries[] = {
      "0-based index of the polygon's horizon, spring (water table), stratum, fault, fracture "
      "family or exclusion zone in the scenario",
      SEQ, NULL, "geology"},
+    {"block_id", "block mesh cell data", KARST_ARRAYS_UNIT_INDEX, "block (index)",
+     "0-based index of the rock block the triangle bounds, -1 for the terrain (docs/blocks.md)",
+     SEQ, NULL, NULL},
     {"block_type", "block mesh cell data", KARST_ARRAYS_UNIT_CATEGORY, "block type",
      "shape class of the rock block (Paris et al. 2020, section 4)", CAT, "block_type_names", NULL},
     {"sdf", "mesh --sdf .vti point data", "m", "signed distance bound (m, negative inside)",
