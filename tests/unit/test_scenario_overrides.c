@@ -30,8 +30,8 @@ static karst_error_t load1(karst_ctx_t *ctx, const char *path, const char *key, 
 }
 
 /* An override replaces the file's value and leaves every other one alone; integer keys are read
- * as integers (branchwork.yaml: gamma 2.0, tortuosity 0.1, amplification.steps 2, fracture 0
- * weight 1, domain max z 100). */
+ * as integers (branchwork.yaml: gamma 2.0, tortuosity 0.4, amplification.steps 2, reach 250,
+ * reach_ratio 0.06, fracture 0 weight 1, domain max z 100). */
 static void test_replace_values(void **state) {
   (void)state;
   karst_ctx_t ctx;
@@ -41,20 +41,24 @@ static void test_replace_values(void **state) {
   karst_scenario_override_t ov[] = {{"skeleton.gamma", "3.25", NULL, 1},
                                     {"amplification.steps", "4", NULL, 1},
                                     {"fractures[0].weight", "2.5", NULL, 1},
-                                    {"domain.max[2]", "120", NULL, 1}};
-  karst_override_type_t types[4] = {0};
-  karst_error_t err = karst_scenario_load_with_overrides(&ctx, BRANCHWORK, ov, 4, types, &sc);
+                                    {"domain.max[2]", "120", NULL, 1},
+                                    {"amplification.reach", "100", NULL, 1}};
+  karst_override_type_t types[5] = {0};
+  karst_error_t err = karst_scenario_load_with_overrides(&ctx, BRANCHWORK, ov, 5, types, &sc);
   assert_int_equal(err, KARST_SUCCESS);
   assert_close(sc.gamma, 3.25, 0);
   assert_int_equal(sc.amplification.steps, 4);
   assert_close(sc.fractures[0].weight, 2.5, 0);
   assert_close(sc.domain_max[2], 120, 0);
-  assert_close(sc.tortuosity, 0.1, 0);           /* untouched */
-  assert_int_equal(sc.amplification.points, 10); /* untouched */
+  assert_close(sc.amplification.reach, 100, 0);
+  assert_close(sc.amplification.reach_ratio, 0.06, 0); /* untouched */
+  assert_close(sc.tortuosity, 0.4, 0);                 /* untouched */
+  assert_int_equal(sc.amplification.points, 10);       /* untouched */
   assert_int_equal(types[0], KARST_OVERRIDE_NUMBER);
   assert_int_equal(types[1], KARST_OVERRIDE_INTEGER);
   assert_int_equal(types[2], KARST_OVERRIDE_NUMBER);
   assert_int_equal(types[3], KARST_OVERRIDE_NUMBER);
+  assert_int_equal(types[4], KARST_OVERRIDE_NUMBER);
   karst_scenario_destroy(&sc);
 }
 
@@ -384,7 +388,7 @@ static void test_write_rebases_every_file(void **state) {
   rmdir(dir);
 }
 
-/* The file's own text of a key (branchwork.yaml: tortuosity 0.1, skeleton.gamma 2.0,
+/* The file's own text of a key (branchwork.yaml: tortuosity 0.4, skeleton.gamma 2.0,
  * fractures[0].dip 85, domain.max[1] 600); a key the file leaves out is KARST_ENOTFOUND. */
 static void test_value_text(void **state) {
   (void)state;
@@ -392,7 +396,7 @@ static void test_value_text(void **state) {
   karst_ctx_init(&ctx);
   char v[64];
   assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "tortuosity", v, sizeof v), 0);
-  assert_string_equal(v, "0.1");
+  assert_string_equal(v, "0.4");
   assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "skeleton.gamma", v, sizeof v), 0);
   assert_string_equal(v, "2.0");
   assert_int_equal(karst_scenario_value_text(&ctx, BRANCHWORK, "fractures[0].dip", v, sizeof v), 0);
