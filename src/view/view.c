@@ -19,8 +19,10 @@ static const char *const role_names[KARST_VIEW_ROLE_COUNT] = {"network", "sample
                                                               "field",   "collection", "geology"};
 /* What each role colours by at start (NULL: its first categorical array, else a plain
  * surface). */
-static const char *const role_default[KARST_VIEW_ROLE_COUNT] = {"tunnel_type", "source",      NULL,
-                                                                "sdf",         "tunnel_type", NULL};
+/* A mesh is coloured by tunnel_type when it has one (a conduit mesh also carries the
+ * categorical "feature", wall or speleothem), else by its first categorical array. */
+static const char *const role_default[KARST_VIEW_ROLE_COUNT] = {
+    "tunnel_type", "source", "tunnel_type", "sdf", "tunnel_type", NULL};
 
 /** Colours of unlisted categories written into a script (codes 0 .. KARST_VIEW_CYCLE - 1;
  *  beyond, the script cycles through them: karst_palette_cycle does the same). */
