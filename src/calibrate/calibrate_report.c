@@ -11,6 +11,7 @@
 
 #include "calibrate/calibrate_internal.h"
 #include "karst/compare.h"
+#include "karst/metrics.h"
 #include "karst/report.h"
 #include "karst/version.h"
 #include "report/svg_internal.h"
@@ -22,7 +23,11 @@
 /** Bins of a metric's histograms (prior predictive and best fit share them). */
 #define METRIC_BINS 24
 /** Side of one cell of the pair plot (pixels). */
-#define PAIR_CELL 150
+#define PAIR_CELL 190
+/** Pixels left of each pair-plot cell for its y tick labels. */
+#define PAIR_TICK_ROOM 26
+/** Extra pixels below each pair-plot cell, so its x tick labels stay clear of the row below. */
+#define PAIR_TICK_GAP 14
 
 static const char *const posterior_colour = "#4477AA";
 static const char *const prior_colour = "#BBBBBB";
@@ -58,11 +63,36 @@ static double coord(const karst_calibrate_param_t *p, double v) {
   return p->prior == KARST_PRIOR_LOG_UNIFORM ? log10(v) : v;
 }
 
+/* The unit of a scenario key, from the last part of its path (docs/scenario.md): a count, metres,
+ * degrees, or, for the keys without one (weights, ratios, θ), "1" (dimensionless, as SI writes it);
+ * a key this list does not know is labelled with the scenario's own unit. */
+static const char *param_unit(const char *key) {
+  const char *last = strrchr(key, '.');
+  last = last ? last + 1 : key;
+  static const char *const count[] = {"steps", "points", "k", "realisations"};
+  static const char *const metres[] = {
+      "reach",          "elevation",      "radius",           "fill_radius",
+      "feature_radius", "epikarst_depth", "water_table_band", "feature_band"};
+  static const char *const degrees[] = {"dip", "dip_direction", "vertical_angle"};
+  static const char *const none[] = {
+      "tortuosity",   "gamma",      "reuse",  "w0",          "horizon",      "fracture",
+      "permeability", "prescribed", "weight", "reach_ratio", "points_ratio", "dead_end_fraction"};
+  for (size_t i = 0; i < sizeof count / sizeof *count; i++)
+    if (!strcmp(last, count[i])) return "count";
+  for (size_t i = 0; i < sizeof metres / sizeof *metres; i++)
+    if (!strcmp(last, metres[i])) return "m";
+  for (size_t i = 0; i < sizeof degrees / sizeof *degrees; i++)
+    if (!strcmp(last, degrees[i])) return "degrees";
+  for (size_t i = 0; i < sizeof none / sizeof *none; i++)
+    if (!strcmp(last, none[i])) return "1";
+  return "the scenario's unit";
+}
+
 static void axis_label(const karst_calibrate_param_t *p, char *out, size_t size) {
   if (p->prior == KARST_PRIOR_LOG_UNIFORM)
-    snprintf(out, size, "log10 %s", p->key);
+    snprintf(out, size, "log10 %s (%s)", p->key, param_unit(p->key));
   else
-    snprintf(out, size, "%s", p->key);
+    snprintf(out, size, "%s (%s)", p->key, param_unit(p->key));
 }
 
 /* The plotted range of a parameter: its prior (integers: value ± 1/2). */
@@ -118,7 +148,7 @@ static void plot_param(karst_i_buf_t *b, const karst_i_calib_view_t *v, int k, d
   pl.ymin = 0;
   pl.ymax = ymax * 1.08;
   karst_i_svg_axes(b, &pl, 0, 5, 4, with_axes_titles ? xl : NULL,
-                   with_axes_titles ? "posterior mass" : NULL);
+                   with_axes_titles ? "posterior mass (fraction)" : NULL);
   double a = karst_i_plot_px(&pl, coord(p, v->low[k])),
          c = karst_i_plot_px(&pl, coord(p, v->high[k]));
   if (per_value) {
@@ -174,12 +204,18 @@ static void plot_pairs(karst_i_buf_t *b, const karst_i_calib_view_t *v) {
     for (int j = 0; j < d; j++) {
       double x0 = M + j * C, y0 = i * C + 4;
       if (i == j) {
-        karst_i_buf_printf(b, "<g transform=\"translate(%.2f %.2f)\">", x0 - 34, y0 - 10);
-        plot_param(b, v, i, C + 34, C + 10, 0);
+        /* the same plot area as the other cells: x0 + PAIR_TICK_ROOM .. x0 + C - 10, y0 ..
+         * y0 + C - 20 - PAIR_TICK_GAP (plot_param's margins: 34 left, 10 top, 20 bottom) */
+        karst_i_buf_printf(b, "<g transform=\"translate(%.2f %.2f)\">", x0 + PAIR_TICK_ROOM - 34,
+                           y0 - 10);
+        plot_param(b, v, i, C + 34 - PAIR_TICK_ROOM, C + 10 - PAIR_TICK_GAP, 0);
         karst_i_buf_puts(b, "</g>\n");
         continue;
       }
-      karst_i_plot_t pl = {x0, y0, C - 10, C - 20, 0, 0, 0, 0};
+      /* room on the left of each cell for its y tick labels, so that they do not run into the
+       * x tick labels of the cell beside it */
+      karst_i_plot_t pl = {
+          x0 + PAIR_TICK_ROOM, y0, C - 10 - PAIR_TICK_ROOM, C - 20 - PAIR_TICK_GAP, 0, 0, 0, 0};
       param_range(&v->params[j], &pl.xmin, &pl.xmax);
       param_range(&v->params[i], &pl.ymin, &pl.ymax);
       if (i < j) {
@@ -203,9 +239,10 @@ static void plot_pairs(karst_i_buf_t *b, const karst_i_calib_view_t *v) {
     }
     char lab[300];
     axis_label(&v->params[i], lab, sizeof lab);
-    karst_i_svg_text(b, M + i * C + (C - 10) / 2, d * C + 30, "middle", "axis", lab);
+    karst_i_svg_text(b, M + i * C + PAIR_TICK_ROOM + (C - 10 - PAIR_TICK_ROOM) / 2, d * C + 30,
+                     "middle", "axis", lab);
     karst_i_buf_printf(b, "<g transform=\"translate(%.2f %.2f) rotate(-90)\">", 14.0,
-                       i * C + 4 + (C - 20) / 2);
+                       i * C + 4 + (C - 20 - PAIR_TICK_GAP) / 2);
     karst_i_svg_text(b, 0, 0, "middle", "axis", lab);
     karst_i_buf_puts(b, "</g>\n");
   }
@@ -230,8 +267,9 @@ static void plot_generations(karst_i_buf_t *b, const karst_i_calib_view_t *v, in
   }
   karst_i_svg_begin(b, W, H, tolerance ? "tolerance per generation" : "acceptance per generation");
   pl.ymax = tolerance ? (ymax > 0 ? ymax * 1.05 : 1) : 1;
-  karst_i_svg_axes(b, &pl, 0, h->n_gen < 8 ? (h->n_gen > 1 ? h->n_gen : 2) : 8, 5, "generation",
-                   tolerance ? "tolerance ε" : "acceptance rate p_acc");
+  karst_i_svg_axes(b, &pl, 0, h->n_gen < 8 ? (h->n_gen > 1 ? h->n_gen : 2) : 8, 5,
+                   "generation (index)",
+                   tolerance ? "tolerance ε (1)" : "acceptance rate p_acc (fraction)");
   for (int g = first; g < h->n_gen; g++) {
     double y = tolerance ? h->gen[g].tolerance : h->gen[g].acceptance;
     if (!isfinite(y)) continue;
@@ -300,7 +338,14 @@ static void plot_fit(karst_i_buf_t *b, const karst_i_calib_view_t *v, const char
   pl.xmax = hi;
   pl.ymin = 0;
   pl.ymax = ymax > 0 ? ymax * 1.08 : 1;
-  karst_i_svg_axes(b, &pl, 1, 5, 4, name, "fraction of members");
+  char xtitle[160];
+  snprintf(xtitle, sizeof xtitle, "%s (1)", name);
+  int nf = 0;
+  const karst_metric_field_t *mf = karst_metric_fields(&nf);
+  for (int f = 0; f < nf; f++)
+    if (!strcmp(mf[f].key, name) && mf[f].unit && *mf[f].unit && strcmp(mf[f].unit, "1"))
+      snprintf(xtitle, sizeof xtitle, "%s (%s)", name, mf[f].unit);
+  karst_i_svg_axes(b, &pl, 1, 5, 4, xtitle, "members (fraction)");
   if (pub) {
     double a = fmax(pub->min, pl.xmin), c = fmin(pub->max, pl.xmax);
     if (a < c)
