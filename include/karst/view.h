@@ -28,7 +28,8 @@ extern "C" {
 typedef enum {
   KARST_VIEW_NETWORK = 0, /**< conduit lines (network.vtp), coloured by tunnel_type */
   KARST_VIEW_SAMPLES = 1, /**< a point cloud (samples.vtp), coloured by source, hidden at start */
-  KARST_VIEW_MESH = 2,    /**< a surface (.vtp, .ply, .stl), coloured by its label array */
+  KARST_VIEW_MESH = 2,    /**< a surface (.vtp, .ply, .stl), coloured by tunnel_type, else its first
+                             categorical array */
   KARST_VIEW_FIELD = 3,   /**< a scalar field on a grid (.vti): its 0 isosurface and a slice */
   KARST_VIEW_COLLECTION = 4, /**< a ParaView collection (.pvd) of networks, one member a step */
   KARST_VIEW_GEOLOGY = 5,    /**< geological surfaces (geology.vtp), translucent, hidden at start */

@@ -98,7 +98,7 @@ static void test_write_and_read_back(void **state) {
       python_check(script, "assert [os.fsencode(f['file']) for f in FILES] == [b'cave.vtp', "
                            "b\"../other/cave's \\\\ \\xe9t\\xe9.vti\", b'x.pvd'], FILES\n"
                            "assert [f['role'] for f in FILES] == ['mesh', 'field', 'collection']\n"
-                           "assert [f['colour_by'] for f in FILES] == [None, 'sdf', 'radius']\n"
+                           "assert [f['colour_by'] for f in FILES] == ['tunnel_type', 'sdf', 'radius']\n"
                            "assert BACKGROUND == (1, 1, 1) and FOREGROUND == (0, 0, 0)\n"),
       0);
 
