@@ -318,7 +318,27 @@ typedef struct karst_amplification {
 /** Largest number of amplification points over all steps (karst_scenario_check refuses more). */
 #define KARST_SCENARIO_MAX_AMPLIFICATION_POINTS 1000000
 
-/** Points of amplification step @p step (1-based): round(points × points_ratio^(step − 1)). */
+/**
+ * Points of all amplification steps together, and in *@p largest (may be NULL) those of the
+ * largest step, by the rule of karst_amplification_step_points; stops at the first step with no
+ * point or once the total exceeds @p cap. O(steps), where calling karst_amplification_step_points
+ * for every step would be O(steps²).
+ */
+static inline double karst_amplification_points_total(const karst_amplification_t *am, double cap,
+                                                      double *largest) {
+  double n = am->points, total = 0, big = 0;
+  for (int s = 1; s <= am->steps && n >= 0.5 && total <= cap; s++) {
+    double k = floor(n + 0.5);
+    total += k;
+    if (k > big) big = k;
+    n *= am->points_ratio;
+  }
+  if (largest) *largest = big;
+  return total;
+}
+
+/** Points of amplification step @p step (1-based): round(points × points_ratio^(step − 1)).
+ *  O(step). */
 static inline double karst_amplification_step_points(const karst_amplification_t *am, int step) {
   double n = am->points;
   for (int s = 1; s < step && n >= 0.5; s++)
@@ -390,11 +410,11 @@ void karst_geometry_init(karst_geometry_t *g);
  * it (KarstNSim's polyphasic cohesion factor, Gouy et al. 2024).
  */
 typedef struct karst_generation {
-  char name[KARST_SCENARIO_NAME_MAX]; /**< "generation1", ... when the file gives none */
-  karst_surface_def_t water_table;    /**< default water table of its springs; not given: the
-                                           scenario's water_table rule */
-  karst_routing_t routing;            /**< default: the scenario's routing */
-  double gamma, reuse;                /**< default: the scenario's skeleton.gamma, .reuse */
+  char name[KARST_SCENARIO_NAME_MAX];  /**< "generation1", ... when the file gives none */
+  karst_surface_def_t water_table;     /**< default water table of its springs; not given: the
+                                            scenario's water_table rule */
+  karst_routing_t routing;             /**< default: the scenario's routing */
+  double gamma, reuse;                 /**< default: the scenario's skeleton.gamma, .reuse */
   karst_amplification_t amplification; /**< default: the scenario's amplification */
   double cohesion; /**< cost factor of the earlier generations' conduits, (0, 1], default
                         KARST_SCENARIO_DEFAULT_COHESION */
@@ -436,7 +456,8 @@ typedef struct karst_conditioning {
   int line, column;
 } karst_conditioning_t;
 
-/** Default of conditioning.cost_factor: a surveyed metre costs 1 % of the cheapest metre of rock. */
+/** Default of conditioning.cost_factor: a surveyed metre costs 1 % of the cheapest metre of rock.
+ */
 #define KARST_SCENARIO_DEFAULT_LEG_COST_FACTOR 0.01
 
 typedef struct karst_scenario {
@@ -476,13 +497,13 @@ typedef struct karst_scenario {
   uint64_t seed;
   int realisations; /**< >= 1 */
   /* Where blocks named by cross-field messages were given (0 when defaulted or built in code). */
-  karst_srcpos_t pos_domain;        /**< the domain map */
-  karst_srcpos_t pos_terrain;       /**< terrain.elevation or terrain.heightfield value */
-  karst_srcpos_t pos_amplification; /**< the amplification map */
-  karst_srcpos_t pos_water_table;   /**< the water_table map */
-  karst_srcpos_t pos_key_points;    /**< the key_points list */
-  karst_srcpos_t pos_sampling;      /**< the sampling map */
-  karst_geometry_t geometry;        /**< `karst mesh`: blending, wall details, speleothems */
+  karst_srcpos_t pos_domain;           /**< the domain map */
+  karst_srcpos_t pos_terrain;          /**< terrain.elevation or terrain.heightfield value */
+  karst_srcpos_t pos_amplification;    /**< the amplification map */
+  karst_srcpos_t pos_water_table;      /**< the water_table map */
+  karst_srcpos_t pos_key_points;       /**< the key_points list */
+  karst_srcpos_t pos_sampling;         /**< the sampling map */
+  karst_geometry_t geometry;           /**< `karst mesh`: blending, wall details, speleothems */
   struct karst_blocks_section *blocks; /**< the blocks section (karst blocks), NULL when absent */
   /** The coordinate reference system of every coordinate of the file (crs:, docs/scenario.md,
    *  "Coordinates"), as given, or NULL: a local frame. */

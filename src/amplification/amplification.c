@@ -241,12 +241,9 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   size_t n = (size_t)(g->n > 0 ? g->n : 1);
   in_net = calloc(n, 1);
   blocked = calloc(n, 1);
-  size_t max_pts = 1;
-  for (int step = 1; step <= am->steps; step++) {
-    double n_step = karst_amplification_step_points(am, step);
-    if (n_step < 0.5) break;
-    if (n_step > (double)max_pts) max_pts = (size_t)n_step;
-  }
+  double largest = 0;
+  karst_amplification_points_total(am, INFINITY, &largest);
+  size_t max_pts = largest > 1 ? (size_t)largest : 1;
   pts = malloc(max_pts * 3 * sizeof *pts);
   snap = malloc(max_pts * sizeof *snap);
   snap_d = malloc(max_pts * sizeof *snap_d);
@@ -256,9 +253,10 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   }
   for (karst_int_t v = 0; v < g->n; v++)
     in_net[v] = sk->node_of_vertex[v] >= 0;
-  double reach = am->reach;
+  double reach = am->reach, n_next = am->points; /* karst_amplification_step_points, running */
   for (int step = 1; step <= am->steps; step++) {
-    const int n_step = (int)karst_amplification_step_points(am, step);
+    const int n_step = n_next >= 0.5 ? (int)floor(n_next + 0.5) : 0;
+    if (n_next >= 0.5) n_next *= am->points_ratio;
     const int n_dead = (int)llround(am->dead_end_fraction * n_step);
     if (n_step == 0) break; /* later steps have no more points (points_ratio <= 1) */
     int n_pts = am->reach > 0 ? draw_near(geo, opt, rng, &sk->net, reach, step - 1,

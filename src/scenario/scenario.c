@@ -243,8 +243,8 @@ struct reader {
   yaml_node_t **drains;      /* per key point: its drains_to list, read after all key points */
   int n_drains;
   karst_i_override_set_t *ovs; /* values put into the document before the walk, or NULL */
-  yaml_node_t *generations; /* read after the top-level keys, whose values are its defaults */
-  int generation;           /* the generation whose key points are being read (1-based), or 0 */
+  yaml_node_t *generations;    /* read after the top-level keys, whose values are its defaults */
+  int generation;              /* the generation whose key points are being read (1-based), or 0 */
 };
 
 /* ------------------------------------------------------------------------ */
@@ -3034,12 +3034,8 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
                         karst_tunnel_type_name((karst_tunnel_type_t)t), rr->min, rr->max);
   }
 
-  double am_total = 0, am_n = sc->amplification.points;
-  for (int st = 1; st <= sc->amplification.steps && am_n >= 0.5; st++) {
-    am_total += floor(am_n + 0.5); /* karst_amplification_step_points(.., st) */
-    if (am_total > KARST_SCENARIO_MAX_AMPLIFICATION_POINTS) break;
-    am_n *= sc->amplification.points_ratio;
-  }
+  double am_total = karst_amplification_points_total(&sc->amplification,
+                                                     KARST_SCENARIO_MAX_AMPLIFICATION_POINTS, NULL);
   if (am_total > KARST_SCENARIO_MAX_AMPLIFICATION_POINTS)
     return check_fail(
         ctx, sc, sc->pos_amplification.line, sc->pos_amplification.column, KARST_ERANGE,
