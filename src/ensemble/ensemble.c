@@ -30,6 +30,7 @@
 #include <unistd.h>
 
 #include "ensemble/ensemble_internal.h"
+#include "io/input_internal.h"
 #include "karst/io.h"
 #include "karst/version.h"
 
@@ -215,7 +216,11 @@ karst_error_t karst_i_key_file(karst_ctx_t *ctx, const char *path, const char *w
                                const char *holds, const char *advice) {
   karst_error_t err = KARST_SUCCESS;
   char *have = NULL;
-  FILE *fp = fopen(path, "rb");
+  FILE *fp = NULL;
+  struct stat kst; /* absent: created below; present: read through the guarded opening */
+  if (stat(path, &kst) == 0 &&
+      (err = karst_i_open_regular(ctx, path, "key", KEY_FILE_MAX, &fp)))
+    return err;
   if (fp) {
     have = malloc(KEY_FILE_MAX);
     if (!have) {
@@ -542,9 +547,9 @@ static karst_error_t read_member_row(karst_ctx_t *ctx, const char *path, const c
   karst_error_t err = KARST_SUCCESS;
   char *buf = NULL;
   size_t cap = 0;
-  FILE *fp = fopen(path, "rb");
+  FILE *fp;
   *row = NULL;
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot read: %s", path, strerror(errno));
+  if ((err = karst_i_open_regular(ctx, path, "metrics", KARST_TABLE_MAX_BYTES, &fp))) return err;
   ssize_t len = getline(&buf, &cap, fp);
   if (len <= 0 || buf[len - 1] != '\n' || (buf[len - 1] = '\0', strcmp(buf, header) != 0)) {
     err = karst_set_error(ctx, KARST_EPARSE,

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "io/input_internal.h"
 #include "karst/ensemble.h"
 
 void karst_ensemble_table_init(karst_ensemble_table_t *t) {
@@ -60,8 +61,8 @@ karst_error_t karst_ensemble_table_read(karst_ctx_t *ctx, const char *path,
   karst_int_t row_cap = 0, lineno = 0;
   karst_ensemble_table_t r;
   karst_ensemble_table_init(&r);
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot read: %s", path, strerror(errno));
+  FILE *fp;
+  if ((err = karst_i_open_regular(ctx, path, "table", KARST_TABLE_MAX_BYTES, &fp))) return err;
 
   ssize_t len = getline(&line, &cap, fp);
   lineno = 1;

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "io/input_internal.h"
 #include "karst/io.h"
 
 /* Length of the well-formed UTF-8 sequence at @p p (Unicode 15, table 3-7:
@@ -566,22 +567,12 @@ karst_error_t karst_json_parse(karst_ctx_t *ctx, const char *source, const char 
 /** Read the whole of @p path and parse it (karst_json_parse). O(file size). */
 karst_error_t karst_json_read_file(karst_ctx_t *ctx, const char *path, karst_json_t **out) {
   *out = NULL;
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot read: %s", path, strerror(errno));
-  sbuf_t b = {NULL, 0, 0};
-  char chunk[65536];
-  size_t got;
-  karst_error_t err = KARST_SUCCESS;
-  while ((got = fread(chunk, 1, sizeof chunk, fp)) > 0)
-    if (sbuf_put(&b, chunk, got)) {
-      err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
-      break;
-    }
-  if (!err && ferror(fp))
-    err = karst_set_error(ctx, KARST_EIO, "%s: cannot read: %s", path, strerror(errno));
-  fclose(fp);
-  if (!err) err = karst_json_parse(ctx, path, b.s ? b.s : "", b.len, out);
-  free(b.s);
+  unsigned char *data;
+  size_t len;
+  karst_error_t err = karst_i_read_regular(ctx, path, "JSON", KARST_JSON_MAX_BYTES, &data, &len);
+  if (err) return err;
+  err = karst_json_parse(ctx, path, (const char *)data, len, out);
+  free(data);
   return err;
 }
 

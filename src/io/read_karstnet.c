@@ -6,7 +6,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
+#include "io/input_internal.h"
 #include "karst/readers.h"
 
 enum { MAX_COLUMNS = 64 };
@@ -45,8 +47,8 @@ static karst_error_t read_nodes(karst_ctx_t *ctx, const char *path, karst_networ
   size_t cap = 0;
   long lineno = 0, first_line = 0;
   int ncols = 0;
-  FILE *fp = fopen(path, "r");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  FILE *fp;
+  if ((err = karst_i_open_regular(ctx, path, "Karstnet", KARST_SURVEY_MAX_BYTES, &fp))) return err;
   while (getline(&line, &cap, fp) >= 0) {
     lineno++;
     char *tok[MAX_COLUMNS];
@@ -108,8 +110,8 @@ static karst_error_t read_links(karst_ctx_t *ctx, const char *path, const char *
   char *line = NULL;
   size_t cap = 0;
   long lineno = 0;
-  FILE *fp = fopen(path, "r");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  FILE *fp;
+  if ((err = karst_i_open_regular(ctx, path, "Karstnet", KARST_SURVEY_MAX_BYTES, &fp))) return err;
   while (getline(&line, &cap, fp) >= 0) {
     lineno++;
     char *tok[MAX_COLUMNS];
@@ -183,8 +185,8 @@ karst_error_t karst_read_karstnet(karst_ctx_t *ctx, const char *path, karst_netw
   snprintf(links, n + 16, "%s_links.dat", base);
   for (int i = 0; i < 2; i++) {
     const char *f = i == 0 ? nodes : links;
-    FILE *fp = fopen(f, "r");
-    if (!fp) {
+    struct stat st;
+    if (stat(f, &st) != 0) {
       int e = errno;
       err = karst_set_error(ctx, e == ENOENT ? KARST_ENOTFOUND : KARST_EIO,
                             "%s: cannot open %s of the Karstnet pair %s_nodes.dat + "
@@ -192,7 +194,7 @@ karst_error_t karst_read_karstnet(karst_ctx_t *ctx, const char *path, karst_netw
                             path, f, base, base, strerror(e));
       goto cleanup;
     }
-    fclose(fp);
+    if ((err = karst_i_check_regular(ctx, f, "Karstnet", KARST_SURVEY_MAX_BYTES))) goto cleanup;
   }
   if ((err = read_nodes(ctx, nodes, &tmp))) goto cleanup;
   if ((err = read_links(ctx, links, nodes, &tmp))) goto cleanup;

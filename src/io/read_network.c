@@ -4,7 +4,9 @@
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
+#include "io/input_internal.h"
 #include "karst/readers.h"
 #include "karst/vtk.h"
 
@@ -51,22 +53,26 @@ karst_error_t karst_read_network(karst_ctx_t *ctx, const char *path, karst_forma
   if (format == KARST_FORMAT_AUTO) {
     char head[32];
     size_t n = 0;
-    FILE *fp = fopen(path, "rb");
-    if (fp) {
+    struct stat st;
+    if (stat(path, &st) == 0) {
+      /* Sniff the first bytes through the guarded opening: a FIFO or a device
+       * named without an extension is refused here instead of blocking. */
+      FILE *fp;
+      karst_error_t err = karst_i_open_regular(ctx, path, "network", KARST_VTP_MAX_BYTES, &fp);
+      if (err) return err;
       n = fread(head, 1, sizeof head, fp);
       fclose(fp);
       format = format_from_magic(head, n);
     } else {
       /* maybe the prefix X of a Karstnet pair X_nodes.dat + X_links.dat */
+      int e = errno;
       char nodes[4096];
       snprintf(nodes, sizeof nodes, "%s_nodes.dat", path);
-      FILE *kp = fopen(nodes, "r");
-      if (kp) {
-        fclose(kp);
+      if (stat(nodes, &st) == 0) {
         format = KARST_FORMAT_KARSTNET;
       } else {
-        return karst_set_error(ctx, errno == ENOENT ? KARST_ENOTFOUND : KARST_EIO,
-                               "%s: cannot open: %s", path, strerror(errno));
+        return karst_set_error(ctx, e == ENOENT ? KARST_ENOTFOUND : KARST_EIO,
+                               "%s: cannot open: %s", path, strerror(e));
       }
     }
   }

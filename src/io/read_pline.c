@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "io/input_internal.h"
 #include "karst/readers.h"
 
 /* Open-addressing map from a file's vertex/atom id to a node index. */
@@ -119,8 +120,9 @@ karst_error_t karst_read_pline(karst_ctx_t *ctx, const char *path, karst_network
   size_t cap = 0;
   long lineno = 0;
   int seen_header = 0, in_block = 0;
-  FILE *fp = fopen(path, "r");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  FILE *fp;
+  if ((err = karst_i_open_regular(ctx, path, "GOCAD PLine", KARST_SURVEY_MAX_BYTES, &fp)))
+    return err;
   while (getline(&line, &cap, fp) >= 0) {
     lineno++;
     char *tok[MAX_TOKENS];

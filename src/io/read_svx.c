@@ -15,6 +15,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "io/input_internal.h"
 #include "survey_internal.h"
 
 extern char **environ;
@@ -69,8 +70,8 @@ static void remove_tree(const char *dir) {
 /* The first MAX_QUOTED_OUTPUT bytes of cavern's output (its errors come first). */
 static void quote_output(const char *log, char *buf, size_t size) {
   buf[0] = '\0';
-  FILE *fp = fopen(log, "rb");
-  if (!fp) return;
+  FILE *fp;
+  if (karst_i_open_regular(NULL, log, "cavern log", KARST_SURVEY_MAX_BYTES, &fp)) return;
   size_t n = fread(buf, 1, size - 1, fp);
   buf[n] = '\0';
   while (n > 0 && (buf[n - 1] == '\n' || buf[n - 1] == ' '))
@@ -104,6 +105,8 @@ karst_error_t karst_read_svx(karst_ctx_t *ctx, const char *path, karst_network_t
   char quoted[MAX_QUOTED_OUTPUT];
   int have_actions = 0, status = 0;
   posix_spawn_file_actions_t fa;
+  /* cavern opens the file itself: refuse a FIFO or device before it blocks on one. */
+  if ((err = karst_i_check_regular(ctx, path, "survey", KARST_SURVEY_MAX_BYTES))) goto cleanup;
   if (access(path, R_OK) != 0) {
     err = karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
     goto cleanup;

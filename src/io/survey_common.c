@@ -2,6 +2,8 @@
  * the survey readers (src/io/survey_internal.h). */
 #include "survey_internal.h"
 
+#include "io/input_internal.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -222,39 +224,5 @@ cleanup:
 
 karst_error_t karst_i_read_file(karst_ctx_t *ctx, const char *path, unsigned char **data,
                                 size_t *len) {
-  karst_error_t err = KARST_SUCCESS;
-  unsigned char *buf = NULL;
-  size_t n = 0, cap = 0;
-  FILE *fp = fopen(path, "rb");
-  if (!fp) {
-    err = karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
-    goto cleanup;
-  }
-  for (;;) {
-    if (cap - n < 65536) {
-      size_t ncap = cap ? 2 * cap : 65536 + 1;
-      unsigned char *b = realloc(buf, ncap);
-      if (!b) {
-        err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory reading the file", path);
-        goto cleanup;
-      }
-      buf = b;
-      cap = ncap;
-    }
-    size_t got = fread(buf + n, 1, cap - n - 1, fp);
-    n += got;
-    if (got == 0) break;
-  }
-  if (ferror(fp)) {
-    err = karst_set_error(ctx, KARST_EIO, "%s: read error: %s", path, strerror(errno));
-    goto cleanup;
-  }
-  buf[n] = '\0';
-  *data = buf;
-  *len = n;
-  buf = NULL;
-cleanup:
-  if (fp) fclose(fp);
-  free(buf);
-  return err;
+  return karst_i_read_regular(ctx, path, "survey", KARST_SURVEY_MAX_BYTES, data, len);
 }

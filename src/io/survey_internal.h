@@ -72,7 +72,8 @@ karst_error_t karst_i_survey_leg(karst_i_survey_t *s, karst_int_t a, karst_int_t
 karst_error_t karst_i_survey_build(karst_ctx_t *ctx, const karst_i_survey_t *s, int with_lrud,
                                    karst_network_t *net, karst_int_t *n_zero);
 
-/** Whole-file read into a malloc'd buffer (NUL-terminated for text parsers). */
+/** Whole-file read into a malloc'd buffer (NUL-terminated for text parsers), through
+ * karst_i_read_regular (regular file of at most KARST_SURVEY_MAX_BYTES). */
 karst_error_t karst_i_read_file(karst_ctx_t *ctx, const char *path, unsigned char **data,
                                 size_t *len);
 

@@ -20,6 +20,7 @@
  * No C++ exception crosses the extern "C" boundary: each entry point catches
  * std::bad_alloc (KARST_ENOMEM) and anything else (KARST_EEXTERNAL).
  */
+#include "io/input_internal.h"
 #include "karst/arrays.h"
 #include "karst/io.h"
 #include "karst/palette.h"
@@ -58,6 +59,7 @@
 #include <vtkImageData.h>
 #include <vtkInformation.h>
 #include <vtkIntArray.h>
+#include <vtkLZ4DataCompressor.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -69,6 +71,7 @@
 #include <vtkXMLImageDataWriter.h>
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
+#include <vtkZLibDataCompressor.h>
 
 namespace {
 
@@ -766,14 +769,10 @@ karst_error_t read_network(karst_ctx_t *ctx, const char *path, karst_network_t *
   karst_error_t err = KARST_SUCCESS;
   if (!path || !*path) return karst_set_error(ctx, KARST_EINVAL, "no input file name given");
   if (!out) return karst_set_error(ctx, KARST_EINVAL, "%s: no network to read into", path);
-  {
-    FILE *f = std::fopen(path, "rb");
-    if (!f) {
-      int e = errno;
-      return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, std::strerror(e));
-    }
-    std::fclose(f);
-  }
+  /* VTK's XML reader trusts the file's counts and block headers (it allocates
+   * what they claim, and some malformed structures crash it): check them
+   * against the file first, through the guarded opening of every input. */
+  if ((err = karst_i_vtp_check(ctx, path))) return err;
   vtkNew<ErrorCatcher> catcher;
   vtkNew<vtkXMLPolyDataReader> reader;
   catcher->watch(reader);
@@ -820,6 +819,12 @@ karst_error_t read_network(karst_ctx_t *ctx, const char *path, karst_network_t *
   for (karst_int_t i = 0; i < np; i++) {
     double p[3];
     pd->GetPoint(i, p);
+    if (!finite3(p)) {
+      err = karst_set_error(ctx, KARST_EPARSE,
+                            "%s: Points: point %" PRId64 " has a non-finite coordinate (%g, %g, %g)",
+                            path, i, p[0], p[1], p[2]);
+      goto cleanup;
+    }
     if ((err = karst_network_add_node(&n, p[0], p[1], p[2], nullptr))) goto nomem;
   }
   if (lines) {
@@ -1008,6 +1013,32 @@ template <class F> karst_error_t guarded(karst_ctx_t *ctx, const char *path, F b
 /* ------------------------------------------------------------------------ */
 /* Public entry points                                                       */
 /* ------------------------------------------------------------------------ */
+
+/**
+ * Decompress one block of a VTK XML file for the pre-check of vtp_check.c
+ * (compressor 1: zlib, 2: LZ4), with VTK's own decompressors so that the
+ * check decodes exactly what the reader will. @p out_len is the size the
+ * block header declares (already bounded by the compressor's ratio).
+ * @return 0 when the block decompresses to exactly @p out_len bytes.
+ */
+extern "C" int karst_i_vtk_uncompress(int compressor, const unsigned char *in, size_t in_len,
+                                      unsigned char *out, size_t out_len) {
+  try {
+    vtkSmartPointer<vtkDataCompressor> c;
+    if (compressor == 1)
+      c = vtkSmartPointer<vtkZLibDataCompressor>::New();
+    else if (compressor == 2)
+      c = vtkSmartPointer<vtkLZ4DataCompressor>::New();
+    else
+      return -1;
+    vtkNew<ErrorCatcher> catcher;
+    catcher->watch(c);
+    size_t got = c->Uncompress(in, in_len, out, out_len);
+    return got == out_len && catcher->errors == 0 ? 0 : -1;
+  } catch (...) {
+    return -1;
+  }
+}
 
 /**
  * Write a network as VTK XML PolyData (.vtp) for ParaView.

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "io/input_internal.h"
 #include "karst/metrics.h"
 
 /* Columns of the published table and the key each one gives (docs/metrics.md). */
@@ -128,24 +129,9 @@ karst_error_t karst_metrics_observed_load(karst_ctx_t *ctx, const char *path,
     obs->n[k] = 0;
   }
   obs->n_caves = 0;
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
-  size_t cap = 0;
-  for (;;) {
-    if (len + 4096 > cap) {
-      cap = cap ? 2 * cap : 65536;
-      char *nb = realloc(buf, cap);
-      if (!nb) goto nomem;
-      buf = nb;
-    }
-    size_t got = fread(buf + len, 1, cap - len - 1, fp);
-    len += got;
-    if (got == 0) break;
-  }
-  if (ferror(fp)) {
-    err = karst_set_error(ctx, KARST_EIO, "%s: read error", path);
-    goto cleanup;
-  }
+  if ((err = karst_i_read_regular(ctx, path, "observed table", KARST_TABLE_MAX_BYTES,
+                                  (unsigned char **)&buf, &len)))
+    return err;
   rec = malloc(len + 1);
   if (!rec) goto nomem;
   int target[MAX_COLS]; /* field index of each column, -1 when unused */
@@ -221,6 +207,5 @@ cleanup:
   if (err) obs->n_caves = 0;
   free(buf);
   free(rec);
-  fclose(fp);
   return err;
 }

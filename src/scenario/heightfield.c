@@ -65,55 +65,6 @@ const char *karst_i_suggest(const char *word, const char *const *candidates, int
 }
 
 /* ------------------------------------------------------------------------ */
-/* Opening input files                                                      */
-/* ------------------------------------------------------------------------ */
-
-static const char *file_kind(mode_t m) {
-  if (S_ISDIR(m)) return "a directory";
-  if (S_ISFIFO(m)) return "a FIFO (named pipe)";
-  if (S_ISCHR(m)) return "a character device";
-  if (S_ISBLK(m)) return "a block device";
-  if (S_ISSOCK(m)) return "a socket";
-  return "not a regular file";
-}
-
-/* "64 MiB", "2 GiB" or a byte count. */
-static void size_text(long long bytes, char *buf, size_t sz) {
-  if (bytes >= (1LL << 30) && bytes % (1LL << 30) == 0)
-    snprintf(buf, sz, "%lld GiB", bytes >> 30);
-  else if (bytes >= (1LL << 20) && bytes % (1LL << 20) == 0)
-    snprintf(buf, sz, "%lld MiB", bytes >> 20);
-  else
-    snprintf(buf, sz, "%lld bytes", bytes);
-}
-
-karst_error_t karst_i_open_regular(karst_ctx_t *ctx, const char *path, const char *what,
-                                   long long max_bytes, FILE **fp) {
-  struct stat st;
-  char lim[32];
-  *fp = NULL;
-  if (stat(path, &st) != 0)
-    return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
-  if (!S_ISREG(st.st_mode))
-    return karst_set_error(ctx, KARST_EIO, "%s: is %s; the %s must be a regular file", path,
-                           file_kind(st.st_mode), what);
-  size_text(max_bytes, lim, sizeof lim);
-  if ((long long)st.st_size > max_bytes)
-    return karst_set_error(ctx, KARST_ERANGE,
-                           "%s: the %s file is %lld bytes, more than the limit of %s", path, what,
-                           (long long)st.st_size, lim);
-  FILE *f = fopen(path, "rb");
-  if (!f) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
-  /* The path may have been replaced between stat and fopen: check what was opened. */
-  if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
-    fclose(f);
-    return karst_set_error(ctx, KARST_EIO, "%s: the %s must be a regular file", path, what);
-  }
-  *fp = f;
-  return KARST_SUCCESS;
-}
-
-/* ------------------------------------------------------------------------ */
 /* File hash                                                                */
 /* ------------------------------------------------------------------------ */
 

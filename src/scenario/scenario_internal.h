@@ -4,6 +4,7 @@
 
 #include <stdio.h>
 
+#include "io/input_internal.h"
 #include "karst/scenario.h"
 
 /**
@@ -14,17 +15,8 @@
 karst_error_t karst_i_terrain_read_grid(karst_ctx_t *ctx, FILE *fp, const char *name,
                                         karst_terrain_t *t);
 
-/**
- * Open @p path for reading only when it is a regular file of at most
- * @p max_bytes bytes. The type is checked with stat() before opening, so a
- * FIFO is refused without blocking and /dev/zero without reading forever.
- * @p what names the file in messages ("scenario", "heightfield").
- * @return KARST_SUCCESS with *fp open, KARST_EIO (missing, unreadable, not a
- *         regular file) or KARST_ERANGE (too large); ctx->errmsg starts with
- *         "PATH: ".
- */
-karst_error_t karst_i_open_regular(karst_ctx_t *ctx, const char *path, const char *what,
-                                   long long max_bytes, FILE **fp);
+/* karst_i_open_regular(), the guarded opening of every input file, is in
+ * io/input_internal.h (shared by all readers of the library). */
 
 /**
  * Levenshtein distance between @p a and @p b, stopping early at @p cap + 1
