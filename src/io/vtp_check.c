@@ -36,6 +36,8 @@
 #define LZ4_MAX_RATIO 255
 /** Slack for tiny blocks whose container overhead exceeds their payload. */
 #define BLOCK_SLACK 64
+/** Block size always accepted (VTK writes 32 KiB blocks). */
+#define VTP_BLOCK_SIZE_FLOOR (16ULL << 20)
 
 enum { COMP_NONE = 0, COMP_ZLIB = 1, COMP_LZ4 = 2 };
 
@@ -483,6 +485,16 @@ static karst_error_t read_binary(vc_t *v, const velem_t *e, vsrc_t src, vdata_t 
     d->bytes += u;
   }
   free(raw);
+  /* The block size is also what VTK allocates for one block: some block must
+   * be able to produce it, or it stays within a small fixed allowance. */
+  uint64_t most = VTP_BLOCK_SIZE_FLOOR;
+  for (uint64_t i = 0; i < d->nb; i++)
+    if (ratio * d->csize[i] + BLOCK_SLACK > most) most = ratio * d->csize[i] + BLOCK_SLACK;
+  if (d->bs > most)
+    FAIL_EL(v, e, KARST_EPARSE,
+            "the compression header declares blocks of %" PRIu64
+            " bytes, more than its compressed blocks can produce",
+            d->bs);
   if (sum > total - d->data_off)
     FAIL_EL(v, e, KARST_EPARSE,
             "the compression header declares %" PRIu64 " compressed bytes; the file holds %" PRIu64,
