@@ -855,7 +855,7 @@ karst_error_t karst_i_vtp_check_buffer(karst_ctx_t *ctx, const char *name,
 karst_error_t karst_i_vtp_check(karst_ctx_t *ctx, const char *path) {
   unsigned char *data;
   size_t len;
-  karst_error_t err = karst_i_read_regular(ctx, path, "VTK PolyData", KARST_VTP_MAX_BYTES, &data, &len);
+  karst_error_t err = karst_i_read_regular(ctx, path, ".vtp", KARST_VTP_MAX_BYTES, &data, &len);
   if (err) return err;
   err = karst_i_vtp_check_buffer(ctx, path, data, len);
   free(data);
