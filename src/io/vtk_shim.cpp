@@ -60,6 +60,7 @@
 #include <vtkInformation.h>
 #include <vtkIntArray.h>
 #include <vtkLZ4DataCompressor.h>
+#include <vtkLZMADataCompressor.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -1016,7 +1017,7 @@ template <class F> karst_error_t guarded(karst_ctx_t *ctx, const char *path, F b
 
 /**
  * Decompress one block of a VTK XML file for the pre-check of vtp_check.c
- * (compressor 1: zlib, 2: LZ4), with VTK's own decompressors so that the
+ * (compressor 1: zlib, 2: LZ4, 3: LZMA), with VTK's own decompressors so that the
  * check decodes exactly what the reader will. @p out_len is the size the
  * block header declares (already bounded by the compressor's ratio).
  * @return 0 when the block decompresses to exactly @p out_len bytes.
@@ -1029,6 +1030,8 @@ extern "C" int karst_i_vtk_uncompress(int compressor, const unsigned char *in, s
       c = vtkSmartPointer<vtkZLibDataCompressor>::New();
     else if (compressor == 2)
       c = vtkSmartPointer<vtkLZ4DataCompressor>::New();
+    else if (compressor == 3)
+      c = vtkSmartPointer<vtkLZMADataCompressor>::New();
     else
       return -1;
     vtkNew<ErrorCatcher> catcher;

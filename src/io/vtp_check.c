@@ -7,7 +7,7 @@
  * as a compressed header says, and it dereferences NULL on some missing
  * elements. This file reads the subset of VTK XML that karst reads (one
  * VTKFile of type PolyData, its pieces and data arrays, inline or appended
- * data, raw or base64, zlib/LZ4 compressed or not) and checks every count the
+ * data, raw or base64, zlib/LZ4/LZMA compressed or not) and checks every count the
  * reader would act on against the bytes the file holds, so that a malformed
  * file ends in a message naming the file and the element, never in a crash,
  * a hang or a huge allocation.
@@ -31,15 +31,19 @@
 #define VTP_MAX_DEPTH 64
 /** Attributes per element read (VTK writes at most 8). */
 #define VTP_MAX_ATTRS 32
-/** Largest output of one input byte: deflate (zlib) at most 1032:1, LZ4 at most 255:1. */
+/** Largest output of one input byte: deflate (zlib) at most 1032:1 (zlib's FAQ), LZ4 at
+ * most 255:1 (a 255-byte length extension per input byte). LZMA's range coder, with 11-bit
+ * probabilities, spends at least about 0.3 bit on a 273-byte repeated match, about 7300:1;
+ * xz reaches 6781:1 on 64 MiB of zeros: 8192 bounds it. */
 #define ZLIB_MAX_RATIO 1032
 #define LZ4_MAX_RATIO 255
+#define LZMA_MAX_RATIO 8192
 /** Slack for tiny blocks whose container overhead exceeds their payload. */
 #define BLOCK_SLACK 64
 /** Block size always accepted (VTK writes 32 KiB blocks). */
 #define VTP_BLOCK_SIZE_FLOOR (16ULL << 20)
 
-enum { COMP_NONE = 0, COMP_ZLIB = 1, COMP_LZ4 = 2 };
+enum { COMP_NONE = 0, COMP_ZLIB = 1, COMP_LZ4 = 2, COMP_LZMA = 3 };
 
 typedef struct {
   size_t name, name_len, val, val_len;
@@ -470,7 +474,9 @@ static karst_error_t read_binary(vc_t *v, const velem_t *e, vsrc_t src, vdata_t 
   }
   d->data_off = (uint64_t)(3 * hs) + want;
   uint64_t sum = 0;
-  const uint64_t ratio = v->compressor == COMP_ZLIB ? ZLIB_MAX_RATIO : LZ4_MAX_RATIO;
+  const uint64_t ratio = v->compressor == COMP_ZLIB  ? ZLIB_MAX_RATIO
+                         : v->compressor == COMP_LZ4 ? LZ4_MAX_RATIO
+                                                     : LZMA_MAX_RATIO;
   for (uint64_t i = 0; i < d->nb; i++) {
     d->csize[i] = word(v, raw + i * (size_t)hs);
     uint64_t u = (i + 1 == d->nb && d->last) ? d->last : d->bs;
@@ -748,8 +754,12 @@ static karst_error_t check_piece(vc_t *v, int piece) {
   const velem_t *pe = &v->el[piece];
   karst_error_t err;
   uint64_t np, nc[4], ncells = 0;
-  /* At most one value per byte of the file, times the best compression ratio. */
-  const uint64_t cap = (uint64_t)v->len * ZLIB_MAX_RATIO + BLOCK_SLACK;
+  /* At most one value per byte of the file, times the best ratio of its compressor. */
+  const uint64_t ratio = v->compressor == COMP_NONE  ? 1
+                         : v->compressor == COMP_ZLIB ? ZLIB_MAX_RATIO
+                         : v->compressor == COMP_LZ4  ? LZ4_MAX_RATIO
+                                                      : LZMA_MAX_RATIO;
+  const uint64_t cap = (uint64_t)v->len * ratio + BLOCK_SLACK;
   if (attr_count(v, pe, "NumberOfPoints", 0, &np) < 0)
     FAIL_EL(v, pe, KARST_EPARSE, "NumberOfPoints is not a whole number");
   if (np > cap)
@@ -812,9 +822,12 @@ static karst_error_t check_structure(vc_t *v) {
       v->compressor = COMP_ZLIB;
     else if (attr_is(v, root, "compressor", "vtkLZ4DataCompressor"))
       v->compressor = COMP_LZ4;
+    else if (attr_is(v, root, "compressor", "vtkLZMADataCompressor"))
+      v->compressor = COMP_LZMA;
     else
       FAIL_EL(v, root, KARST_EUNSUPPORTED,
-              "compressor \"%.*s\" is not read (save the file uncompressed, with zlib or with LZ4)",
+              "compressor \"%.*s\" is not read (VTK writes vtkZLibDataCompressor, "
+              "vtkLZ4DataCompressor or vtkLZMADataCompressor)",
               (int)(n > 40 ? 40 : n), s);
   }
   v->version_major = 0;
