@@ -29,6 +29,8 @@ extern "C" {
 #define KARST_TABLE_MAX_BYTES (256LL << 20)
 /** JSON documents (ensemble.json, ...). */
 #define KARST_JSON_MAX_BYTES (256LL << 20)
+/** The largest cap of any reader (heightfield, TSurf, .vtp): for hashing an input file. */
+#define KARST_INPUT_MAX_BYTES (2LL << 30)
 
 /**
  * Open @p path for reading only when it is a regular file of at most

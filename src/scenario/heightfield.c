@@ -75,15 +75,16 @@ const char *karst_i_suggest(const char *word, const char *const *candidates, int
  * @param ctx  context for the error message
  * @param path file to hash
  * @param out  receives the 16 digits and a terminating NUL
- * @return KARST_SUCCESS, or KARST_EIO when the file cannot be read.
+ * @return KARST_SUCCESS, or KARST_EIO when the file cannot be read or is not a regular
+ *         file (karst_i_open_regular), KARST_ERANGE above KARST_INPUT_MAX_BYTES.
  * Time complexity: O(file size).
  */
 karst_error_t karst_file_hash(karst_ctx_t *ctx, const char *path, char out[17]) {
   karst_error_t err = KARST_SUCCESS;
   uint64_t h = 0xcbf29ce484222325ULL;
   unsigned char buf[65536];
-  FILE *fp = fopen(path, "rb");
-  if (!fp) return karst_set_error(ctx, KARST_EIO, "%s: cannot open: %s", path, strerror(errno));
+  FILE *fp;
+  if ((err = karst_i_open_regular(ctx, path, "input", KARST_INPUT_MAX_BYTES, &fp))) return err;
   size_t n;
   while ((n = fread(buf, 1, sizeof buf, fp)) > 0) {
     for (size_t i = 0; i < n; i++) {
