@@ -737,6 +737,8 @@ static karst_error_t check_cells(vc_t *v, int piece, int kind, uint64_t count) {
   if (count == 0) return KARST_SUCCESS;
   if (!oa.type->integral || oa.type->size <= 0)
     FAIL_EL(v, &v->el[offs], KARST_EPARSE, "offsets must be integers");
+  if (!ca.type->integral || ca.type->size <= 0)
+    FAIL_EL(v, &v->el[conn], KARST_EPARSE, "connectivity must be integers");
   if (oa.nc != 1 || ca.nc != 1)
     FAIL_EL(v, &v->el[oa.nc != 1 ? offs : conn], KARST_EPARSE, "cell arrays have one component");
   if (oa.values < need)
@@ -785,6 +787,8 @@ static karst_error_t check_piece(vc_t *v, int piece) {
     memset(&pa, 0, sizeof pa);
     pa.finite = 1;
     if ((err = check_array(v, &v->el[a], &pa))) return err;
+    if (pa.type->size <= 0)
+      FAIL_EL(v, &v->el[a], KARST_EPARSE, "points must be numbers, not %s", pa.type->name);
     if (pa.nc != 3) FAIL_EL(v, &v->el[a], KARST_EPARSE, "points have 3 components, not %" PRIu64, pa.nc);
     if ((err = check_counted(v, &v->el[a], 1, np, 1))) return err;
   }

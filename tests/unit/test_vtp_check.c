@@ -175,6 +175,17 @@ static void test_missing_elements(void **state) {
                           "</Lines>"),
                KARST_EPARSE, "<DataArray Name=\"offsets\">",
                "the last offset is 100000000000; the connectivity holds 3 values");
+  /* Arrays of the wrong kind where VTK expects numbers. */
+  expect_error(write_file("strpoints.vtp", "", PIECE,
+                          "        <DataArray type=\"String\" Name=\"Points\" "
+                          "NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 2 3 2 4 6</DataArray>",
+                          LINES),
+               KARST_EPARSE, "<DataArray Name=\"Points\">", "points must be numbers, not String");
+  expect_error(write_file("fconn.vtp", "", PIECE, ASCII_POINTS("0 0 0 1 2 3 2 4 6"),
+                          "      <Lines>\n        <DataArray type=\"Float32\" Name=\"connectivity\" "
+                          "format=\"ascii\">0 1 2</DataArray>\n        <DataArray type=\"Int64\" "
+                          "Name=\"offsets\" format=\"ascii\">3</DataArray>\n      </Lines>"),
+               KARST_EPARSE, "<DataArray Name=\"connectivity\">", "connectivity must be integers");
   /* Unclosed element (a file cut short). */
   snprintf(path, sizeof path, "%s/cut.vtp", dir);
   f = fopen(path, "w");
