@@ -218,8 +218,7 @@ karst_error_t karst_i_key_file(karst_ctx_t *ctx, const char *path, const char *w
   char *have = NULL;
   FILE *fp = NULL;
   struct stat kst; /* absent: created below; present: read through the guarded opening */
-  if (stat(path, &kst) == 0 &&
-      (err = karst_i_open_regular(ctx, path, "key", KEY_FILE_MAX, &fp)))
+  if (stat(path, &kst) == 0 && (err = karst_i_open_regular(ctx, path, "key", KEY_FILE_MAX, &fp)))
     return err;
   if (fp) {
     have = malloc(KEY_FILE_MAX);

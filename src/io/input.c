@@ -104,8 +104,10 @@ karst_error_t karst_i_read_regular(karst_ctx_t *ctx, const char *path, const cha
     if ((long long)n > max_bytes) {
       char lim[32];
       size_text(max_bytes, lim, sizeof lim);
-      err = karst_set_error(ctx, KARST_ERANGE, "%s: the %s file grew past the limit of %s while "
-                            "being read", path, what, lim);
+      err = karst_set_error(ctx, KARST_ERANGE,
+                            "%s: the %s file grew past the limit of %s while "
+                            "being read",
+                            path, what, lim);
       goto fail;
     }
     size_t ncap = cap * 2 > (size_t)max_bytes + 1 ? (size_t)max_bytes + 1 : cap * 2;

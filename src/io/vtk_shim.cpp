@@ -821,9 +821,10 @@ karst_error_t read_network(karst_ctx_t *ctx, const char *path, karst_network_t *
     double p[3];
     pd->GetPoint(i, p);
     if (!finite3(p)) {
-      err = karst_set_error(ctx, KARST_EPARSE,
-                            "%s: Points: point %" PRId64 " has a non-finite coordinate (%g, %g, %g)",
-                            path, i, p[0], p[1], p[2]);
+      err =
+          karst_set_error(ctx, KARST_EPARSE,
+                          "%s: Points: point %" PRId64 " has a non-finite coordinate (%g, %g, %g)",
+                          path, i, p[0], p[1], p[2]);
       goto cleanup;
     }
     if ((err = karst_network_add_node(&n, p[0], p[1], p[2], nullptr))) goto nomem;

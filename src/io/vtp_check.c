@@ -421,10 +421,10 @@ static uint64_t word(const vc_t *v, const unsigned char *b) {
 
 /* An array's data as VTK will decode it. */
 typedef struct {
-  uint64_t bytes;          /* uncompressed bytes the header declares (checked against the file) */
-  uint64_t nb, bs, last;   /* compressed: block count, block size, last block size */
-  uint64_t *csize;         /* compressed: size of each block */
-  uint64_t data_off;       /* offset of the data (uncompressed) or of block 0 in the source */
+  uint64_t bytes;        /* uncompressed bytes the header declares (checked against the file) */
+  uint64_t nb, bs, last; /* compressed: block count, block size, last block size */
+  uint64_t *csize;       /* compressed: size of each block */
+  uint64_t data_off;     /* offset of the data (uncompressed) or of block 0 in the source */
   vsrc_t src;
 } vdata_t;
 
@@ -442,8 +442,8 @@ static karst_error_t read_binary(vc_t *v, const velem_t *e, vsrc_t src, vdata_t 
     d->data_off = (uint64_t)hs;
     if (d->bytes > total - (size_t)hs)
       FAIL_EL(v, e, KARST_EPARSE,
-              "the binary header declares %" PRIu64 " bytes; the file holds %zu after it",
-              d->bytes, total - (size_t)hs);
+              "the binary header declares %" PRIu64 " bytes; the file holds %zu after it", d->bytes,
+              total - (size_t)hs);
     return KARST_SUCCESS;
   }
   if (src_read(&src, 0, h, (size_t)(3 * hs)) < (size_t)(3 * hs))
@@ -454,12 +454,15 @@ static karst_error_t read_binary(vc_t *v, const velem_t *e, vsrc_t src, vdata_t 
   uint64_t room = (total - (size_t)(3 * hs)) / (size_t)hs;
   if (d->nb > room)
     FAIL_EL(v, e, KARST_EPARSE,
-            "the compression header declares %" PRIu64 " blocks; the file could hold at most %" PRIu64,
+            "the compression header declares %" PRIu64
+            " blocks; the file could hold at most %" PRIu64,
             d->nb, room);
-  if (d->nb > 0 && d->bs == 0) FAIL_EL(v, e, KARST_EPARSE, "the compression header declares blocks of 0 bytes");
+  if (d->nb > 0 && d->bs == 0)
+    FAIL_EL(v, e, KARST_EPARSE, "the compression header declares blocks of 0 bytes");
   if (d->last > d->bs)
     FAIL_EL(v, e, KARST_EPARSE,
-            "the compression header's last block (%" PRIu64 " bytes) is larger than its blocks (%" PRIu64 ")",
+            "the compression header's last block (%" PRIu64
+            " bytes) is larger than its blocks (%" PRIu64 ")",
             d->last, d->bs);
   d->csize = malloc((size_t)(d->nb ? d->nb : 1) * sizeof *d->csize);
   unsigned char *raw = malloc((size_t)(d->nb ? d->nb : 1) * (size_t)hs);
@@ -557,10 +560,10 @@ typedef struct {
 } vtype_t;
 
 static const vtype_t types[] = {
-    {"Int8", 1, 1, 1},     {"UInt8", 1, 1, 0},    {"Int16", 2, 1, 1},    {"UInt16", 2, 1, 0},
-    {"Int32", 4, 1, 1},    {"UInt32", 4, 1, 0},   {"Int64", 8, 1, 1},    {"UInt64", 8, 1, 0},
-    {"Float32", 4, 0, 1},  {"Float64", 8, 0, 1},  {"String", -1, 0, 0},  {"Bit", 0, 1, 0},
-    {"Char", 1, 1, 1},     {"UChar", 1, 1, 0},    {"IdType", 8, 1, 1},
+    {"Int8", 1, 1, 1},    {"UInt8", 1, 1, 0},   {"Int16", 2, 1, 1},   {"UInt16", 2, 1, 0},
+    {"Int32", 4, 1, 1},   {"UInt32", 4, 1, 0},  {"Int64", 8, 1, 1},   {"UInt64", 8, 1, 0},
+    {"Float32", 4, 0, 1}, {"Float64", 8, 0, 1}, {"String", -1, 0, 0}, {"Bit", 0, 1, 0},
+    {"Char", 1, 1, 1},    {"UChar", 1, 1, 0},   {"IdType", 8, 1, 1},
 };
 
 /* What a DataArray holds: its values present and, on request, one integer. */
@@ -571,7 +574,7 @@ typedef struct {
   int want_at;     /* fetch the value at index `at` into `value` */
   uint64_t at;
   int64_t value;
-  int finite;      /* check ASCII values are finite numbers */
+  int finite; /* check ASCII values are finite numbers */
 } varr_t;
 
 static karst_error_t check_array(vc_t *v, const velem_t *e, varr_t *a) {
@@ -582,7 +585,8 @@ static karst_error_t check_array(vc_t *v, const velem_t *e, varr_t *a) {
   a->type = NULL;
   for (size_t i = 0; i < sizeof types / sizeof types[0]; i++)
     if (strlen(types[i].name) == n && memcmp(types[i].name, s, n) == 0) a->type = &types[i];
-  if (!a->type) FAIL_EL(v, e, KARST_EUNSUPPORTED, "unknown type \"%.*s\"", (int)(n > 40 ? 40 : n), s);
+  if (!a->type)
+    FAIL_EL(v, e, KARST_EUNSUPPORTED, "unknown type \"%.*s\"", (int)(n > 40 ? 40 : n), s);
   int r = attr_count(v, e, "NumberOfComponents", 1, &a->nc);
   if (r < 0) FAIL_EL(v, e, KARST_EPARSE, "NumberOfComponents is not a whole number");
   if (a->nc < 1 || a->nc > VTP_MAX_COMPONENTS)
@@ -625,8 +629,10 @@ static karst_error_t check_array(vc_t *v, const velem_t *e, varr_t *a) {
       src = (vsrc_t){v->s + e->text, e->text_len, 1};
     } else {
       uint64_t off;
-      if (!v->has_app) FAIL_EL(v, e, KARST_EPARSE, "format=\"appended\" but the file has no AppendedData");
-      if (attr_count(v, e, "offset", 0, &off) != 1) FAIL_EL(v, e, KARST_EPARSE, "no valid offset attribute");
+      if (!v->has_app)
+        FAIL_EL(v, e, KARST_EPARSE, "format=\"appended\" but the file has no AppendedData");
+      if (attr_count(v, e, "offset", 0, &off) != 1)
+        FAIL_EL(v, e, KARST_EPARSE, "no valid offset attribute");
       if (off >= v->app_len && !(off == 0 && v->app_len == 0))
         FAIL_EL(v, e, KARST_EPARSE, "offset %" PRIu64 " is past the %zu bytes of AppendedData", off,
                 v->app_len);
@@ -714,8 +720,8 @@ static karst_error_t check_cells(vc_t *v, int piece, int kind, uint64_t count) {
     FAIL_EL(v, pe, KARST_EPARSE, "more than one <%s>", cell_kinds[kind]);
   if (c < 0) {
     if (count > 0)
-      FAIL_EL(v, pe, KARST_EPARSE, "%s is %" PRIu64 " but the piece has no <%s>",
-              cell_counts[kind], count, cell_kinds[kind]);
+      FAIL_EL(v, pe, KARST_EPARSE, "%s is %" PRIu64 " but the piece has no <%s>", cell_counts[kind],
+              count, cell_kinds[kind]);
     return KARST_SUCCESS;
   }
   int conn = named_array(v, c, "connectivity"), offs = named_array(v, c, "offsets");
@@ -757,7 +763,7 @@ static karst_error_t check_piece(vc_t *v, int piece) {
   karst_error_t err;
   uint64_t np, nc[4], ncells = 0;
   /* At most one value per byte of the file, times the best ratio of its compressor. */
-  const uint64_t ratio = v->compressor == COMP_NONE  ? 1
+  const uint64_t ratio = v->compressor == COMP_NONE   ? 1
                          : v->compressor == COMP_ZLIB ? ZLIB_MAX_RATIO
                          : v->compressor == COMP_LZ4  ? LZ4_MAX_RATIO
                                                       : LZMA_MAX_RATIO;
@@ -777,10 +783,13 @@ static karst_error_t check_piece(vc_t *v, int piece) {
   }
   static const char *const once[] = {"PointData", "CellData", "Points"};
   for (int k = 0; k < 3; k++)
-    if (count_children(v, piece, once[k]) > 1) FAIL_EL(v, pe, KARST_EPARSE, "more than one <%s>", once[k]);
+    if (count_children(v, piece, once[k]) > 1)
+      FAIL_EL(v, pe, KARST_EPARSE, "more than one <%s>", once[k]);
   int pts = child(v, piece, "Points", piece);
   if (np > 0) {
-    if (pts < 0) FAIL_EL(v, pe, KARST_EPARSE, "NumberOfPoints is %" PRIu64 " but the piece has no <Points>", np);
+    if (pts < 0)
+      FAIL_EL(v, pe, KARST_EPARSE, "NumberOfPoints is %" PRIu64 " but the piece has no <Points>",
+              np);
     int a = child(v, pts, "DataArray", pts);
     if (a < 0) FAIL_EL(v, &v->el[pts], KARST_EPARSE, "no DataArray for the %" PRIu64 " points", np);
     varr_t pa;
@@ -789,7 +798,8 @@ static karst_error_t check_piece(vc_t *v, int piece) {
     if ((err = check_array(v, &v->el[a], &pa))) return err;
     if (pa.type->size <= 0)
       FAIL_EL(v, &v->el[a], KARST_EPARSE, "points must be numbers, not %s", pa.type->name);
-    if (pa.nc != 3) FAIL_EL(v, &v->el[a], KARST_EPARSE, "points have 3 components, not %" PRIu64, pa.nc);
+    if (pa.nc != 3)
+      FAIL_EL(v, &v->el[a], KARST_EPARSE, "points have 3 components, not %" PRIu64, pa.nc);
     if ((err = check_counted(v, &v->el[a], 1, np, 1))) return err;
   }
   for (int k = 0; k < 4; k++)

@@ -129,9 +129,10 @@ karst_error_t karst_metrics_observed_load(karst_ctx_t *ctx, const char *path,
     obs->n[k] = 0;
   }
   obs->n_caves = 0;
-  if ((err = karst_i_read_regular(ctx, path, "observed table", KARST_TABLE_MAX_BYTES,
-                                  (unsigned char **)&buf, &len)))
+  unsigned char *data;
+  if ((err = karst_i_read_regular(ctx, path, "observed table", KARST_TABLE_MAX_BYTES, &data, &len)))
     return err;
+  buf = (char *)data;
   rec = malloc(len + 1);
   if (!rec) goto nomem;
   int target[MAX_COLS]; /* field index of each column, -1 when unused */

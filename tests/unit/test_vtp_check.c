@@ -66,8 +66,8 @@ static const char *write_file(const char *name, const char *root_attrs, const ch
 
 #define PIECE "NumberOfPoints=\"3\" NumberOfLines=\"1\""
 #define LINES                                                                                      \
-  "      <Lines>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">0 1 "  \
-  "2</DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" "                           \
+  "      <Lines>\n        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">0 1 "   \
+  "2</DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" "                             \
   "format=\"ascii\">3</DataArray>\n      </Lines>"
 #define ZLIB64 "header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\""
 #define BIN_POINTS(data)                                                                           \
@@ -78,8 +78,7 @@ static const char *write_file(const char *name, const char *root_attrs, const ch
   "format=\"ascii\">" data "</DataArray>"
 
 /* Reading @p path must fail with @p code and a message holding the path and each of @p subs. */
-static void expect_error(const char *path, karst_error_t code, const char *sub1,
-                         const char *sub2) {
+static void expect_error(const char *path, karst_error_t code, const char *sub1, const char *sub2) {
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
   karst_network_t n;
@@ -181,11 +180,12 @@ static void test_missing_elements(void **state) {
                           "NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 2 3 2 4 6</DataArray>",
                           LINES),
                KARST_EPARSE, "<DataArray Name=\"Points\">", "points must be numbers, not String");
-  expect_error(write_file("fconn.vtp", "", PIECE, ASCII_POINTS("0 0 0 1 2 3 2 4 6"),
-                          "      <Lines>\n        <DataArray type=\"Float32\" Name=\"connectivity\" "
-                          "format=\"ascii\">0 1 2</DataArray>\n        <DataArray type=\"Int64\" "
-                          "Name=\"offsets\" format=\"ascii\">3</DataArray>\n      </Lines>"),
-               KARST_EPARSE, "<DataArray Name=\"connectivity\">", "connectivity must be integers");
+  expect_error(
+      write_file("fconn.vtp", "", PIECE, ASCII_POINTS("0 0 0 1 2 3 2 4 6"),
+                 "      <Lines>\n        <DataArray type=\"Float32\" Name=\"connectivity\" "
+                 "format=\"ascii\">0 1 2</DataArray>\n        <DataArray type=\"Int64\" "
+                 "Name=\"offsets\" format=\"ascii\">3</DataArray>\n      </Lines>"),
+      KARST_EPARSE, "<DataArray Name=\"connectivity\">", "connectivity must be integers");
   /* Unclosed element (a file cut short). */
   snprintf(path, sizeof path, "%s/cut.vtp", dir);
   f = fopen(path, "w");
@@ -214,7 +214,8 @@ static void test_counts(void **state) {
   expect_error(write_file("npoints2.vtp", "", "NumberOfPoints=\"1000000000\" NumberOfLines=\"1\"",
                           ASCII_POINTS("0 0 0 1 2 3 2 4 6"), LINES),
                KARST_ERANGE, "<Piece>", "NumberOfPoints is 1000000000, more than a");
-  expect_error(write_file("nlines.vtp", "", "NumberOfPoints=\"3\" NumberOfLines=\"99999999999999999\"",
+  expect_error(write_file("nlines.vtp", "",
+                          "NumberOfPoints=\"3\" NumberOfLines=\"99999999999999999\"",
                           ASCII_POINTS("0 0 0 1 2 3 2 4 6"), LINES),
                KARST_ERANGE, "<Piece>", "NumberOfLines is 99999999999999999, more than a");
 }
@@ -231,8 +232,8 @@ static void test_block_headers(void **state) {
   expect_error(write_file("uflip.vtp", "header_type=\"UInt32\"", PIECE, BIN_POINTS(U_FLIP), LINES),
                KARST_EPARSE, "<DataArray Name=\"Points\">",
                "declares 16777252 bytes; the file holds 36");
-  expect_error(write_file("notb64.vtp", ZLIB64, PIECE, BIN_POINTS("AQAA*AAA"), LINES),
-               KARST_EPARSE, "<DataArray Name=\"Points\">", "not valid base64");
+  expect_error(write_file("notb64.vtp", ZLIB64, PIECE, BIN_POINTS("AQAA*AAA"), LINES), KARST_EPARSE,
+               "<DataArray Name=\"Points\">", "not valid base64");
   expect_error(write_file("foo.vtp", "compressor=\"vtkFooDataCompressor\"", PIECE,
                           BIN_POINTS(Z_GOOD), LINES),
                KARST_EUNSUPPORTED, "<VTKFile>", "compressor \"vtkFooDataCompressor\" is not read");
@@ -248,7 +249,8 @@ static void test_block_headers(void **state) {
 static void test_inf(void **state) {
   (void)state;
   expect_error(write_file("inf.vtp", "", PIECE, ASCII_POINTS("0 0 0 1 2 inf 2 4 6"), LINES),
-               KARST_EPARSE, "<DataArray Name=\"Points\">", "value 5 ('inf') is not a finite number");
+               KARST_EPARSE, "<DataArray Name=\"Points\">",
+               "value 5 ('inf') is not a finite number");
   expect_error(write_file("huge.vtp", "", PIECE, ASCII_POINTS("0 0 0 1 2 3 2 4 1e999"), LINES),
                KARST_EPARSE, "<DataArray Name=\"Points\">", "value 8 ('1e999')");
 }
