@@ -163,9 +163,10 @@ static int run(int argc, char **argv) {
       have_seed = 1;
       i++;
     } else if (strcmp(a, "-j") == 0 || strcmp(a, "--threads") == 0) {
-      if (!more || cli_parse_int(argv[i + 1], &threads) || threads < 1)
-        return cli_usage_error("mesh", "%s needs a thread count >= 1, got '%s'", a,
-                               more ? argv[i + 1] : "");
+      if (!more || cli_parse_int(argv[i + 1], &threads) || threads < 1 ||
+          threads > KARST_ENSEMBLE_MAX_THREADS)
+        return cli_usage_error("mesh", "%s must be a whole number of threads within [1, %d], got '%s'",
+                               a, KARST_ENSEMBLE_MAX_THREADS, more ? argv[i + 1] : "");
       i++;
     } else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
       quiet = 1;
@@ -356,7 +357,7 @@ const cli_command_t cli_cmd_mesh = {
     "                 scenario's random.seed with --scenario, else 1)\n"
     "  --realisation N  realisation index: details and speleothems are drawn from the stream of\n"
     "                 (seed, N), as karst generate draws realisation N (default 0)\n"
-    "  -j THREADS     worker threads (default: all processors)\n"
+    "  -j THREADS     worker threads, 1 to 1024 (default: all processors)\n"
     "  --quiet        no progress bar and no summary line\n\n"
     "Beside the mesh, STEM.paraview.py (cave.paraview.py for cave.vtp) shows it and the --sdf\n"
     "field in ParaView with karst's colours, category names and units (karst view).\n"

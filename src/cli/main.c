@@ -1,4 +1,5 @@
 /* karst: git-style command dispatcher. Each subcommand lives in cmd_<name>.c. */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -111,5 +112,15 @@ int main(int argc, char **argv) {
       cli_print_help(c);
       return CLI_OK;
     }
-  return c->run(argc - 1, argv + 1);
+  int status = c->run(argc - 1, argv + 1);
+  /* Results printed on standard output that did not reach it (a full device, a closed pipe)
+   * are an error, not a success: every command's output is checked here, once. */
+  errno = 0;
+  if (fflush(stdout) != 0 || ferror(stdout)) {
+    int e = errno;
+    fprintf(stderr, "karst %s: writing standard output: %s\n", c->name,
+            e ? strerror(e) : "write error");
+    return CLI_ERROR;
+  }
+  return status;
 }

@@ -201,6 +201,17 @@ static void release_lock(int fd, char *path) {
   free(path);
 }
 
+karst_error_t karst_dir_lock(karst_ctx_t *ctx, const char *dir, const char *name, const char *what,
+                             karst_dir_lock_t *lock) {
+  return take_lock_named(ctx, dir, name, what, &lock->fd, &lock->path);
+}
+
+void karst_dir_unlock(karst_dir_lock_t *lock) {
+  release_lock(lock->fd, lock->path);
+  lock->fd = -1;
+  lock->path = NULL;
+}
+
 /* ------------------------------------------------------------------------ */
 /* The key file: a re-run into DIR must be the same scenario and seed.      */
 /* ------------------------------------------------------------------------ */
