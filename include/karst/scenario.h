@@ -588,6 +588,14 @@ karst_error_t karst_scenario_write_with_overrides(karst_ctx_t *ctx, const char *
 karst_error_t karst_scenario_value_text(karst_ctx_t *ctx, const char *path, const char *key,
                                         char *out, size_t size);
 
+/**
+ * The files scenario @p path reads besides itself (terrain.heightfield, surfaces of the
+ * terrain, water tables, horizons, strata ...), as paths usable from the working directory,
+ * into a new array *@p files of *@p n strings (free each and the array). Errors as
+ * karst_scenario_load.
+ */
+karst_error_t karst_scenario_files(karst_ctx_t *ctx, const char *path, char ***files, int *n);
+
 /** Check the cross-field rules (key points inside the domain and below the terrain, a spring
  * present ...). */
 karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc);

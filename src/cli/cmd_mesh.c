@@ -190,6 +190,14 @@ static int run(int argc, char **argv) {
   if (blocks && !carve)
     return cli_usage_error("mesh", "--blocks needs --carve (the blocks amplify the terrain)");
 
+  {
+    const char *inputs[2] = {in, scen_path};
+    const char *outputs[2] = {out, sdf_path};
+    for (int o = 0; o < 2; o++) {
+      int st = cli_refuse_output_over_input("mesh", outputs[o], inputs, 2);
+      if (st) return st;
+    }
+  }
   karst_ctx_t ctx;
   cli_ctx_init(&ctx, quiet, 0);
   if (threads > 0) ctx.nthreads = threads;
@@ -212,6 +220,20 @@ static int run(int argc, char **argv) {
   if (!script) {
     err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
     goto fail;
+  }
+  if (scen_path) { /* neither output may replace a file the scenario reads */
+    char **sfiles = NULL;
+    int nsf = 0, st = CLI_OK;
+    if ((err = karst_scenario_files(&ctx, scen_path, &sfiles, &nsf))) goto fail;
+    for (int o = 0; o < 2 && !st; o++)
+      st = cli_refuse_output_over_input("mesh", o ? sdf_path : out, (const char *const *)sfiles,
+                                        nsf);
+    for (int k = 0; k < nsf; k++) free(sfiles[k]);
+    free(sfiles);
+    if (st) {
+      status = st;
+      goto done;
+    }
   }
   if ((err = cli_add_output(&ctx, &outs, out, &tmp_out))) goto fail;
   if (sdf_path && (err = cli_add_output(&ctx, &outs, sdf_path, &tmp_sdf))) goto fail;

@@ -241,6 +241,11 @@ static int run(int argc, char **argv) {
     status = cli_usage_error("metrics", "no network file given");
     goto done;
   }
+  if ((status = cli_refuse_output_over_input("metrics", out_path, (const char *const *)files,
+                                             nfiles)) ||
+      (table_path &&
+       (status = cli_refuse_output_over_input("metrics", out_path, &table_path, 1))))
+    goto done;
   karst_ctx_t ctx;
   cli_ctx_init(&ctx, quiet, 0);
   if (nthreads > 0) ctx.nthreads = nthreads;
