@@ -63,6 +63,10 @@ typedef struct karst_ensemble_hooks {
  *  while karst_ensemble_run works in DIR (a second run into DIR fails with KARST_EBUSY) and
  *  removed when the run ends. */
 #define KARST_ENSEMBLE_LOCK_NAME ".ensemble.lock"
+/** The run log of an ensemble, DIR/ensemble_log.json: wall time, members computed and reused,
+ *  threads and ranks of the last run. Everything else (ensemble.json, metrics.csv, the members)
+ *  is reproducible: byte-identical whether the run was resumed or not. */
+#define KARST_ENSEMBLE_LOG_NAME "ensemble_log.json"
 /** The lock file `karst generate` holds in its output directory while it writes it (the same
  *  kind of lock as KARST_ENSEMBLE_LOCK_NAME: a second generate into DIR fails with KARST_EBUSY). */
 #define KARST_GENERATE_LOCK_NAME ".generate.lock"
