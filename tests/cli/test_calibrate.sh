@@ -137,7 +137,7 @@ same_outputs() { # A B: the calibration's files byte for byte (timings lines lef
   for f in posterior.csv generations.csv best.yaml report.html calibration.key best/metrics.csv; do
     cmp -s "$1/$f" "$2/$f" || { echo "differs: $f"; d=1; }
   done
-  for f in $(cd "$1" && find generations best/realisations -type f ! -name ensemble.json | sort); do
+  for f in $(cd "$1" && find generations best/realisations -type f ! -name ensemble_log.json | sort); do
     cmp -s "$1/$f" "$2/$f" || { echo "differs: $f"; d=1; }
   done
   diff <(grep -v '"timings"' "$1/calibration.json") <(grep -v '"timings"' "$2/calibration.json") >/dev/null || { echo "differs: calibration.json"; d=1; }

@@ -50,6 +50,9 @@ run 1 "validate --max-memory 1M refuses gorge" "$KARST" validate --max-memory 1M
 err_has "more than the limit of 1 MiB (--max-memory)"
 run 1 "generate --max-memory 1M refuses gorge" "$KARST" generate "$P" --max-memory 1M -o "$tmp/gm"
 [ -e "$tmp/gm" ] && { echo "FAIL: generate --max-memory 1M wrote $tmp/gm"; fail=1; }
+run 1 "ensemble --max-memory 1M refuses gorge" "$KARST" ensemble "$P" -n 2 --max-memory 1M -o "$tmp/em" -q
+err_has "more than the limit of 1 MiB"
+[ -e "$tmp/em" ] && { echo "FAIL: ensemble --max-memory 1M wrote $tmp/em"; fail=1; }
 run 0 "validate --max-memory 64G accepts gorge" "$KARST" validate --max-memory 64G "$P"
 grep -q "of memory" "$tmp/out" || { echo "FAIL: no estimate in the summary"; fail=1; }
 run 2 "--max-memory needs a size" "$KARST" validate --max-memory lots "$P"
@@ -66,6 +69,9 @@ run 1 "metrics > /dev/full" sh -c "'$KARST' metrics '$tmp/net/network.vtp' > /de
 err_has "karst metrics: writing standard output"
 run 1 "validate > /dev/full" sh -c "'$KARST' validate '$MIN' > /dev/full"
 err_has "karst validate: writing standard output"
+run 0 "ensemble of 3" "$KARST" ensemble "$MIN" -n 3 -o "$tmp/ens" -j 1 --seed 4 -q
+run 1 "compare > /dev/full" sh -c "'$KARST' compare '$tmp/ens' > /dev/full"
+err_has "karst compare: writing standard output"
 run 1 "help > /dev/full" sh -c "'$KARST' help generate > /dev/full"
 
 # -o naming an input is refused before any work (exit 2, as a usage error), the input unchanged;
@@ -81,6 +87,33 @@ err_has "is the input"
 (cd "$tmp" && run 2 "mesh -o ./IN" "$KARST" mesh in.vtp -o ./in.vtp)
 [ "$(cksum < "$tmp/in.vtp")" = "$sum" ] || { echo "FAIL: the input was changed"; fail=1; }
 [ -e "$tmp/in.paraview.py" ] && { echo "FAIL: mesh wrote its script"; fail=1; }
+sum=$(cksum < "$tmp/ens/metrics.csv")
+run 2 "compare -o the ensemble's metrics.csv" "$KARST" compare "$tmp/ens" -o "$tmp/ens/metrics.csv"
+err_has "is the input"
+[ "$(cksum < "$tmp/ens/metrics.csv")" = "$sum" ] || { echo "FAIL: metrics.csv was changed"; fail=1; }
+# mesh --scenario: -o naming a file the scenario reads (its terrain surface) is refused too.
+mkdir "$tmp/sc"
+printf 'domain:\n  min: [0, 0, 0]\n  max: [100, 100, 50]\nterrain:\n  heightfield: hill.asc\nkey_points:\n  - {type: sink, position: [10, 10, 40]}\n  - {type: spring, position: [90, 90, 10]}\n' > "$tmp/sc/s.yaml"
+printf 'ncols 3\nnrows 3\nxllcorner -50\nyllcorner -50\ncellsize 100\nNODATA_value -9999\n50 50 50\n50 50 50\n50 50 50\n' > "$tmp/sc/hill.asc"
+ln -s hill.asc "$tmp/sc/hill.vtp"  # a name mesh accepts, for the scenario's file
+sum=$(cksum < "$tmp/sc/hill.asc")
+run 0 "the heightfield scenario validates" "$KARST" validate "$tmp/sc/s.yaml"
+run 2 "mesh -o a file the scenario reads" "$KARST" mesh "$tmp/in.vtp" --scenario "$tmp/sc/s.yaml" -o "$tmp/sc/hill.vtp"
+err_has "is the input $tmp/sc/hill.asc"
+[ "$(cksum < "$tmp/sc/hill.asc")" = "$sum" ] || { echo "FAIL: the heightfield was changed"; fail=1; }
+
+# ensemble.json is reproducible: a resumed ensemble (a member deleted, the same command again)
+# holds the same bytes as the uninterrupted one in every file but the run log ensemble_log.json,
+# which says what was reused.
+cp -r "$tmp/ens" "$tmp/ens2"
+rm -rf "$tmp/ens2/realisations/0001" "$tmp/ens2/metrics.csv"
+run 0 "resume the ensemble" "$KARST" ensemble "$MIN" -n 3 -o "$tmp/ens2" -j 1 --seed 4 -q
+for f in $(cd "$tmp/ens" && find . -type f ! -name ensemble_log.json); do
+  cmp -s "$tmp/ens/$f" "$tmp/ens2/$f" || { echo "FAIL: resumed $f differs"; fail=1; }
+done
+grep -q '"reused": 2,' "$tmp/ens2/ensemble_log.json" && grep -q '"computed": 1,' "$tmp/ens2/ensemble_log.json" ||
+  { echo "FAIL: ensemble_log.json of the resumed run: $(cat "$tmp/ens2/ensemble_log.json")"; fail=1; }
+grep -q wall_seconds "$tmp/ens/ensemble.json" && { echo "FAIL: ensemble.json holds the run log"; fail=1; }
 
 # generate locks its directory: while this shell holds DIR/.generate.lock (flock(1) takes the
 # same flock(2) lock as a running generate), a generate into DIR is refused and DIR's files stay as they were.
