@@ -86,6 +86,16 @@ static int print_version(void) {
   return CLI_OK;
 }
 
+/* Results printed on standard output that did not reach it (a full device, a closed pipe) are
+ * an error, not a success: every command's output is checked here, once, at exit. */
+static int stdout_status(const char *cmd) {
+  errno = 0;
+  if (fflush(stdout) == 0 && !ferror(stdout)) return CLI_OK;
+  int e = errno;
+  fprintf(stderr, "karst %s: writing standard output: %s\n", cmd, e ? strerror(e) : "write error");
+  return CLI_ERROR;
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     print_main_help(stderr);
@@ -93,9 +103,12 @@ int main(int argc, char **argv) {
   }
   if (cli_is_help(argv[1])) {
     print_main_help(stdout);
-    return CLI_OK;
+    return stdout_status("help");
   }
-  if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) return print_version();
+  if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) {
+    int status = print_version();
+    return status ? status : stdout_status("version");
+  }
   const cli_command_t *c = cli_find_command(argv[1]);
   if (!c) {
     if (argv[1][0] == '-')
@@ -110,17 +123,9 @@ int main(int argc, char **argv) {
   for (int i = 2; i < argc; i++)
     if (cli_is_help(argv[i])) {
       cli_print_help(c);
-      return CLI_OK;
+      return stdout_status(c->name);
     }
   int status = c->run(argc - 1, argv + 1);
-  /* Results printed on standard output that did not reach it (a full device, a closed pipe)
-   * are an error, not a success: every command's output is checked here, once. */
-  errno = 0;
-  if (fflush(stdout) != 0 || ferror(stdout)) {
-    int e = errno;
-    fprintf(stderr, "karst %s: writing standard output: %s\n", c->name,
-            e ? strerror(e) : "write error");
-    return CLI_ERROR;
-  }
-  return status;
+  int out = stdout_status(c->name);
+  return out ? out : status;
 }

@@ -73,6 +73,8 @@ run 0 "ensemble of 3" "$KARST" ensemble "$MIN" -n 3 -o "$tmp/ens" -j 1 --seed 4 
 run 1 "compare > /dev/full" sh -c "'$KARST' compare '$tmp/ens' > /dev/full"
 err_has "karst compare: writing standard output"
 run 1 "help > /dev/full" sh -c "'$KARST' help generate > /dev/full"
+run 1 "--version > /dev/full" sh -c "'$KARST' --version > /dev/full"
+run 1 "generate --help > /dev/full" sh -c "'$KARST' generate --help > /dev/full"
 
 # -o naming an input is refused before any work (exit 2, as a usage error), the input unchanged;
 # a symlink and a ./path name the same file.
