@@ -10,8 +10,8 @@
  * at feature_radius. */
 #include <math.h>
 #include <stdarg.h>
-#include <stdlib.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -45,8 +45,7 @@ void karst_budget_estimate(const karst_scenario_t *sc, int threads, karst_budget
   b->samples = fmin(b->samples_needed, cap);
   double k = fmin((double)sp->k, fmax(b->samples - 1, 0));
   b->edges = b->samples * k;
-  b->amplification_points =
-      karst_amplification_points_total(&sc->amplification, INFINITY, NULL);
+  b->amplification_points = karst_amplification_points_total(&sc->amplification, INFINITY, NULL);
   for (int g = 0; g < sc->n_generations; g++)
     b->amplification_points +=
         karst_amplification_points_total(&sc->generations[g].amplification, INFINITY, NULL);
@@ -92,11 +91,28 @@ int karst_budget_parse_size(const char *s, double *bytes) {
   if (end == s || !isfinite(v) || !(v > 0)) return -1;
   double unit = 1;
   switch (*end) {
-  case 'k': case 'K': unit = 1024.0; end++; break;
-  case 'm': case 'M': unit = 1024.0 * 1024; end++; break;
-  case 'g': case 'G': unit = 1024.0 * 1024 * 1024; end++; break;
-  case 't': case 'T': unit = 1024.0 * 1024 * 1024 * 1024; end++; break;
-  default: break;
+  case 'k':
+  case 'K':
+    unit = 1024.0;
+    end++;
+    break;
+  case 'm':
+  case 'M':
+    unit = 1024.0 * 1024;
+    end++;
+    break;
+  case 'g':
+  case 'G':
+    unit = 1024.0 * 1024 * 1024;
+    end++;
+    break;
+  case 't':
+  case 'T':
+    unit = 1024.0 * 1024 * 1024 * 1024;
+    end++;
+    break;
+  default:
+    break;
   }
   if (unit > 1 && *end == 'i') end++;
   if (*end == 'B' || *end == 'b') end++;
@@ -130,9 +146,8 @@ static karst_error_t refuse(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_
   vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
   if (!sc->path) return karst_set_error(ctx, KARST_ERANGE, "%s", msg);
-  return karst_set_error(ctx, KARST_ERANGE, "%s:%d:%d: %s", sc->path,
-                         pos.line > 0 ? pos.line : 1, pos.line > 0 && pos.column > 0 ? pos.column : 1,
-                         msg);
+  return karst_set_error(ctx, KARST_ERANGE, "%s:%d:%d: %s", sc->path, pos.line > 0 ? pos.line : 1,
+                         pos.line > 0 && pos.column > 0 ? pos.column : 1, msg);
 }
 
 karst_error_t karst_budget_check(karst_ctx_t *ctx, const karst_scenario_t *sc, int threads,
@@ -149,8 +164,7 @@ karst_error_t karst_budget_check(karst_ctx_t *ctx, const karst_scenario_t *sc, i
   /* A sample count no run could reach: sampling would refuse it after allocating its grids
    * (or overflow them); refuse it here, where the key is known. */
   double cap = (double)sc->sampling.max_samples;
-  if (!isfinite(b.samples_needed) || b.samples_needed > 1e15 ||
-      (b.samples_needed > 1000 * cap)) {
+  if (!isfinite(b.samples_needed) || b.samples_needed > 1e15 || (b.samples_needed > 1000 * cap)) {
     int feat = b.feature_samples > b.fill_samples;
     karst_srcpos_t pos = feat ? sc->pos_feature_radius : sc->pos_fill_radius;
     if (!pos.line) pos = sc->pos_domain;

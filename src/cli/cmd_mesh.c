@@ -165,8 +165,9 @@ static int run(int argc, char **argv) {
     } else if (strcmp(a, "-j") == 0 || strcmp(a, "--threads") == 0) {
       if (!more || cli_parse_int(argv[i + 1], &threads) || threads < 1 ||
           threads > KARST_ENSEMBLE_MAX_THREADS)
-        return cli_usage_error("mesh", "%s must be a whole number of threads within [1, %d], got '%s'",
-                               a, KARST_ENSEMBLE_MAX_THREADS, more ? argv[i + 1] : "");
+        return cli_usage_error("mesh",
+                               "%s must be a whole number of threads within [1, %d], got '%s'", a,
+                               KARST_ENSEMBLE_MAX_THREADS, more ? argv[i + 1] : "");
       i++;
     } else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
       quiet = 1;
@@ -228,7 +229,8 @@ static int run(int argc, char **argv) {
     for (int o = 0; o < 2 && !st; o++)
       st = cli_refuse_output_over_input("mesh", o ? sdf_path : out, (const char *const *)sfiles,
                                         nsf);
-    for (int k = 0; k < nsf; k++) free(sfiles[k]);
+    for (int k = 0; k < nsf; k++)
+      free(sfiles[k]);
     free(sfiles);
     if (st) {
       status = st;

@@ -224,8 +224,9 @@ static int run(int argc, char **argv) {
     } else if (strcmp(a, "--threads") == 0 || strcmp(a, "-j") == 0) {
       if (++i >= argc || cli_parse_int(argv[i], &nthreads) || nthreads < 1 ||
           nthreads > KARST_ENSEMBLE_MAX_THREADS) {
-        status = cli_usage_error("metrics", "%s must be a whole number of threads within [1, %d], got '%s'",
-                                 a, KARST_ENSEMBLE_MAX_THREADS, i < argc ? argv[i] : "");
+        status = cli_usage_error("metrics",
+                                 "%s must be a whole number of threads within [1, %d], got '%s'", a,
+                                 KARST_ENSEMBLE_MAX_THREADS, i < argc ? argv[i] : "");
         goto done;
       }
     } else if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
@@ -241,10 +242,9 @@ static int run(int argc, char **argv) {
     status = cli_usage_error("metrics", "no network file given");
     goto done;
   }
-  if ((status = cli_refuse_output_over_input("metrics", out_path, (const char *const *)files,
-                                             nfiles)) ||
-      (table_path &&
-       (status = cli_refuse_output_over_input("metrics", out_path, &table_path, 1))))
+  if ((status =
+           cli_refuse_output_over_input("metrics", out_path, (const char *const *)files, nfiles)) ||
+      (table_path && (status = cli_refuse_output_over_input("metrics", out_path, &table_path, 1))))
     goto done;
   karst_ctx_t ctx;
   cli_ctx_init(&ctx, quiet, 0);

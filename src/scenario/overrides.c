@@ -711,7 +711,8 @@ karst_error_t karst_scenario_files(karst_ctx_t *ctx, const char *path, char ***f
       snprintf(v[i], len, "%s/%s", dir, name);
   }
   if (err) {
-    for (int i = 0; v && i < set.n_files; i++) free(v[i]);
+    for (int i = 0; v && i < set.n_files; i++)
+      free(v[i]);
     free(v);
   } else {
     *files = v;

@@ -78,7 +78,7 @@ static void test_check_refuses(void **state) {
   /* 1 MiB: refused with the file, the estimate and the limit */
   assert_int_equal(karst_budget_check(&ctx, &sc, 1, 1024.0 * 1024, NULL), KARST_ERANGE);
   assert_non_null(strstr(ctx.errmsg, MINIMAL ":1:1: sampling.k: the run needs an "
-                                     "estimated 125 MiB of memory"));
+                                             "estimated 125 MiB of memory"));
   assert_non_null(strstr(ctx.errmsg, "more than the limit of 1 MiB"));
   /* a domain whose volume overflows, and more steps than any hierarchy */
   sc.domain_max[0] = sc.domain_max[1] = 1e300;
