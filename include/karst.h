@@ -12,6 +12,7 @@
 
 #include "karst/amplification.h"
 #include "karst/arrays.h"
+#include "karst/budget.h"
 #include "karst/calibrate.h"
 #include "karst/classification.h"
 #include "karst/common.h"

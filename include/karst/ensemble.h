@@ -63,6 +63,29 @@ typedef struct karst_ensemble_hooks {
  *  while karst_ensemble_run works in DIR (a second run into DIR fails with KARST_EBUSY) and
  *  removed when the run ends. */
 #define KARST_ENSEMBLE_LOCK_NAME ".ensemble.lock"
+/** The run log of an ensemble, DIR/ensemble_log.json: wall time, members computed and reused,
+ *  threads and ranks of the last run. Everything else (ensemble.json, metrics.csv, the members)
+ *  is reproducible: byte-identical whether the run was resumed or not. */
+#define KARST_ENSEMBLE_LOG_NAME "ensemble_log.json"
+/** The lock file `karst generate` holds in its output directory while it writes it (the same
+ *  kind of lock as KARST_ENSEMBLE_LOCK_NAME: a second generate into DIR fails with KARST_EBUSY). */
+#define KARST_GENERATE_LOCK_NAME ".generate.lock"
+
+/** A held directory lock (karst_dir_lock); fd -1 when none. */
+typedef struct karst_dir_lock {
+  int fd;
+  char *path;
+} karst_dir_lock_t;
+/**
+ * Take the exclusive, non-blocking flock(2) of DIR/@p name (created, holding this process's
+ * id), the lock of karst_ensemble_run; KARST_EBUSY, with a message naming DIR, the other
+ * "karst @p what" and its pid, when another process holds it. Released (and unlinked) by
+ * karst_dir_unlock, or when the process dies. O(1).
+ */
+karst_error_t karst_dir_lock(karst_ctx_t *ctx, const char *dir, const char *name, const char *what,
+                             karst_dir_lock_t *lock);
+/** Release a lock taken by karst_dir_lock (unlinks its file); a lock with fd -1 is left. */
+void karst_dir_unlock(karst_dir_lock_t *lock);
 
 /** How to run an ensemble. */
 typedef struct karst_ensemble_options {

@@ -503,6 +503,9 @@ typedef struct karst_scenario {
   karst_srcpos_t pos_water_table;      /**< the water_table map */
   karst_srcpos_t pos_key_points;       /**< the key_points list */
   karst_srcpos_t pos_sampling;         /**< the sampling map */
+  /* Where the keys behind the resource estimate were given (include/karst/budget.h). */
+  karst_srcpos_t pos_fill_radius, pos_feature_radius, pos_k, pos_max_samples;
+  karst_srcpos_t pos_amplification_steps, pos_amplification_points;
   karst_geometry_t geometry;           /**< `karst mesh`: blending, wall details, speleothems */
   struct karst_blocks_section *blocks; /**< the blocks section (karst blocks), NULL when absent */
   /** The coordinate reference system of every coordinate of the file (crs:, docs/scenario.md,
@@ -584,6 +587,14 @@ karst_error_t karst_scenario_write_with_overrides(karst_ctx_t *ctx, const char *
  */
 karst_error_t karst_scenario_value_text(karst_ctx_t *ctx, const char *path, const char *key,
                                         char *out, size_t size);
+
+/**
+ * The files scenario @p path reads besides itself (terrain.heightfield, surfaces of the
+ * terrain, water tables, horizons, strata ...), as paths usable from the working directory,
+ * into a new array *@p files of *@p n strings (free each and the array). Errors as
+ * karst_scenario_load.
+ */
+karst_error_t karst_scenario_files(karst_ctx_t *ctx, const char *path, char ***files, int *n);
 
 /** Check the cross-field rules (key points inside the domain and below the terrain, a spring
  * present ...). */

@@ -48,6 +48,11 @@ void cli_note_failed_output(karst_ctx_t *ctx, karst_error_t err, const char *out
  * renamed on commit; the temporary keeps the extension). */
 karst_error_t cli_add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
                              const char **tmp);
+/* When @p out names the same file as one of the @p n inputs (by device and inode, so symlinks
+ * and ./paths count), print "karst CMD: -o OUT is the input IN; it would be replaced" and
+ * return CLI_USAGE, before any work; CLI_OK otherwise (also when OUT does not exist yet). */
+int cli_refuse_output_over_input(const char *cmd, const char *out, const char *const *inputs,
+                                 int n);
 /* Print a usage error and the command's usage line; returns CLI_USAGE. */
 int cli_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Look up a command by name (NULL if none). */

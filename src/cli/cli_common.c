@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -238,4 +239,17 @@ karst_error_t cli_add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char
   err = karst_fileset_add(ctx, outs, path, t, tmp);
   free(t);
   return err;
+}
+
+int cli_refuse_output_over_input(const char *cmd, const char *out, const char *const *inputs,
+                                 int n) {
+  struct stat so, si;
+  if (!out || stat(out, &so) != 0) return CLI_OK;
+  for (int i = 0; i < n; i++)
+    if (inputs[i] && stat(inputs[i], &si) == 0 && si.st_dev == so.st_dev && si.st_ino == so.st_ino)
+      return cli_usage_error(cmd,
+                             "-o %s is the input %s; it would be replaced (write the output "
+                             "elsewhere)",
+                             out, inputs[i]);
+  return CLI_OK;
 }

@@ -53,9 +53,11 @@ static int run(int argc, char **argv) {
       resized = 1;
       i++;
     } else if (!strcmp(a, "-j") || !strcmp(a, "--threads")) {
-      if (!more || cli_parse_int(argv[i + 1], &threads) || threads < 1)
-        return cli_usage_error("blocks", "%s needs a thread count >= 1, got '%s'", a,
-                               more ? argv[i + 1] : "");
+      if (!more || cli_parse_int(argv[i + 1], &threads) || threads < 1 ||
+          threads > KARST_ENSEMBLE_MAX_THREADS)
+        return cli_usage_error("blocks",
+                               "%s must be a whole number of threads within [1, %d], got '%s'", a,
+                               KARST_ENSEMBLE_MAX_THREADS, more ? argv[i + 1] : "");
       i++;
     } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
       quiet = 1;
@@ -295,6 +297,7 @@ const cli_command_t cli_cmd_blocks = {
     "                 metres (default 0.69: about 14 500 points in 20 m)\n"
     "  --voxel H      polygonization step in metres (default: blocks.tile_voxel and\n"
     "                 blocks.voxel of the scenario, 0.25 for --tile)\n"
-    "  -j THREADS     worker threads (default: all processors); the output does not depend on it\n"
+    "  -j THREADS     worker threads, 1 to 1024 (default: all processors); the output does not\n"
+    "                 depend on it\n"
     "  --quiet        no progress and no summary\n\n"
     "The method and its departures from the paper are described in docs/blocks.md.\n"};

@@ -46,6 +46,7 @@ static int run(int argc, char **argv) {
   int n_metrics = 0;
   karst_calibrate_param_t params[KARST_CALIBRATE_MAX_PARAMS];
   int n_params = 0, threads = 0, quiet = 0, status = CLI_OK, have_seed = 0;
+  double max_memory = 0;
   uint64_t seed = 0;
   karst_calibrate_options_t opt;
   karst_calibrate_options_init(&opt);
@@ -112,6 +113,11 @@ static int run(int argc, char **argv) {
         return cli_usage_error("calibrate",
                                "-j must be a whole number of threads within [1, %d], got '%s'",
                                KARST_ENSEMBLE_MAX_THREADS, argv[i]);
+    } else if (strcmp(a, "--max-memory") == 0) {
+      if (!more || karst_budget_parse_size(argv[++i], &max_memory))
+        return cli_usage_error("calibrate",
+                               "--max-memory needs a size such as 512M or 8G, got '%s'",
+                               more ? argv[i] : "");
     } else if (strcmp(a, "--seed") == 0 && more) {
       if (cli_parse_u64(argv[++i], &seed))
         return cli_usage_error("calibrate",
@@ -160,6 +166,8 @@ static int run(int argc, char **argv) {
   /* A broken scenario is an error of the file (exit 1); a --vary key it does not have, or
    * that holds no number, is a usage error (exit 2). */
   err = karst_scenario_load(&ctx, scenario, &sc);
+  /* the scenario as the file gives it, before any simulation (the check of karst generate) */
+  if (!err) err = karst_budget_check(&ctx, &sc, 1, max_memory, NULL);
   if (err) {
     status = cli_fail("calibrate", &ctx, err);
     goto cleanup;
@@ -218,7 +226,8 @@ const cli_command_t cli_cmd_calibrate = {
     "usage: karst calibrate SCENARIO.yaml --survey FILE --vary KEY=LO:HI[:log] [--vary ...]\n"
     "                       -o DIR [--metrics LIST] [--particles N] [--alpha A]\n"
     "                       [--generations G] [--min-acceptance P] [--best-members M]\n"
-    "                       [--published CSV] [-j THREADS] [--seed S] [--quiet]\n\n"
+    "                       [--published CSV] [-j THREADS] [--seed S]\n"
+    "                       [--max-memory SIZE] [--quiet]\n\n"
     "Fits the varied scenario keys so that the generated networks' metrics match the survey's,\n"
     "by approximate Bayesian computation with sequential Monte Carlo: the adaptive population\n"
     "Monte Carlo ABC of Lenormand, Jabot & Deffuant (2013) with the weights and Gaussian\n"
@@ -241,6 +250,9 @@ const cli_command_t cli_cmd_calibrate = {
     "                     0: none)\n"
     "  --published CSV    the table of the 34 caves (default: datasets/published_metrics.csv)\n"
     "  -j THREADS         worker threads, 1 to 1024 (default: the number of processors)\n"
+    "  --max-memory SIZE  refuse, before any simulation, a scenario (as the file gives it) that\n"
+    "                     needs more memory than SIZE by the estimate of karst validate (e.g.\n"
+    "                     512M, 8G; default: the machine's memory)\n"
     "  --seed S           base seed (default: random.seed of the scenario)\n"
     "  --quiet            no progress display\n\n"
     "Writes DIR/posterior.csv (the population of every generation: values, weights,\n"

@@ -70,6 +70,13 @@ static int run(int argc, char **argv) {
     goto cleanup;
   }
   snprintf(mpath, len, "%s/metrics.csv", dir);
+  if (outpath) { /* -o must not replace an input (the ensemble's table, a survey, --published) */
+    const char *ins[2] = {mpath, published};
+    if ((status = cli_refuse_output_over_input("compare", outpath, ins, 2)) ||
+        (status = cli_refuse_output_over_input("compare", outpath, (const char *const *)surveys,
+                                               n_surveys)))
+      goto cleanup;
+  }
   err = karst_ensemble_table_read(&ctx, mpath, &table);
   if (!err && published) snprintf(pubpath, sizeof pubpath, "%s", published);
   if (!err && !published) err = karst_published_locate(&ctx, pubpath, sizeof pubpath);

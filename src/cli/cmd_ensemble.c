@@ -10,6 +10,7 @@ static int run(int argc, char **argv) {
   const char *scenario = NULL, *out = NULL;
   uint64_t seed = 0, n = 0;
   int have_seed = 0, have_n = 0, threads = 0, quiet = 0, status = CLI_OK;
+  double max_memory = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     int more = i + 1 < argc;
@@ -34,6 +35,10 @@ static int run(int argc, char **argv) {
                                "--seed must be an integer from 0 to 18446744073709551615, got '%s'",
                                argv[i]);
       have_seed = 1;
+    } else if (strcmp(a, "--max-memory") == 0) {
+      if (!more || karst_budget_parse_size(argv[++i], &max_memory))
+        return cli_usage_error("ensemble", "--max-memory needs a size such as 512M or 8G, got '%s'",
+                               more ? argv[i] : "");
     } else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
       quiet = 1;
     } else if (a[0] == '-' && a[1] != '\0') {
@@ -66,6 +71,8 @@ static int run(int argc, char **argv) {
 
   err = karst_scenario_load(&ctx, scenario, &sc);
   if (!err) err = karst_file_hash(&ctx, scenario, hash);
+  /* one member's estimate, before any member runs (the check of karst generate) */
+  if (!err) err = karst_budget_check(&ctx, &sc, 1, max_memory, NULL);
   if (err) {
     status = cli_fail("ensemble", &ctx, err);
     goto cleanup;
@@ -111,7 +118,8 @@ cleanup:
 
 const cli_command_t cli_cmd_ensemble = {
     "ensemble", run, "generate an ensemble of realisations (resumable, threads, MPI)",
-    "usage: karst ensemble SCENARIO.yaml -n N -o DIR [-j THREADS] [--seed S] [--quiet]\n\n"
+    "usage: karst ensemble SCENARIO.yaml -n N -o DIR [-j THREADS] [--seed S]\n"
+    "                      [--max-memory SIZE] [--quiet]\n\n"
     "Generates N realisations of the scenario. Realisation i uses only the seed derived from\n"
     "(S, i) (column 'seed' of metrics.csv; `karst generate --seed` with it reproduces the\n"
     "member), so every file is the same whatever -j or the number of MPI processes.\n\n"
@@ -119,11 +127,15 @@ const cli_command_t cli_cmd_ensemble = {
     "  -o DIR        output directory\n"
     "  -j THREADS    worker threads, 1 to 1024 (default: the number of processors)\n"
     "  --seed S      base seed (default: random.seed of the scenario)\n"
+    "  --max-memory SIZE  refuse, before any work, a scenario one member of which needs more\n"
+    "                memory than SIZE by the estimate of karst validate (e.g. 512M, 8G;\n"
+    "                default: the machine's memory)\n"
     "  --quiet       no progress display\n\n"
     "Writes DIR/realisations/NNNN/{network.vtp,network_nodes.dat,network_links.dat,metrics.csv},\n"
     "DIR/ensemble.pvd (open in ParaView and step through the members), DIR/metrics.csv (one row\n"
     "per realisation: index, seed, every metric of `karst metrics`) and DIR/ensemble.json\n"
-    "(scenario hash, parameters, N, timings).\n\n"
+    "(scenario hash, parameters, N: byte-identical for a resumed run), DIR/ensemble_log.json\n"
+    "(wall time, members computed and reused, threads, ranks of the last run).\n\n"
     "Interrupting (Ctrl-C, kill) loses nothing: finished realisations are kept, unfinished ones\n"
     "leave no file; running the same command again computes only the missing ones.\n"
     "One run at a time per DIR: a second one is refused while DIR/.ensemble.lock is held.\n\n"

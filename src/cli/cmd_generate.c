@@ -17,6 +17,7 @@ static int run(int argc, char **argv) {
   const char *scenario = NULL, *outdir = NULL;
   uint64_t seed = 0;
   int have_seed = 0, want_samples = 0, quiet = 0, verbose = 0, threads = 0;
+  double max_memory = 0;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i];
     if (cli_is_help(a)) {
@@ -32,8 +33,15 @@ static int run(int argc, char **argv) {
                                i < argc ? argv[i] : "");
       have_seed = 1;
     } else if (strcmp(a, "--threads") == 0) {
-      if (++i >= argc || cli_parse_int(argv[i], &threads) || threads < 1)
-        return cli_usage_error("generate", "--threads needs an integer >= 1, got '%s'",
+      if (++i >= argc || cli_parse_int(argv[i], &threads) || threads < 1 ||
+          threads > KARST_ENSEMBLE_MAX_THREADS)
+        return cli_usage_error("generate",
+                               "--threads must be a whole number of threads within [1, %d], got "
+                               "'%s'",
+                               KARST_ENSEMBLE_MAX_THREADS, i < argc ? argv[i] : "");
+    } else if (strcmp(a, "--max-memory") == 0) {
+      if (++i >= argc || karst_budget_parse_size(argv[i], &max_memory))
+        return cli_usage_error("generate", "--max-memory needs a size such as 512M or 8G, got '%s'",
                                i < argc ? argv[i] : "");
     } else if (strcmp(a, "--samples") == 0) {
       want_samples = 1;
@@ -66,19 +74,24 @@ static int run(int argc, char **argv) {
   karst_fileset_t files;
   karst_fileset_init(&files);
   karst_geology_t *geo = NULL;
+  karst_dir_lock_t lock = {-1, NULL};
   char *path = NULL, *prefix = NULL;
   char writing[4096] = "";
   int status = CLI_OK;
   karst_error_t err;
   if ((err = karst_scenario_load(&ctx, scenario, &sc))) goto fail;
+  if ((err = karst_budget_check(&ctx, &sc, ctx.nthreads, max_memory, NULL))) goto fail;
   if (!have_seed) seed = sc.seed;
+  /* One generate at a time in DIR (the lock of karst ensemble): two runs writing one set of
+   * files would each rename its own into place, leaving a mixed set. */
+  if ((err = karst_mkdir_p(&ctx, outdir))) goto fail;
+  if ((err = karst_dir_lock(&ctx, outdir, KARST_GENERATE_LOCK_NAME, "generate", &lock))) goto fail;
   if ((err = karst_generate(&ctx, &sc, seed, 0, &net, want_samples ? &samples : NULL, &stats)))
     goto fail;
   /* The six files are one set: each is written to a temporary name, then all are renamed into
    * place with run.json last, so a run that fails leaves no new file, and a previous set in DIR
    * stays whole (karst_fileset_commit). A samples.vtp left by an earlier run with --samples goes
    * when this run writes none, so it never sits beside a network it does not belong to. */
-  if ((err = karst_mkdir_p(&ctx, outdir))) goto fail;
   const char *tmp;
   if (!(path = join(outdir, "network.vtp"))) goto nomem;
   if ((err = karst_fileset_add(&ctx, &files, path, NULL, &tmp))) goto fail;
@@ -157,6 +170,7 @@ fail:
   status = cli_fail("generate", &ctx, err);
 cleanup:
   karst_fileset_abort(&files);
+  karst_dir_unlock(&lock);
   free(path);
   free(prefix);
   karst_samples_destroy(&samples);
@@ -168,7 +182,8 @@ cleanup:
 
 const cli_command_t cli_cmd_generate = {
     "generate", run, "generate a cave network from a scenario (Paris et al. 2021)",
-    "usage: karst generate SCENARIO.yaml -o DIR [--seed S] [--samples] [--threads N] [--quiet]\n\n"
+    "usage: karst generate SCENARIO.yaml -o DIR [--seed S] [--samples] [--threads N]\n"
+    "                      [--max-memory SIZE] [--quiet]\n\n"
     "Runs one realisation of the scenario (sampling, graph, least-cost paths, gamma-skeleton,\n"
     "amplification, classification; docs/generation.md) and writes these files as one set\n"
     "(all to temporary names first, then renamed into place, run.json last; a failed run\n"
@@ -188,6 +203,12 @@ const cli_command_t cli_cmd_generate = {
     "                                     parameter, counts and stage wall times\n\n"
     "  --seed S     base seed (default: the scenario's seed). The same seed gives byte-identical\n"
     "               files (timings are only in run.json); another seed another network.\n"
-    "  --threads N  worker threads (default: all cores); the result does not depend on N.\n"
+    "  --threads N  worker threads, 1 to 1024 (default: all cores); the result does not depend\n"
+    "               on N.\n"
     "  --samples    also write samples.vtp.\n"
+    "  --max-memory SIZE  refuse, before any work, a scenario whose estimated memory (samples,\n"
+    "               graph edges, path searches; docs/scenario.md, \"Resource limits\") exceeds\n"
+    "               SIZE (e.g. 512M, 8G; default: the machine's memory). DIR is locked\n"
+    "               (DIR/.generate.lock) while generate writes it: a second generate into DIR\n"
+    "               is refused.\n"
     "  --quiet      no progress bar and no summary line.\n"};

@@ -163,9 +163,11 @@ static int run(int argc, char **argv) {
       have_seed = 1;
       i++;
     } else if (strcmp(a, "-j") == 0 || strcmp(a, "--threads") == 0) {
-      if (!more || cli_parse_int(argv[i + 1], &threads) || threads < 1)
-        return cli_usage_error("mesh", "%s needs a thread count >= 1, got '%s'", a,
-                               more ? argv[i + 1] : "");
+      if (!more || cli_parse_int(argv[i + 1], &threads) || threads < 1 ||
+          threads > KARST_ENSEMBLE_MAX_THREADS)
+        return cli_usage_error("mesh",
+                               "%s must be a whole number of threads within [1, %d], got '%s'", a,
+                               KARST_ENSEMBLE_MAX_THREADS, more ? argv[i + 1] : "");
       i++;
     } else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
       quiet = 1;
@@ -189,6 +191,14 @@ static int run(int argc, char **argv) {
   if (blocks && !carve)
     return cli_usage_error("mesh", "--blocks needs --carve (the blocks amplify the terrain)");
 
+  {
+    const char *inputs[2] = {in, scen_path};
+    const char *outputs[2] = {out, sdf_path};
+    for (int o = 0; o < 2; o++) {
+      int st = cli_refuse_output_over_input("mesh", outputs[o], inputs, 2);
+      if (st) return st;
+    }
+  }
   karst_ctx_t ctx;
   cli_ctx_init(&ctx, quiet, 0);
   if (threads > 0) ctx.nthreads = threads;
@@ -211,6 +221,21 @@ static int run(int argc, char **argv) {
   if (!script) {
     err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
     goto fail;
+  }
+  if (scen_path) { /* neither output may replace a file the scenario reads */
+    char **sfiles = NULL;
+    int nsf = 0, st = CLI_OK;
+    if ((err = karst_scenario_files(&ctx, scen_path, &sfiles, &nsf))) goto fail;
+    for (int o = 0; o < 2 && !st; o++)
+      st = cli_refuse_output_over_input("mesh", o ? sdf_path : out, (const char *const *)sfiles,
+                                        nsf);
+    for (int k = 0; k < nsf; k++)
+      free(sfiles[k]);
+    free(sfiles);
+    if (st) {
+      status = st;
+      goto done;
+    }
   }
   if ((err = cli_add_output(&ctx, &outs, out, &tmp_out))) goto fail;
   if (sdf_path && (err = cli_add_output(&ctx, &outs, sdf_path, &tmp_sdf))) goto fail;
@@ -356,7 +381,7 @@ const cli_command_t cli_cmd_mesh = {
     "                 scenario's random.seed with --scenario, else 1)\n"
     "  --realisation N  realisation index: details and speleothems are drawn from the stream of\n"
     "                 (seed, N), as karst generate draws realisation N (default 0)\n"
-    "  -j THREADS     worker threads (default: all processors)\n"
+    "  -j THREADS     worker threads, 1 to 1024 (default: all processors)\n"
     "  --quiet        no progress bar and no summary line\n\n"
     "Beside the mesh, STEM.paraview.py (cave.paraview.py for cave.vtp) shows it and the --sdf\n"
     "field in ParaView with karst's colours, category names and units (karst view).\n"

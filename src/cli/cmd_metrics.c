@@ -222,8 +222,11 @@ static int run(int argc, char **argv) {
     } else if (strcmp(a, "--true-north") == 0) {
       true_north = 1;
     } else if (strcmp(a, "--threads") == 0 || strcmp(a, "-j") == 0) {
-      if (++i >= argc || cli_parse_int(argv[i], &nthreads) || nthreads < 1) {
-        status = cli_usage_error("metrics", "%s needs a positive number", a);
+      if (++i >= argc || cli_parse_int(argv[i], &nthreads) || nthreads < 1 ||
+          nthreads > KARST_ENSEMBLE_MAX_THREADS) {
+        status = cli_usage_error("metrics",
+                                 "%s must be a whole number of threads within [1, %d], got '%s'", a,
+                                 KARST_ENSEMBLE_MAX_THREADS, i < argc ? argv[i] : "");
         goto done;
       }
     } else if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
@@ -239,6 +242,10 @@ static int run(int argc, char **argv) {
     status = cli_usage_error("metrics", "no network file given");
     goto done;
   }
+  if ((status =
+           cli_refuse_output_over_input("metrics", out_path, (const char *const *)files, nfiles)) ||
+      (table_path && (status = cli_refuse_output_over_input("metrics", out_path, &table_path, 1))))
+    goto done;
   karst_ctx_t ctx;
   cli_ctx_init(&ctx, quiet, 0);
   if (nthreads > 0) ctx.nthreads = nthreads;
@@ -356,7 +363,7 @@ const cli_command_t cli_cmd_metrics = {
     "  --true-north      rotate azimuths by the meridian convergence of the file's coordinate\n"
     "                    system before the orientation entropy; files without a convertible\n"
     "                    system are reported and keep grid north\n"
-    "  --threads N       threads for the betweenness (default: all cores)\n"
+    "  --threads N       threads for the betweenness, 1 to 1024 (default: all cores)\n"
     "  -q                quiet\n\n"
     "Exit code 1 when a file cannot be read (the others are still measured), 2 for usage "
     "errors.\n"};

@@ -1,4 +1,5 @@
 /* karst: git-style command dispatcher. Each subcommand lives in cmd_<name>.c. */
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,6 +86,16 @@ static int print_version(void) {
   return CLI_OK;
 }
 
+/* Results printed on standard output that did not reach it (a full device, a closed pipe) are
+ * an error, not a success: every command's output is checked here, once, at exit. */
+static int stdout_status(const char *cmd) {
+  errno = 0;
+  if (fflush(stdout) == 0 && !ferror(stdout)) return CLI_OK;
+  int e = errno;
+  fprintf(stderr, "karst %s: writing standard output: %s\n", cmd, e ? strerror(e) : "write error");
+  return CLI_ERROR;
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     print_main_help(stderr);
@@ -92,9 +103,12 @@ int main(int argc, char **argv) {
   }
   if (cli_is_help(argv[1])) {
     print_main_help(stdout);
-    return CLI_OK;
+    return stdout_status("help");
   }
-  if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) return print_version();
+  if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) {
+    int status = print_version();
+    return status ? status : stdout_status("version");
+  }
   const cli_command_t *c = cli_find_command(argv[1]);
   if (!c) {
     if (argv[1][0] == '-')
@@ -109,7 +123,9 @@ int main(int argc, char **argv) {
   for (int i = 2; i < argc; i++)
     if (cli_is_help(argv[i])) {
       cli_print_help(c);
-      return CLI_OK;
+      return stdout_status(c->name);
     }
-  return c->run(argc - 1, argv + 1);
+  int status = c->run(argc - 1, argv + 1);
+  int out = stdout_status(c->name);
+  return out ? out : status;
 }

@@ -202,6 +202,17 @@ static void release_lock(int fd, char *path) {
   free(path);
 }
 
+karst_error_t karst_dir_lock(karst_ctx_t *ctx, const char *dir, const char *name, const char *what,
+                             karst_dir_lock_t *lock) {
+  return take_lock_named(ctx, dir, name, what, &lock->fd, &lock->path);
+}
+
+void karst_dir_unlock(karst_dir_lock_t *lock) {
+  release_lock(lock->fd, lock->path);
+  lock->fd = -1;
+  lock->path = NULL;
+}
+
 /* ------------------------------------------------------------------------ */
 /* The key file: a re-run into DIR must be the same scenario and seed.      */
 /* ------------------------------------------------------------------------ */
@@ -657,10 +668,23 @@ static karst_error_t write_collection_files(karst_ctx_t *ctx, const char *dir,
   }
   fprintf(f.fp, "],\n  \"parameters\": {\n");
   if (opt->parameters_json) fputs(opt->parameters_json, f.fp);
-  fprintf(f.fp, "  },\n");
+  fprintf(f.fp, "  }\n}\n");
+  err = karst_atomic_commit(ctx, &f);
+  if (err) goto cleanup;
+
+  /* The run log, apart from what is reproducible: a resumed ensemble's ensemble.json is
+   * byte-identical to an uninterrupted one's, its ensemble_log.json is not. */
+  free(path);
+  path = karst_i_path_join(dir, KARST_ENSEMBLE_LOG_NAME);
+  if (!path) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+    goto cleanup;
+  }
+  err = karst_atomic_open(ctx, &f, path, "wb");
+  if (err) goto cleanup;
   fprintf(f.fp,
-          "  \"timings\": {\"wall_seconds\": %.3f, \"computed\": %" PRId64 ", \"reused\": %" PRId64
-          ", \"threads\": %d, \"ranks\": %d}\n}\n",
+          "{\n  \"wall_seconds\": %.3f,\n  \"computed\": %" PRId64 ",\n  \"reused\": %" PRId64
+          ",\n  \"threads\": %d,\n  \"ranks\": %d\n}\n",
           sum->wall_seconds, sum->complete - sum->reused, sum->reused, nthreads, sum->ranks);
   err = karst_atomic_commit(ctx, &f);
   if (err) goto cleanup;

@@ -679,3 +679,46 @@ cleanup:
   karst_i_overrides_destroy(&set);
   return err;
 }
+
+/**
+ * The files scenario @p path reads (scenario.h): the walk's resolved file keys, each joined to
+ * the scenario's directory when relative.
+ * Time complexity: that of karst_scenario_load.
+ */
+karst_error_t karst_scenario_files(karst_ctx_t *ctx, const char *path, char ***files, int *n) {
+  karst_i_override_set_t set;
+  karst_scenario_t sc;
+  *files = NULL;
+  *n = 0;
+  karst_error_t err = karst_i_overrides_init(ctx, &set, NULL, 0);
+  if (err) return err;
+  karst_scenario_init(&sc);
+  err = karst_i_scenario_load(ctx, path, &set, &sc, NULL, NULL, NULL);
+  karst_scenario_destroy(&sc);
+  char *dir = err ? NULL : dir_of(path);
+  char **v = err ? NULL : calloc((size_t)set.n_files + 1, sizeof *v);
+  if (!err && (!dir || !v)) err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+  for (int i = 0; !err && i < set.n_files; i++) {
+    const char *name = set.file_values[i];
+    size_t len = strlen(dir) + strlen(name) + 2;
+    if (!(v[i] = malloc(len))) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
+      break;
+    }
+    if (name[0] == '/')
+      snprintf(v[i], len, "%s", name);
+    else
+      snprintf(v[i], len, "%s/%s", dir, name);
+  }
+  if (err) {
+    for (int i = 0; v && i < set.n_files; i++)
+      free(v[i]);
+    free(v);
+  } else {
+    *files = v;
+    *n = set.n_files;
+  }
+  free(dir);
+  karst_i_overrides_destroy(&set);
+  return err;
+}

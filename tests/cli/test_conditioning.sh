@@ -41,9 +41,9 @@ grep -q "fill_radius: 60" "$T/ext.yaml" && grep -q "DowProv.svx" "$T/ext.yaml" |
 N=3
 "$KARST" ensemble "$T/ext.yaml" -n $N -o "$T/e1" -j 1 --quiet >"$T/log" 2>&1 || { cat "$T/log"; bad "ensemble -j 1"; }
 "$KARST" ensemble "$T/ext.yaml" -n $N -o "$T/e2" -j 2 --quiet >"$T/log" 2>&1 || { cat "$T/log"; bad "ensemble -j 2"; }
-same() { # dir dir: every file but the timings
-  (cd "$1" && find . -type f ! -name ensemble.json | sort) >"$T/l1"
-  (cd "$2" && find . -type f ! -name ensemble.json | sort) >"$T/l2"
+same() { # dir dir: every file but the run log ensemble_log.json
+  (cd "$1" && find . -type f ! -name ensemble_log.json | sort) >"$T/l1"
+  (cd "$2" && find . -type f ! -name ensemble_log.json | sort) >"$T/l2"
   cmp -s "$T/l1" "$T/l2" || return 1
   while read -r f; do cmp -s "$1/$f" "$2/$f" || { echo "  differs: $f"; return 1; }; done <"$T/l1"
 }

@@ -63,11 +63,12 @@ SCEN="$SRC/datasets/scenarios/branchwork.yaml"
 if ! "$KARST" ensemble "$SCEN" -n 4 -o "$T/a" -j 1 --seed 11 --quiet 2>"$T/err"; then
   echo "FAIL: karst ensemble"; cat "$T/err"; exit 1
 fi
-same_tree() { # A B: same files, same bytes (ensemble.json without its timings line)
+same_tree() { # A B: same files, same bytes (ensemble.json too); only the run log may differ
   local d=0
   diff <(cd "$1" && find . -type f | sort) <(cd "$2" && find . -type f | sort) || d=1
-  for f in $(cd "$1" && find . -type f ! -name ensemble.json); do cmp -s "$1/$f" "$2/$f" || { echo "differs: $f"; d=1; }; done
-  diff <(grep -v '"timings"' "$1/ensemble.json") <(grep -v '"timings"' "$2/ensemble.json") || d=1
+  for f in $(cd "$1" && find . -type f ! -name ensemble_log.json); do cmp -s "$1/$f" "$2/$f" || { echo "differs: $f"; d=1; }; done
+  [ -f "$1/ensemble_log.json" ] || { echo "no ensemble_log.json in $1"; d=1; }
+  grep -q wall_seconds "$1/ensemble.json" && { echo "ensemble.json holds the run log"; d=1; }
   return $d
 }
 no_leftovers() { # DIR: no hidden member temporaries and no lock file after a finished run
@@ -111,7 +112,8 @@ grep -qF "$T/a is in use by another karst ensemble (pid 4242" "$T/out" && echo "
 rm -rf "$T/a/realisations/.0004.tmp.999999" "$T/a/.ensemble.lock"
 
 # Kill mid-run, re-run, compare with an uninterrupted run: every file byte-identical (cmp),
-# ensemble.json without its timings line. SIGTERM is handled (members in progress remove their
+# ensemble.json included; only the run log ensemble_log.json differs (its reused count is
+# asserted below). SIGTERM is handled (members in progress remove their
 # temporaries, exit 1); SIGKILL is not (temporaries and the lock file stay; the re-run removes
 # them). The kill comes once 2 of 12 members are done, so the run cannot have finished: that is
 # asserted (fewer than 12 members, no metrics.csv), not assumed.
@@ -139,6 +141,10 @@ for sig in TERM KILL; do
   fi
   check 0 "re-run after SIG$sig" "$KARST" ensemble "$SCEN" -n 12 -o "$K" -j 1 --seed 5 --quiet
   same_tree "$T/ref" "$K" && echo "ok: SIG$sig + re-run = uninterrupted" || { echo "FAIL: SIG$sig + re-run differs"; fail=1; }
+  # the run log says what the re-run reused (the members kept) and computed (the rest)
+  grep -q "\"reused\": $kept," "$K/ensemble_log.json" && grep -q "\"computed\": $((12 - kept))," "$K/ensemble_log.json" &&
+    echo "ok: ensemble_log.json: $kept reused, $((12 - kept)) computed" ||
+    { echo "FAIL: ensemble_log.json after SIG$sig: $(cat "$K/ensemble_log.json")"; fail=1; }
   no_leftovers "$K"
 done
 # MPI with 3 processes writes the same files. In sanitizer builds LeakSanitizer reports Open MPI's

@@ -274,6 +274,8 @@ class TestEnsemble(Tmp):
         d = ens.directory
         self.assertTrue((d / "ensemble.json").is_file())
         self.assertEqual(ens.info["realisations"], 2)
+        self.assertNotIn("timings", ens.info)  # the run log is ensemble_log.json
+        self.assertEqual(ens.log["computed"], 2)
         self.assertEqual(ens.info["versions"]["karst"], karst.__version__)
         del ens
         import gc

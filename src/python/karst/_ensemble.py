@@ -18,7 +18,9 @@ class Ensemble:
 
     directory     the directory (DIR/realisations/NNNN/network.vtp, DIR/metrics.csv,
                   DIR/ensemble.json; docs/ensembles.md)
-    info          ensemble.json as a dict (scenario, seed, parameters, versions, timings)
+    info          ensemble.json as a dict (scenario, seed, parameters, versions)
+    log           ensemble_log.json as a dict (wall_seconds, computed, reused, threads, ranks),
+                  or None when the directory has none
     index, seeds  (n,) member indices and member seeds (``karst generate --seed`` with a
                   member's seed reproduces it)
     metric_names  the metric columns, in the order of ``karst metrics``
@@ -37,6 +39,10 @@ class Ensemble:
         self.metrics = {n: self.values[:, k] for k, n in enumerate(self.metric_names)}
         with open(self.directory / "ensemble.json", encoding="utf-8") as f:
             self.info = json.load(f)
+        self.log = None
+        if (self.directory / "ensemble_log.json").is_file():
+            with open(self.directory / "ensemble_log.json", encoding="utf-8") as f:
+                self.log = json.load(f)
         self._finalizer = None
         if _temporary:
             # An ensemble made without an output directory lives as long as this object.
