@@ -1983,7 +1983,6 @@ static karst_error_t read_gen_key_points(reader_t *r, yaml_node_t *n, void *base
   return KARST_SUCCESS;
 }
 
-static const range_t cohesion_range = RANGE_OPEN_CLOSED(0, 1, "");
 static const field_t gen_skeleton_fields[] = {
     {.key = "gamma",
      .type = T_NUM,
@@ -2012,7 +2011,7 @@ static const field_t generation_fields[] = {
     {.key = "cohesion",
      .type = T_NUM,
      .off = offsetof(karst_generation_t, cohesion),
-     .range = cohesion_range},
+     .range = RANGE_OPEN_CLOSED(0, 1, "")},
 };
 static const schema_t generation_schema = {generation_fields, 7};
 

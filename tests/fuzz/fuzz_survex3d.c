@@ -1,0 +1,18 @@
+/**
+ * @file fuzz_survex3d.c
+ * @brief Fuzz target: Survex .3d survey reader (karst_read_survex3d on the input written to a scratch ".3d" file).
+ */
+#include "fuzz_util.h"
+#include "karst/network.h"
+#include "karst/readers.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  karst_ctx_t ctx;
+  karst_fuzz_ctx(&ctx);
+  const char *path = karst_fuzz_file("fuzz.3d", data, size);
+  karst_network_t net;
+  karst_network_init(&net);
+  karst_fuzz_report(&ctx, karst_read_survex3d(&ctx, path, &net));
+  karst_network_destroy(&net);
+  return 0;
+}
