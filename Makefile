@@ -3,14 +3,17 @@
 #   make test   install what is missing, build Debian's ParaView chroot for the ParaView test
 #               once (scripts/paraview-chroot; a complete one is kept), build with -Werror,
 #               run the tests, then build with AddressSanitizer + UndefinedBehaviorSanitizer
-#               and run them again
+#               and run them again, then run every libFuzzer target for a bounded time (make fuzz)
 JOBS     ?= $(shell nproc)
 BUILD    ?= build
 ASAN     ?= build-asan
+FUZZ     ?= build-fuzz
+# Seconds of fuzzing per target in make fuzz (tests/fuzz/run.sh, docs/fuzzing.md).
+FUZZ_SECONDS ?= 20
 SCENARIO ?= datasets/scenarios/branchwork.yaml
 DEMO_OUT ?= out/branchwork
 
-.PHONY: all deps paraview-chroot build demo test test-fast test-asan bench clean format
+.PHONY: all deps paraview-chroot build demo test test-fast test-asan fuzz bench clean format
 
 all: build
 
@@ -48,9 +51,21 @@ test-asan: $(ASAN)/Makefile
 	cd $(ASAN) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  ctest --output-on-failure -j $(JOBS)
 
+# libFuzzer targets of tests/fuzz/ (clang, ASan + UBSan): build them, run each for
+# FUZZ_SECONDS, fail on any crash, leak, timeout or out-of-memory.
+$(FUZZ)/Makefile:
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ) -DCMAKE_BUILD_TYPE=RelWithDebInfo -DKARST_WERROR=ON \
+	  -DKARST_FUZZ=ON -DKARST_BUILD_TESTS=OFF -DKARST_BUILD_BENCH=OFF -DKARST_WITH_PYTHON=OFF \
+	  -DKARST_WITH_MPI=OFF -DBUILD_SHARED_LIBS=OFF
+
+fuzz: deps $(FUZZ)/Makefile
+	cmake --build $(FUZZ) -j $(JOBS) --target karst_fuzz_targets
+	FUZZ_SECONDS=$(FUZZ_SECONDS) tests/fuzz/run.sh $(FUZZ)
+
 test: paraview-chroot
 	$(MAKE) test-fast
 	$(MAKE) test-asan
+	$(MAKE) fuzz
 
 bench: build
 	cmake --build $(BUILD) --target bench -j $(JOBS)
@@ -59,4 +74,4 @@ format:
 	clang-format -i $$(git ls-files '*.c' '*.h' '*.cpp')
 
 clean:
-	rm -rf $(BUILD) $(ASAN)
+	rm -rf $(BUILD) $(ASAN) $(FUZZ)
