@@ -20,7 +20,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     memcpy(text, data, size);
   }
   karst_json_t *v = NULL;
-  if (karst_fuzz_report(&ctx, karst_json_parse(&ctx, "fuzz.json", text, size, &v)) == KARST_SUCCESS) {
+  if (karst_fuzz_report(&ctx, karst_json_parse(&ctx, "fuzz.json", text, size, &v)) ==
+      KARST_SUCCESS) {
     karst_json_free(v);
   }
   free(text);

@@ -1,6 +1,7 @@
 /**
  * @file fuzz_pline.c
- * @brief Fuzz target: GOCAD PLine reader (karst_read_pline on the input written to a scratch ".pl" file).
+ * @brief Fuzz target: GOCAD PLine reader (karst_read_pline on the input written to a scratch ".pl"
+ * file).
  */
 #include "fuzz_util.h"
 #include "karst/network.h"

@@ -11,6 +11,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   karst_fuzz_ctx(&ctx);
   const char *path = karst_fuzz_file("fuzz.ts", data, size);
   karst_surface_t *s = NULL;
-  if (karst_fuzz_report(&ctx, karst_surface_load(&ctx, path, &s)) == KARST_SUCCESS) karst_surface_free(s);
+  if (karst_fuzz_report(&ctx, karst_surface_load(&ctx, path, &s)) == KARST_SUCCESS)
+    karst_surface_free(s);
   return 0;
 }

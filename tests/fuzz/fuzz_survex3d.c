@@ -1,6 +1,7 @@
 /**
  * @file fuzz_survex3d.c
- * @brief Fuzz target: Survex .3d survey reader (karst_read_survex3d on the input written to a scratch ".3d" file).
+ * @brief Fuzz target: Survex .3d survey reader (karst_read_survex3d on the input written to a
+ * scratch ".3d" file).
  */
 #include "fuzz_util.h"
 #include "karst/network.h"

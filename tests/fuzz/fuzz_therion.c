@@ -1,6 +1,7 @@
 /**
  * @file fuzz_therion.c
- * @brief Fuzz target: Therion SQL export reader (karst_read_therion_sql on the input written to a scratch ".sql" file).
+ * @brief Fuzz target: Therion SQL export reader (karst_read_therion_sql on the input written to a
+ * scratch ".sql" file).
  */
 #include "fuzz_util.h"
 #include "karst/network.h"
