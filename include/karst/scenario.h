@@ -497,12 +497,12 @@ typedef struct karst_scenario {
   uint64_t seed;
   int realisations; /**< >= 1 */
   /* Where blocks named by cross-field messages were given (0 when defaulted or built in code). */
-  karst_srcpos_t pos_domain;           /**< the domain map */
-  karst_srcpos_t pos_terrain;          /**< terrain.elevation or terrain.heightfield value */
-  karst_srcpos_t pos_amplification;    /**< the amplification map */
-  karst_srcpos_t pos_water_table;      /**< the water_table map */
-  karst_srcpos_t pos_key_points;       /**< the key_points list */
-  karst_srcpos_t pos_sampling;         /**< the sampling map */
+  karst_srcpos_t pos_domain;        /**< the domain map */
+  karst_srcpos_t pos_terrain;       /**< terrain.elevation or terrain.heightfield value */
+  karst_srcpos_t pos_amplification; /**< the amplification map */
+  karst_srcpos_t pos_water_table;   /**< the water_table map */
+  karst_srcpos_t pos_key_points;    /**< the key_points list */
+  karst_srcpos_t pos_sampling;      /**< the sampling map */
   /* Where the keys behind the resource estimate were given (include/karst/budget.h). */
   karst_srcpos_t pos_fill_radius, pos_feature_radius, pos_k, pos_max_samples;
   karst_srcpos_t pos_amplification_steps, pos_amplification_points;
@@ -532,6 +532,17 @@ void karst_scenario_destroy(karst_scenario_t *sc);
  * ctx->errmsg holds "FILE:LINE:COLUMN: message" naming the field and value.
  */
 karst_error_t karst_scenario_load(karst_ctx_t *ctx, const char *path, karst_scenario_t *sc);
+
+/**
+ * Set an error about a value of @p sc: "FILE:LINE:COLUMN: message" when the
+ * scenario came from a file (1:1 for a rule about something the file left
+ * out, line <= 0), the bare message otherwise. Returns @p code. For the stages
+ * that check a parsed scenario (geology, budget) so every such message has one
+ * form. O(message).
+ */
+karst_error_t karst_scenario_fail_at(karst_ctx_t *ctx, const karst_scenario_t *sc, int line,
+                                     int col, karst_error_t code, const char *fmt, ...)
+    __attribute__((format(printf, 6, 7)));
 
 /** Longest key path of an override ("fractures[0].weight"), in bytes without the NUL. */
 #define KARST_SCENARIO_OVERRIDE_KEY_MAX 255

@@ -135,20 +135,9 @@ const char *karst_budget_format_size(double bytes, char *buf, size_t size) {
   return buf;
 }
 
-static karst_error_t refuse(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_srcpos_t pos,
-                            const char *fmt, ...) __attribute__((format(printf, 4, 5)));
-
-static karst_error_t refuse(karst_ctx_t *ctx, const karst_scenario_t *sc, karst_srcpos_t pos,
-                            const char *fmt, ...) {
-  char msg[KARST_ERRMSG_MAX];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
-  if (!sc->path) return karst_set_error(ctx, KARST_ERANGE, "%s", msg);
-  return karst_set_error(ctx, KARST_ERANGE, "%s:%d:%d: %s", sc->path, pos.line > 0 ? pos.line : 1,
-                         pos.line > 0 && pos.column > 0 ? pos.column : 1, msg);
-}
+/* FILE:LINE:COLUMN of the key at @p pos (karst_scenario_fail_at). */
+#define refuse(ctx, sc, pos, ...)                                                                  \
+  karst_scenario_fail_at((ctx), (sc), (pos).line, (pos).column, KARST_ERANGE, __VA_ARGS__)
 
 karst_error_t karst_budget_check(karst_ctx_t *ctx, const karst_scenario_t *sc, int threads,
                                  double max_memory, karst_budget_t *out) {

@@ -452,23 +452,6 @@ void karst_i_fisher_draw(karst_rng_t *rng, const double mu[3], double kappa, dou
 /* The model                                                                 */
 /* ------------------------------------------------------------------------ */
 
-static karst_error_t fail_at(karst_ctx_t *ctx, const karst_scenario_t *sc, int line, int col,
-                             karst_error_t code, const char *fmt, ...)
-    __attribute__((format(printf, 6, 7)));
-
-/* "FILE:LINE:COLUMN: message" when the scenario came from a file. */
-static karst_error_t fail_at(karst_ctx_t *ctx, const karst_scenario_t *sc, int line, int col,
-                             karst_error_t code, const char *fmt, ...) {
-  char msg[KARST_ERRMSG_MAX];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
-  va_end(ap);
-  if (!sc->path) return karst_set_error(ctx, code, "%s", msg);
-  return karst_set_error(ctx, code, "%s:%d:%d: %s", sc->path, line > 0 ? line : 1,
-                         line > 0 && col > 0 ? col : 1, msg);
-}
-
 const karst_scenario_t *karst_geology_scenario(const karst_geology_t *g) {
   return g->sc;
 }
@@ -693,15 +676,17 @@ static karst_error_t realise_dfn(karst_ctx_t *ctx, karst_geology_t *g, uint64_t 
     double mean =
         fr->p32 * vol / (M_PI * powerlaw_mean_r2(fr->size_exponent, fr->r_min, fr->r_max));
     if (!(mean <= KARST_GEOLOGY_MAX_DISCS))
-      return fail_at(ctx, sc, fr->line, fr->column, KARST_ERANGE,
-                     "fractures: this family's network would hold about %.3g discs (p32 %g m²/m³ "
-                     "over %.3g m³ with radii %g-%g m), more than the %d allowed; lower p32 or "
-                     "raise r_min",
-                     mean, fr->p32, vol, fr->r_min, fr->r_max, KARST_GEOLOGY_MAX_DISCS);
+      return karst_scenario_fail_at(
+          ctx, sc, fr->line, fr->column, KARST_ERANGE,
+          "fractures: this family's network would hold about %.3g discs (p32 %g m²/m³ "
+          "over %.3g m³ with radii %g-%g m), more than the %d allowed; lower p32 or "
+          "raise r_min",
+          mean, fr->p32, vol, fr->r_min, fr->r_max, KARST_GEOLOGY_MAX_DISCS);
     karst_int_t m = poisson_draw(&rng, mean);
     if (g->n_discs + m > KARST_GEOLOGY_MAX_DISCS)
-      return fail_at(ctx, sc, fr->line, fr->column, KARST_ERANGE,
-                     "fractures: the networks hold more than %d discs", KARST_GEOLOGY_MAX_DISCS);
+      return karst_scenario_fail_at(ctx, sc, fr->line, fr->column, KARST_ERANGE,
+                                    "fractures: the networks hold more than %d discs",
+                                    KARST_GEOLOGY_MAX_DISCS);
     if (g->n_discs + m > cap) {
       cap = (g->n_discs + m) * 2;
       karst_disc_t *nd = realloc(g->discs, (size_t)cap * sizeof *nd);
@@ -845,10 +830,11 @@ static karst_error_t check_surface_covers(karst_ctx_t *ctx, const karst_scenario
   for (int i = 0; i < 3; i++)
     for (int j = 0; j < 3; j++)
       if (!isfinite(karst_i_surf_z(s, xs[i], ys[j])))
-        return fail_at(ctx, sc, line, col, KARST_ERANGE,
-                       "%s is not defined at (%g, %g), inside the domain; it must cover the "
-                       "domain's x-y extent",
-                       what, xs[i], ys[j]);
+        return karst_scenario_fail_at(
+            ctx, sc, line, col, KARST_ERANGE,
+            "%s is not defined at (%g, %g), inside the domain; it must cover the "
+            "domain's x-y extent",
+            what, xs[i], ys[j]);
   return KARST_SUCCESS;
 }
 
@@ -862,19 +848,21 @@ static karst_error_t check_key_points(karst_ctx_t *ctx, const karst_geology_t *g
       const karst_exclusion_t *e = &sc->exclusions[idx];
       char nm[KARST_SCENARIO_NAME_MAX + 8] = "";
       if (e->name[0]) snprintf(nm, sizeof nm, " '%s'", e->name);
-      return fail_at(ctx, sc, kp->line, kp->column, KARST_EINVAL,
-                     "key_points[%d] '%s' at (%g, %g, %g) is inside exclusions[%d]%s (line %d), "
-                     "which holds no conduit; move it out or shrink the zone",
-                     i, kp->name, kp->p[0], kp->p[1], kp->p[2], idx, nm, e->line);
+      return karst_scenario_fail_at(
+          ctx, sc, kp->line, kp->column, KARST_EINVAL,
+          "key_points[%d] '%s' at (%g, %g, %g) is inside exclusions[%d]%s (line %d), "
+          "which holds no conduit; move it out or shrink the zone",
+          i, kp->name, kp->p[0], kp->p[1], kp->p[2], idx, nm, e->line);
     }
     if (ex == KARST_EXCLUDED_STRATUM) {
       const karst_stratum_t *s = &sc->strata[idx];
       double lo, hi;
       stratum_bounds(g, idx, kp->p[0], kp->p[1], &lo, &hi);
-      return fail_at(ctx, sc, kp->line, kp->column, KARST_EINVAL,
-                     "key_points[%d] '%s' at z = %g m is inside the insoluble stratum '%s' "
-                     "(line %d; %g to %g m there), which holds no conduit",
-                     i, kp->name, kp->p[2], s->name, s->line, lo, hi);
+      return karst_scenario_fail_at(
+          ctx, sc, kp->line, kp->column, KARST_EINVAL,
+          "key_points[%d] '%s' at z = %g m is inside the insoluble stratum '%s' "
+          "(line %d; %g to %g m there), which holds no conduit",
+          i, kp->name, kp->p[2], s->name, s->line, lo, hi);
     }
   }
   return KARST_SUCCESS;

@@ -2817,13 +2817,10 @@ static karst_error_t finish(reader_t *r) {
 /* Cross-field checks                                                       */
 /* ------------------------------------------------------------------------ */
 
-static karst_error_t check_fail(karst_ctx_t *ctx, const karst_scenario_t *sc, int line, int col,
-                                karst_error_t code, const char *fmt, ...)
-    __attribute__((format(printf, 6, 7)));
 /* Prefix "FILE:LINE:COLUMN: " when the scenario came from a file (1:1 for a
  * rule about something the file left out). */
-static karst_error_t check_fail(karst_ctx_t *ctx, const karst_scenario_t *sc, int line, int col,
-                                karst_error_t code, const char *fmt, ...) {
+karst_error_t karst_scenario_fail_at(karst_ctx_t *ctx, const karst_scenario_t *sc, int line,
+                                     int col, karst_error_t code, const char *fmt, ...) {
   char msg[KARST_ERRMSG_MAX];
   va_list ap;
   va_start(ap, fmt);
@@ -2890,8 +2887,8 @@ static karst_error_t check_values(karst_ctx_t *ctx, const karst_scenario_t *sc, 
     case T_NUM:
       v = *(const double *)at;
       if (!isfinite(v))
-        return check_fail(ctx, sc, line, col, KARST_ERANGE, "%s must be a finite number, got %g",
-                          sub, v);
+        return karst_scenario_fail_at(ctx, sc, line, col, KARST_ERANGE,
+                                      "%s must be a finite number, got %g", sub, v);
       break;
     case T_INT:
       v = *(const int *)at;
@@ -2903,9 +2900,9 @@ static karst_error_t check_values(karst_ctx_t *ctx, const karst_scenario_t *sc, 
     case T_VEC3:
       for (int k = 0; k < (f->type == T_VEC2 ? 2 : 3); k++)
         if (!isfinite(((const double *)at)[k]))
-          return check_fail(ctx, sc, line, col, KARST_ERANGE,
-                            "%s[%d] must be a finite number, got %g", sub, k,
-                            ((const double *)at)[k]);
+          return karst_scenario_fail_at(ctx, sc, line, col, KARST_ERANGE,
+                                        "%s[%d] must be a finite number, got %g", sub, k,
+                                        ((const double *)at)[k]);
       continue;
     case T_MAP: {
       karst_error_t err = check_values(ctx, sc, f->sub, at, sub, line, col);
@@ -2915,9 +2912,9 @@ static karst_error_t check_values(karst_ctx_t *ctx, const karst_scenario_t *sc, 
     case T_ENUM: {
       int e = *(const int *)at;
       if (e < 0 || e >= f->n_names)
-        return check_fail(ctx, sc, line, col, KARST_ERANGE,
-                          "%s must be one of %d names (such as '%s'), got the index %d", sub,
-                          f->n_names, f->names[0], e);
+        return karst_scenario_fail_at(ctx, sc, line, col, KARST_ERANGE,
+                                      "%s must be one of %d names (such as '%s'), got the index %d",
+                                      sub, f->n_names, f->names[0], e);
       continue;
     }
     default:
@@ -2925,7 +2922,8 @@ static karst_error_t check_values(karst_ctx_t *ctx, const karst_scenario_t *sc, 
     }
     if (!in_range(&f->range, v)) {
       range_text(&f->range, rt, sizeof rt);
-      return check_fail(ctx, sc, line, col, KARST_ERANGE, "%s must be %s, got %.15g", sub, rt, v);
+      return karst_scenario_fail_at(ctx, sc, line, col, KARST_ERANGE, "%s must be %s, got %.15g",
+                                    sub, rt, v);
     }
   }
   return KARST_SUCCESS;
@@ -2936,12 +2934,12 @@ static karst_error_t check_perm(karst_ctx_t *ctx, const karst_scenario_t *sc,
   char sub[PATH_LEN];
   karst_error_t err;
   if (depth > KARST_SCENARIO_PERM_MAX_DEPTH)
-    return check_fail(ctx, sc, n->line, n->column, KARST_ERANGE,
-                      "%s: the permeability tree is nested deeper than %d levels", path,
-                      KARST_SCENARIO_PERM_MAX_DEPTH);
+    return karst_scenario_fail_at(ctx, sc, n->line, n->column, KARST_ERANGE,
+                                  "%s: the permeability tree is nested deeper than %d levels", path,
+                                  KARST_SCENARIO_PERM_MAX_DEPTH);
   if (!(n->weight > 0) || !isfinite(n->weight))
-    return check_fail(ctx, sc, n->line, n->column, KARST_ERANGE, "%s.weight must be > 0, got %g",
-                      path, n->weight);
+    return karst_scenario_fail_at(ctx, sc, n->line, n->column, KARST_ERANGE,
+                                  "%s.weight must be > 0, got %g", path, n->weight);
   switch (n->kind) {
   case KARST_PERM_SPHERE:
     join(sub, path, "sphere");
@@ -2951,23 +2949,24 @@ static karst_error_t check_perm(karst_ctx_t *ctx, const karst_scenario_t *sc,
     if ((err = check_values(ctx, sc, &stratum_schema, (const char *)n, sub, n->line, n->column)))
       return err;
     if (!(n->bottom < n->top))
-      return check_fail(ctx, sc, n->line, n->column, KARST_ERANGE,
-                        "%s: bottom (%g m) must be below top (%g m)", sub, n->bottom, n->top);
+      return karst_scenario_fail_at(ctx, sc, n->line, n->column, KARST_ERANGE,
+                                    "%s: bottom (%g m) must be below top (%g m)", sub, n->bottom,
+                                    n->top);
     return KARST_SUCCESS;
   case KARST_PERM_UNION:
   case KARST_PERM_INTERSECTION:
   case KARST_PERM_BLEND:
     if (n->n_children < 1 || !n->children)
-      return check_fail(ctx, sc, n->line, n->column, KARST_EINVAL,
-                        "%s: an operator node needs at least one child", path);
+      return karst_scenario_fail_at(ctx, sc, n->line, n->column, KARST_EINVAL,
+                                    "%s: an operator node needs at least one child", path);
     for (int i = 0; i < n->n_children; i++) {
       index_path(sub, path, i);
       if ((err = check_perm(ctx, sc, &n->children[i], sub, depth + 1))) return err;
     }
     return KARST_SUCCESS;
   }
-  return check_fail(ctx, sc, n->line, n->column, KARST_EINVAL, "%s: unknown node kind %d", path,
-                    (int)n->kind);
+  return karst_scenario_fail_at(ctx, sc, n->line, n->column, KARST_EINVAL,
+                                "%s: unknown node kind %d", path, (int)n->kind);
 }
 
 /* A plane surface must have finite values; a file surface must have been read. */
@@ -2976,25 +2975,26 @@ static karst_error_t check_surface(karst_ctx_t *ctx, const karst_scenario_t *sc,
   if (!d->given) return KARST_SUCCESS;
   if (d->path) {
     if (!d->surface)
-      return check_fail(ctx, sc, d->line, d->column, KARST_EINVAL,
-                        "%s: the surface file '%s' was not read", path, d->path);
+      return karst_scenario_fail_at(ctx, sc, d->line, d->column, KARST_EINVAL,
+                                    "%s: the surface file '%s' was not read", path, d->path);
     const double lo[2] = {sc->domain_min[0], sc->domain_min[1]},
                  hi[2] = {sc->domain_max[0], sc->domain_max[1]};
     karst_ctx_t cover;
     karst_ctx_init(&cover);
     if (karst_surface_check_covers(&cover, d->surface, lo, hi, path))
-      return check_fail(ctx, sc, d->line, d->column, KARST_ERANGE, "%s", cover.errmsg);
+      return karst_scenario_fail_at(ctx, sc, d->line, d->column, KARST_ERANGE, "%s", cover.errmsg);
     return KARST_SUCCESS;
   }
   if (!isfinite(d->elevation) || !isfinite(d->origin[0]) || !isfinite(d->origin[1]))
-    return check_fail(ctx, sc, d->line, d->column, KARST_ERANGE,
-                      "%s: elevation and origin must be finite, got %g at (%g, %g)", path,
-                      d->elevation, d->origin[0], d->origin[1]);
+    return karst_scenario_fail_at(ctx, sc, d->line, d->column, KARST_ERANGE,
+                                  "%s: elevation and origin must be finite, got %g at (%g, %g)",
+                                  path, d->elevation, d->origin[0], d->origin[1]);
   if (!(d->dip >= 0 && d->dip < 90) || !(d->dip_direction >= 0 && d->dip_direction < 360))
-    return check_fail(ctx, sc, d->line, d->column, KARST_ERANGE,
-                      "%s: dip must be within [0, 90) and dip_direction within [0, 360) degrees, "
-                      "got %g and %g",
-                      path, d->dip, d->dip_direction);
+    return karst_scenario_fail_at(
+        ctx, sc, d->line, d->column, KARST_ERANGE,
+        "%s: dip must be within [0, 90) and dip_direction within [0, 360) degrees, "
+        "got %g and %g",
+        path, d->dip, d->dip_direction);
   return KARST_SUCCESS;
 }
 
@@ -3004,9 +3004,10 @@ static karst_error_t check_water_table(karst_ctx_t *ctx, const karst_scenario_t 
                                        const karst_surface_def_t *d, const char *path) {
   if (!d->given || d->path) return KARST_SUCCESS;
   if (!(d->elevation >= sc->domain_min[2] && d->elevation <= sc->domain_max[2]))
-    return check_fail(ctx, sc, d->line, d->column, KARST_ERANGE,
-                      "%s.elevation must be within the domain's z range [%g, %g] m, got %g", path,
-                      sc->domain_min[2], sc->domain_max[2], d->elevation);
+    return karst_scenario_fail_at(
+        ctx, sc, d->line, d->column, KARST_ERANGE,
+        "%s.elevation must be within the domain's z range [%g, %g] m, got %g", path,
+        sc->domain_min[2], sc->domain_max[2], d->elevation);
   return KARST_SUCCESS;
 }
 
@@ -3033,19 +3034,21 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
   /* Per-field ranges of the top-level scalar and map keys. */
   if ((err = check_values(ctx, sc, &top_schema, (const char *)sc, "", 0, 0))) return err;
   if (!isfinite(sc->permeability.background))
-    return check_fail(ctx, sc, 0, 0, KARST_ERANGE, "permeability.background must be finite");
+    return karst_scenario_fail_at(ctx, sc, 0, 0, KARST_ERANGE,
+                                  "permeability.background must be finite");
   for (int t = 0; t < KARST_TUNNEL_TYPE_COUNT; t++) {
     const karst_radius_range_t *rr = &sc->classification.radius[t];
     if (!(rr->min > 0) || !(rr->min <= rr->max) || !isfinite(rr->max))
-      return check_fail(ctx, sc, 0, 0, KARST_ERANGE,
-                        "classification.radius.%s must have 0 < min <= max, got [%g, %g]",
-                        karst_tunnel_type_name((karst_tunnel_type_t)t), rr->min, rr->max);
+      return karst_scenario_fail_at(
+          ctx, sc, 0, 0, KARST_ERANGE,
+          "classification.radius.%s must have 0 < min <= max, got [%g, %g]",
+          karst_tunnel_type_name((karst_tunnel_type_t)t), rr->min, rr->max);
   }
 
   double am_total = karst_amplification_points_total(&sc->amplification,
                                                      KARST_SCENARIO_MAX_AMPLIFICATION_POINTS, NULL);
   if (am_total > KARST_SCENARIO_MAX_AMPLIFICATION_POINTS)
-    return check_fail(
+    return karst_scenario_fail_at(
         ctx, sc, sc->pos_amplification.line, sc->pos_amplification.column, KARST_ERANGE,
         "amplification: %d steps of %d points growing by points_ratio %g make %.4g "
         "points, more than %d",
@@ -3054,9 +3057,10 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
 
   for (int a = 0; a < 3; a++) {
     if (!(sc->domain_min[a] < sc->domain_max[a]))
-      return check_fail(ctx, sc, pd->line, pd->column, KARST_ERANGE,
-                        "domain.max %c (%g m) must be greater than domain.min %c (%g m)", axis[a],
-                        sc->domain_max[a], axis[a], sc->domain_min[a]);
+      return karst_scenario_fail_at(
+          ctx, sc, pd->line, pd->column, KARST_ERANGE,
+          "domain.max %c (%g m) must be greater than domain.min %c (%g m)", axis[a],
+          sc->domain_max[a], axis[a], sc->domain_min[a]);
   }
 
   const karst_terrain_t *tr = &sc->terrain;
@@ -3066,37 +3070,42 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
     karst_ctx_t cover;
     karst_ctx_init(&cover);
     if (karst_surface_check_covers(&cover, tr->surface, lo, hi, "terrain.surface"))
-      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE, "%s", cover.errmsg);
+      return karst_scenario_fail_at(ctx, sc, pt->line, pt->column, KARST_ERANGE, "%s",
+                                    cover.errmsg);
     if (!(tr->zmax > sc->domain_min[2]))
-      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE,
-                        "terrain.surface '%s' peaks at %g m, not above domain.min z (%g m): "
-                        "there is no bedrock",
-                        tr->path ? tr->path : "", tr->zmax, sc->domain_min[2]);
+      return karst_scenario_fail_at(
+          ctx, sc, pt->line, pt->column, KARST_ERANGE,
+          "terrain.surface '%s' peaks at %g m, not above domain.min z (%g m): "
+          "there is no bedrock",
+          tr->path ? tr->path : "", tr->zmax, sc->domain_min[2]);
   } else if (tr->is_grid) {
     if (!tr->z || tr->ncols < 1 || tr->nrows < 1 || !(tr->cellsize > 0))
-      return check_fail(ctx, sc, pt->line, pt->column, KARST_EINVAL,
-                        "terrain.heightfield holds no grid");
+      return karst_scenario_fail_at(ctx, sc, pt->line, pt->column, KARST_EINVAL,
+                                    "terrain.heightfield holds no grid");
     double cs = tr->cellsize, slack = KARST_SCENARIO_GRID_COVER_SLACK * cs;
     double x0 = tr->xll - 0.5 * cs, x1 = tr->xll + ((double)tr->ncols - 0.5) * cs;
     double y0 = tr->yll - 0.5 * cs, y1 = tr->yll + ((double)tr->nrows - 0.5) * cs;
     if (sc->domain_min[0] < x0 - slack || sc->domain_max[0] > x1 + slack ||
         sc->domain_min[1] < y0 - slack || sc->domain_max[1] > y1 + slack)
-      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE,
-                        "terrain.heightfield '%s' covers x in [%g, %g], y in [%g, %g] m but the "
-                        "domain spans x in [%g, %g], y in [%g, %g] m",
-                        tr->path ? tr->path : "", x0, x1, y0, y1, sc->domain_min[0],
-                        sc->domain_max[0], sc->domain_min[1], sc->domain_max[1]);
+      return karst_scenario_fail_at(
+          ctx, sc, pt->line, pt->column, KARST_ERANGE,
+          "terrain.heightfield '%s' covers x in [%g, %g], y in [%g, %g] m but the "
+          "domain spans x in [%g, %g], y in [%g, %g] m",
+          tr->path ? tr->path : "", x0, x1, y0, y1, sc->domain_min[0], sc->domain_max[0],
+          sc->domain_min[1], sc->domain_max[1]);
     if (!(tr->zmax > sc->domain_min[2]))
-      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE,
-                        "terrain.heightfield '%s' peaks at %g m, not above domain.min z (%g m): "
-                        "there is no bedrock",
-                        tr->path ? tr->path : "", tr->zmax, sc->domain_min[2]);
+      return karst_scenario_fail_at(
+          ctx, sc, pt->line, pt->column, KARST_ERANGE,
+          "terrain.heightfield '%s' peaks at %g m, not above domain.min z (%g m): "
+          "there is no bedrock",
+          tr->path ? tr->path : "", tr->zmax, sc->domain_min[2]);
   } else {
     if (!isfinite(tr->elevation) || !(tr->elevation > sc->domain_min[2]))
-      return check_fail(ctx, sc, pt->line, pt->column, KARST_ERANGE,
-                        "terrain.elevation (%g m) must be above domain.min z (%g m): there would "
-                        "be no bedrock",
-                        tr->elevation, sc->domain_min[2]);
+      return karst_scenario_fail_at(
+          ctx, sc, pt->line, pt->column, KARST_ERANGE,
+          "terrain.elevation (%g m) must be above domain.min z (%g m): there would "
+          "be no bedrock",
+          tr->elevation, sc->domain_min[2]);
   }
 
   /* Surveyed stations in the domain and in the bedrock (the message says by how much), before
@@ -3110,9 +3119,10 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
     index_path(kpath, "key_points", i);
     join(sub, kpath, "water_table");
     if (kp->water_table.given && kp->type != KARST_KEYPOINT_SPRING)
-      return check_fail(ctx, sc, kp->water_table.line, kp->water_table.column, KARST_EINVAL,
-                        "%s: only a spring has a water table; '%s' is a %s", sub, kp->name,
-                        keypoint_type_names[kp->type]);
+      return karst_scenario_fail_at(ctx, sc, kp->water_table.line, kp->water_table.column,
+                                    KARST_EINVAL,
+                                    "%s: only a spring has a water table; '%s' is a %s", sub,
+                                    kp->name, keypoint_type_names[kp->type]);
     if ((err = check_surface(ctx, sc, &kp->water_table, sub))) return err;
     if ((err = check_water_table(ctx, sc, &kp->water_table, sub))) return err;
   }
@@ -3126,9 +3136,9 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
     if ((err = check_surface(ctx, sc, &st->bottom, sub2))) return err;
     for (int j = 0; j < i; j++)
       if (st->name[0] && !strcmp(st->name, sc->strata[j].name))
-        return check_fail(ctx, sc, st->line, st->column, KARST_EINVAL,
-                          "%s.name '%s' is already used by strata[%d] (line %d)", sub, st->name, j,
-                          sc->strata[j].line);
+        return karst_scenario_fail_at(ctx, sc, st->line, st->column, KARST_EINVAL,
+                                      "%s.name '%s' is already used by strata[%d] (line %d)", sub,
+                                      st->name, j, sc->strata[j].line);
   }
   for (int i = 0; i < sc->n_exclusions; i++) {
     const karst_exclusion_t *e = &sc->exclusions[i];
@@ -3142,8 +3152,8 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
         ok &= isfinite(e->polygon[v]);
     }
     if (e->kind < 0 || e->kind > 2 || !ok)
-      return check_fail(ctx, sc, e->line, e->column, KARST_EINVAL,
-                        "exclusions[%d] is not a valid box, sphere or prism", i);
+      return karst_scenario_fail_at(ctx, sc, e->line, e->column, KARST_EINVAL,
+                                    "exclusions[%d] is not a valid box, sphere or prism", i);
   }
   for (int i = 0; i < sc->n_faults; i++) {
     const karst_fault_t *f = &sc->faults[i];
@@ -3156,10 +3166,11 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
     for (int i = 0; i < c->n_sinks; i++) {
       const karst_keypoint_t *kp = &sc->key_points[c->sinks[i]];
       if (kp->n_drains_to > 0)
-        return check_fail(ctx, sc, kp->drains_line, kp->drains_column, KARST_EINVAL,
-                          "key point '%s' has drains_to and a row of the connectivity matrix "
-                          "(line %d); give one of them",
-                          kp->name, c->line);
+        return karst_scenario_fail_at(
+            ctx, sc, kp->drains_line, kp->drains_column, KARST_EINVAL,
+            "key point '%s' has drains_to and a row of the connectivity matrix "
+            "(line %d); give one of them",
+            kp->name, c->line);
     }
   }
 
@@ -3182,8 +3193,8 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
   for (int i = 0; i < sc->n_key_points; i++) {
     const karst_keypoint_t *kp = &sc->key_points[i];
     if (!kp->name[0] || !memchr(kp->name, '\0', sizeof kp->name))
-      return check_fail(ctx, sc, kp->line, kp->column, KARST_EINVAL, "key_points[%d] has no name",
-                        i);
+      return karst_scenario_fail_at(ctx, sc, kp->line, kp->column, KARST_EINVAL,
+                                    "key_points[%d] has no name", i);
   }
   {
     int m = 0, dup, first;
@@ -3192,40 +3203,42 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
     first_duplicate(sc, v, m, &dup, &first);
     free(v);
     if (dup >= 0)
-      return check_fail(ctx, sc, sc->key_points[dup].line, sc->key_points[dup].column, KARST_EINVAL,
-                        "key_points[%d].name '%s' is already used by key_points[%d]; names "
-                        "must be unique",
-                        dup, sc->key_points[dup].name, first);
+      return karst_scenario_fail_at(
+          ctx, sc, sc->key_points[dup].line, sc->key_points[dup].column, KARST_EINVAL,
+          "key_points[%d].name '%s' is already used by key_points[%d]; names "
+          "must be unique",
+          dup, sc->key_points[dup].name, first);
   }
   int springs = 0;
   for (int i = 0; i < sc->n_key_points; i++) {
     const karst_keypoint_t *kp = &sc->key_points[i];
     const double *p = kp->p;
     if ((int)kp->type < 0 || (int)kp->type > 2)
-      return check_fail(ctx, sc, kp->line, kp->column, KARST_EINVAL,
-                        "key_points[%d].type must be sink, spring or waypoint, got %d", i,
-                        (int)kp->type);
+      return karst_scenario_fail_at(ctx, sc, kp->line, kp->column, KARST_EINVAL,
+                                    "key_points[%d].type must be sink, spring or waypoint, got %d",
+                                    i, (int)kp->type);
     springs += kp->type == KARST_KEYPOINT_SPRING;
     for (int a = 0; a < 3; a++) {
       if (!isfinite(p[a]))
-        return check_fail(ctx, sc, kp->line, kp->column, KARST_ERANGE,
-                          "key_points[%d] '%s': position[%d] must be finite, got %g", i, kp->name,
-                          a, p[a]);
+        return karst_scenario_fail_at(ctx, sc, kp->line, kp->column, KARST_ERANGE,
+                                      "key_points[%d] '%s': position[%d] must be finite, got %g", i,
+                                      kp->name, a, p[a]);
     }
     for (int a = 0; a < 3; a++) {
       if (p[a] < sc->domain_min[a] || p[a] > sc->domain_max[a])
-        return check_fail(ctx, sc, kp->line, kp->column, KARST_ERANGE,
-                          "key_points[%d] '%s' at (%g, %g, %g) is outside the domain: %c must be "
-                          "within [%g, %g] m, got %g",
-                          i, kp->name, p[0], p[1], p[2], axis[a], sc->domain_min[a],
-                          sc->domain_max[a], p[a]);
+        return karst_scenario_fail_at(
+            ctx, sc, kp->line, kp->column, KARST_ERANGE,
+            "key_points[%d] '%s' at (%g, %g, %g) is outside the domain: %c must be "
+            "within [%g, %g] m, got %g",
+            i, kp->name, p[0], p[1], p[2], axis[a], sc->domain_min[a], sc->domain_max[a], p[a]);
     }
     double h = karst_terrain_height(&sc->terrain, p[0], p[1]);
     if (p[2] > h)
-      return check_fail(ctx, sc, kp->line, kp->column, KARST_ERANGE,
-                        "key_points[%d] '%s' at z = %g m is above the terrain (%g m at x = %g, "
-                        "y = %g); key points must lie in the bedrock",
-                        i, kp->name, p[2], h, p[0], p[1]);
+      return karst_scenario_fail_at(
+          ctx, sc, kp->line, kp->column, KARST_ERANGE,
+          "key_points[%d] '%s' at z = %g m is above the terrain (%g m at x = %g, "
+          "y = %g); key points must lie in the bedrock",
+          i, kp->name, p[2], h, p[0], p[1]);
   }
   {
     int dup, first;
@@ -3233,35 +3246,39 @@ karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc)
       return karst_set_error(ctx, KARST_ENOMEM, "out of memory checking key-point positions");
     if (dup >= 0) {
       const karst_keypoint_t *a = &sc->key_points[first], *b = &sc->key_points[dup];
-      return check_fail(ctx, sc, b->line, b->column, KARST_EINVAL,
-                        "key_points[%d] '%s' (line %d) is at the same position (%g, %g, %g) as "
-                        "key_points[%d] '%s' (line %d); key points must be at distinct positions",
-                        dup, b->name, b->line, b->p[0], b->p[1], b->p[2], first, a->name, a->line);
+      return karst_scenario_fail_at(
+          ctx, sc, b->line, b->column, KARST_EINVAL,
+          "key_points[%d] '%s' (line %d) is at the same position (%g, %g, %g) as "
+          "key_points[%d] '%s' (line %d); key points must be at distinct positions",
+          dup, b->name, b->line, b->p[0], b->p[1], b->p[2], first, a->name, a->line);
     }
   }
   if (springs == 0)
-    return check_fail(ctx, sc, sc->pos_key_points.line, sc->pos_key_points.column, KARST_EINVAL,
-                      "no spring among the %d key points: the network needs at least one "
-                      "(key_points: - {type: spring, position: [x, y, z]})",
-                      sc->n_key_points);
+    return karst_scenario_fail_at(
+        ctx, sc, sc->pos_key_points.line, sc->pos_key_points.column, KARST_EINVAL,
+        "no spring among the %d key points: the network needs at least one "
+        "(key_points: - {type: spring, position: [x, y, z]})",
+        sc->n_key_points);
 
   for (int i = 0; i < sc->n_prescribed; i++) {
     const karst_prescribed_path_t *pp = &sc->prescribed[i];
     if (pp->a < 0 || pp->a >= sc->n_key_points || pp->b < 0 || pp->b >= sc->n_key_points)
-      return check_fail(ctx, sc, pp->line, pp->column, KARST_EINVAL,
-                        "prescribed_paths[%d] refers to key points %d and %d; there are %d", i,
-                        pp->a, pp->b, sc->n_key_points);
+      return karst_scenario_fail_at(
+          ctx, sc, pp->line, pp->column, KARST_EINVAL,
+          "prescribed_paths[%d] refers to key points %d and %d; there are %d", i, pp->a, pp->b,
+          sc->n_key_points);
     if (pp->a == pp->b)
-      return check_fail(ctx, sc, pp->line, pp->column, KARST_EINVAL,
-                        "prescribed_paths[%d] joins key point '%s' to itself", i,
-                        sc->key_points[pp->a].name);
+      return karst_scenario_fail_at(ctx, sc, pp->line, pp->column, KARST_EINVAL,
+                                    "prescribed_paths[%d] joins key point '%s' to itself", i,
+                                    sc->key_points[pp->a].name);
   }
 
   if (sc->sampling.feature_radius > sc->sampling.fill_radius)
-    return check_fail(ctx, sc, sc->pos_sampling.line, sc->pos_sampling.column, KARST_ERANGE,
-                      "sampling.feature_radius (%g m) must not exceed sampling.fill_radius (%g m): "
-                      "features are sampled more finely than the fill",
-                      sc->sampling.feature_radius, sc->sampling.fill_radius);
+    return karst_scenario_fail_at(
+        ctx, sc, sc->pos_sampling.line, sc->pos_sampling.column, KARST_ERANGE,
+        "sampling.feature_radius (%g m) must not exceed sampling.fill_radius (%g m): "
+        "features are sampled more finely than the fill",
+        sc->sampling.feature_radius, sc->sampling.fill_radius);
   return KARST_SUCCESS;
 }
 
