@@ -291,6 +291,13 @@ typedef struct karst_blocks_authored {
 /** Bounding box lo[3], hi[3] of @p s (empty: lo > hi). O(nodes). */
 void karst_blocks_shape_box(const karst_blocks_shape_t *s, double box[6]);
 
+/** A user-placed fracture disc (§4.1) of the tile of type @c tile (blocks.user_discs). */
+typedef struct karst_blocks_user_disc {
+  int tile;                 /**< karst_block_type_t */
+  karst_blocks_disc_t disc; /**< tile coordinates; the normal as given (the tile normalises it) */
+  int line, column;
+} karst_blocks_user_disc_t;
+
 /** A stratum by elevation band: below @c below (the last may be unbounded). */
 typedef struct karst_blocks_stratum {
   char *name;
@@ -314,9 +321,11 @@ typedef struct karst_blocks_section {
   char *warp_image; /**< as given (relative to the scenario) */
   int n_strata;
   karst_blocks_stratum_t *strata;
-  int n_authored;                    /**< user-authored blocks (blocks.authored) */
-  karst_blocks_authored_t *authored; /**< in tile coordinates, each in its type's tile */
-  int line, column;                  /**< where the section starts */
+  int n_authored;                       /**< user-authored blocks (blocks.authored) */
+  karst_blocks_authored_t *authored;    /**< in tile coordinates, each in its type's tile */
+  int n_user_discs;                     /**< user-placed fracture discs (blocks.user_discs) */
+  karst_blocks_user_disc_t *user_discs; /**< in tile coordinates, each in its type's tile */
+  int line, column;                     /**< where the section starts */
 } karst_blocks_section_t;
 
 /** Defaults (docs/blocks.md). */
@@ -329,6 +338,13 @@ int karst_blocks_section_stratum(void *arg, const double p[3]);
  */
 void karst_blocks_section_tile_params(const karst_blocks_section_t *b, int type, uint64_t seed,
                                       karst_blocks_tile_params_t *par);
+
+/**
+ * The user-placed discs of the section @p b whose tile is @p type, copied to @p discs
+ * (capacity b->n_user_discs); returns their count. O(discs).
+ */
+int karst_blocks_section_user_discs(const karst_blocks_section_t *b, int type,
+                                    karst_blocks_disc_t *discs);
 
 /**
  * Add the authored blocks of the section @p b whose tile is @p type to @p tree: their node

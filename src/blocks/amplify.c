@@ -18,6 +18,7 @@ struct karst_blocks_amplified {
   char *image;                 /* the relief image, relative to the scenario */
   karst_sdf_t *authored;       /* the section's authored blocks, borrowed by the tiles */
   karst_int_t *authored_nodes; /* their nodes, tile by tile */
+  karst_blocks_disc_t *discs;  /* the section's user discs, tile by tile, borrowed by the tiles */
   double box[6];
 };
 
@@ -27,6 +28,7 @@ void karst_blocks_amplified_free(karst_blocks_amplified_t *a) {
     karst_blocks_tile_free(a->tiles[k]);
   karst_sdf_free(a->authored);
   free(a->authored_nodes);
+  free(a->discs);
   free(a->stratum_tile);
   free(a->image);
   karst_blocks_replica_free(a->rep);
@@ -93,7 +95,14 @@ karst_error_t karst_blocks_amplify(karst_ctx_t *ctx, const karst_scenario_t *sc,
       goto fail;
     }
   }
-  int used = 0;
+  if (b->n_user_discs) {
+    a->discs = malloc((size_t)b->n_user_discs * sizeof *a->discs);
+    if (!a->discs) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "blocks: out of memory");
+      goto fail;
+    }
+  }
+  int used = 0, used_discs = 0;
   for (int i = 0; i < b->n_strata; i++) {
     int k = 0;
     while (k < a->n_tiles && a->tiles[k]->par.type != b->strata[i].tile)
@@ -109,6 +118,12 @@ karst_error_t karst_blocks_amplify(karst_ctx_t *ctx, const karst_scenario_t *sc,
         par.authored = a->authored;
         par.authored_nodes = a->authored_nodes + used;
         used += par.n_authored;
+      }
+      if (a->discs) { /* this type's user-placed discs (tile coordinates) */
+        par.user_discs = a->discs + used_discs;
+        par.n_user_discs = karst_blocks_section_user_discs(b, par.type, a->discs + used_discs);
+        used_discs += par.n_user_discs;
+        if (!par.n_user_discs) par.user_discs = NULL;
       }
       if ((err = karst_blocks_tile_create(ctx, &par, &a->tiles[k]))) goto fail;
       a->n_tiles++;

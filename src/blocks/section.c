@@ -42,6 +42,7 @@ void karst_blocks_section_free(karst_blocks_section_t *b) {
   for (int i = 0; i < b->n_authored; i++)
     shape_free(&b->authored[i].shape);
   free(b->authored);
+  free(b->user_discs);
   free(b->warp_image);
   free(b);
 }
@@ -72,6 +73,15 @@ void karst_blocks_section_tile_params(const karst_blocks_section_t *b, int type,
   par->warp.amplitude = b->warp_amplitude;
   par->warp.wavelength = b->warp_wavelength;
   par->warp.image = b->warp_image;
+}
+
+/** The user's discs of tile @p type, in the order of blocks.user_discs. O(discs). */
+int karst_blocks_section_user_discs(const karst_blocks_section_t *b, int type,
+                                    karst_blocks_disc_t *discs) {
+  int n = 0;
+  for (int i = 0; i < b->n_user_discs; i++)
+    if (b->user_discs[i].tile == type) discs[n++] = b->user_discs[i].disc;
+  return n;
 }
 
 /** Bounding box of an authored node: union, intersection or first child of its children's. */

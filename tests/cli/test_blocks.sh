@@ -51,8 +51,9 @@ assert (uses == 2).all(), np.unique(uses)
 PY
 
 # The shipped gorge (Fig. 11 of the paper), made light: 10 m tiles (1 800 points each) over the
-# strip 90 <= x <= 110 of its region, and one authored block (a sphere of radius 1.5 m in the
-# tabular tile). Every other key as shipped.
+# strip 90 <= x <= 110 of its region, one authored block (a sphere of radius 1.5 m in the
+# tabular tile) and one user-placed disc (the plane x = 2.5 of the tabular tile, radius 20 m: with
+# its periodic copies it cuts the whole plane). Every other key as shipped.
 G=$SRC/datasets/scenarios/gorge.yaml
 sed -e "s|heightfield: terrain/gorge.asc|heightfield: $SRC/datasets/scenarios/terrain/gorge.asc|" \
   -e 's|tile_size: 20|tile_size: 10|' \
@@ -60,8 +61,10 @@ sed -e "s|heightfield: terrain/gorge.asc|heightfield: $SRC/datasets/scenarios/te
 cat >> "$out/g.yaml" <<'YAML'
   authored:
     - {tile: tabular, sphere: {center: [5, 5, 5], radius: 1.5}}
+  user_discs:
+    - {tile: tabular, center: [2.5, 5, 5], normal: [1, 0, 0], radius: 20}
 YAML
-[ "$(diff "$G" "$out/g.yaml" | grep -c '^>')" = 5 ] || fail "the gorge was not derived as meant"
+[ "$(diff "$G" "$out/g.yaml" | grep -c '^>')" = 7 ] || fail "the gorge was not derived as meant"
 "$KARST" validate "$out/g.yaml" > /dev/null
 "$KARST" blocks "$out/g.yaml" -o "$out/g" --voxel 1 -j 2 --quiet
 for f in tiles/equidimensional.vtp tiles/tabular.vtp terrain_blocks.vtp run.json; do
@@ -76,6 +79,7 @@ d = sys.argv[1]
 run = json.load(open(d + "/run.json"))
 assert [t["type"] for t in run["tiles"]] == ["equidimensional", "tabular"], run["tiles"]
 assert [t["authored_blocks"] for t in run["tiles"]] == [0, 1], run["tiles"]
+assert [t["user_discs"] for t in run["tiles"]] == [0, 1], run["tiles"]
 rep = run["replication"]
 assert rep["copies"] > 0 and rep["block_triangles"] > 0, rep
 assert [s["name"] for s in rep["strata"]] == ["lower", "upper"], rep["strata"]
@@ -94,6 +98,12 @@ assert abs(rad.mean() - 1.5) < 0.15 and rad.max() < 1.5 + 0.6, (rad.mean(), rad.
 # no generated block enters the sphere: their vertices stay outside it (polygonized at 1 m)
 other = np.unique(T[ids != last - 1])
 assert np.linalg.norm(P[other] - [5, 5, 5], axis=1).min() > 1.5 - 0.6
+# the user's disc: no block of the tabular tile straddles the plane x = 2.5 (nor its periodic
+# copies at -7.5 and 12.5); each block's vertices lie on one side, within the 0.1 m tile voxel
+for b in np.unique(ids):
+    x = P[np.unique(T[ids == b]), 0]
+    for plane in (-7.5, 2.5, 12.5):
+        assert not (x.min() < plane - 0.2 and x.max() > plane + 0.2), (b, x.min(), x.max())
 pd = read(d + "/terrain_blocks.vtp")
 bid, bty = v2n(pd.GetCellData().GetArray("block_id")), v2n(pd.GetCellData().GetArray("block_type"))
 P = v2n(pd.GetPoints().GetData()); T = v2n(pd.GetPolys().GetConnectivityArray()).reshape(-1, 3)

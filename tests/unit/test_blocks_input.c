@@ -250,6 +250,85 @@ static void test_authored_errors(void **state) {
 #undef AUTH
 }
 
+/* blocks.user_discs: discs read as given, sorted to their tiles by karst_blocks_section_user_discs
+ * (hand values: two discs in the tabular tile, one in the equidimensional tile). */
+static void test_user_discs_ok(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  assert_int_equal(
+      load(&ctx,
+           "blocks:\n"
+           "  tile_size: 10\n"
+           "  strata: [{name: a, below: 50, tile: equidimensional},\n"
+           "           {name: b, tile: tabular}]\n"
+           "  user_discs:\n"
+           "    - {tile: tabular, center: [2.5, 5, 5], normal: [2, 0, 0], radius: 20}\n"
+           "    - {tile: equidimensional, center: [0, 10, 3], normal: [0, 1, 1], "
+           "radius: 1.5}\n"
+           "    - {tile: tabular, center: [5, 5, 7], normal: [0, 0, 1], radius: 4}\n",
+           &sc),
+      KARST_SUCCESS);
+  const karst_blocks_section_t *b = sc.blocks;
+  assert_int_equal(b->n_user_discs, 3);
+  assert_int_equal(b->user_discs[0].tile, KARST_BLOCK_TABULAR);
+  assert_int_equal(b->user_discs[1].tile, KARST_BLOCK_EQUIDIMENSIONAL);
+  assert_int_equal(b->user_discs[0].line, 11);
+  assert_int_equal(b->user_discs[2].line, 13);
+  karst_blocks_disc_t d[3];
+  assert_int_equal(karst_blocks_section_user_discs(b, KARST_BLOCK_TABULAR, d), 2);
+  assert_close(d[0].c[0], 2.5, 0);
+  assert_close(d[0].n[0], 2, 0); /* as given: the tile normalises */
+  assert_close(d[0].radius, 20, 0);
+  assert_close(d[1].c[2], 7, 0);
+  assert_close(d[1].radius, 4, 0);
+  assert_int_equal(karst_blocks_section_user_discs(b, KARST_BLOCK_EQUIDIMENSIONAL, d), 1);
+  assert_close(d[0].c[1], 10, 0);
+  assert_close(d[0].n[2], 1, 0);
+  assert_int_equal(karst_blocks_section_user_discs(b, KARST_BLOCK_COLUMNAR, d), 0);
+  karst_scenario_destroy(&sc);
+}
+
+static void test_user_discs_errors(void **state) {
+  (void)state;
+  const char *head =
+      "blocks:\n  tile_size: 10\n  strata: [{name: a, tile: tabular}]\n  user_discs:\n";
+  char text[1024];
+#define DISC(body, lc, words)                                                                      \
+  do {                                                                                             \
+    snprintf(text, sizeof text, "%s%s", head, body);                                               \
+    expect_error(text, lc, words);                                                                 \
+  } while (0)
+  DISC("    - {center: [5, 5, 5], normal: [0, 0, 1], radius: 1}\n",
+       ":10:7:", "required key 'tile'");
+  DISC("    - {tile: tabular, normal: [0, 0, 1], radius: 1}\n", ":10:7:", "required key 'center'");
+  DISC("    - {tile: tabular, center: [5, 5, 5], radius: 1}\n", ":10:7:", "required key 'normal'");
+  DISC("    - {tile: tabular, center: [5, 5, 5], normal: [0, 0, 1]}\n",
+       ":10:7:", "required key 'radius'");
+  DISC("    - {tile: tabulr, center: [5, 5, 5], normal: [0, 0, 1], radius: 1}\n",
+       ":10:14:", "did you mean 'tabular'");
+  DISC("    - {tile: columnar, center: [5, 5, 5], normal: [0, 0, 1], radius: 1}\n",
+       ":10:7:", "no stratum has the tile 'columnar'");
+  DISC("    - {tile: tabular, center: [5, 5], normal: [0, 0, 1], radius: 1}\n",
+       ":10:31:", "3 numbers");
+  DISC("    - {tile: tabular, center: [5, 11, 5], normal: [0, 0, 1], radius: 1}\n",
+       ":10:7:", "y = 11 is outside the tile");
+  DISC("    - {tile: tabular, center: [5, 5, .nan], normal: [0, 0, 1], radius: 1}\n", ":10:", "");
+  DISC("    - {tile: tabular, center: [5, 5, 5], normal: [0, 0, 0], radius: 1}\n",
+       ":10:7:", "normal must not be zero");
+  DISC("    - {tile: tabular, center: [5, 5, 5], normal: [0, 0, 1], radius: 0}\n",
+       ":10:69:", "> 0 m");
+  DISC("    - {tile: tabular, center: [5, 5, 5], normal: [0, 0, 1], radius: 41}\n",
+       ":10:7:", "at most 4 tile_size = 40 m");
+  DISC("    - {tile: tabular, center: [5, 5, 5], normal: [0, 0, 1], radius: 1, dip: 3}\n",
+       ":10:", "unknown key 'dip'");
+  DISC("    - 5\n", ":10:7:", "must be a map");
+  expect_error("blocks:\n  strata: [{name: a, tile: tabular}]\n  user_discs: 5\n",
+               ":8:15:", "list of maps");
+#undef DISC
+}
+
 static int setup(void **state) {
   (void)state;
   snprintf(dir, sizeof dir, "/tmp/karst_blocks_input_XXXXXX");
@@ -264,10 +343,9 @@ static int teardown(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_section_ok),
-      cmocka_unit_test(test_section_errors),
-      cmocka_unit_test(test_authored_ok),
-      cmocka_unit_test(test_authored_errors),
+      cmocka_unit_test(test_section_ok),    cmocka_unit_test(test_section_errors),
+      cmocka_unit_test(test_authored_ok),   cmocka_unit_test(test_authored_errors),
+      cmocka_unit_test(test_user_discs_ok), cmocka_unit_test(test_user_discs_errors),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }
