@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "amplification/amplification_internal.h"
 #include "karst/paths.h"
 #include "karst/routing.h"
 
@@ -75,6 +76,137 @@ static karst_error_t block_junctions(karst_ctx_t *ctx, const karst_skeleton_t *s
 static void unblock(unsigned char *blocked, const karst_int_t *list, karst_int_t n) {
   for (karst_int_t k = 0; k < n; k++)
     blocked[list[k]] = 0;
+}
+
+/* A uniform grid of the graph's vertices off the network, for nearest-vertex queries. */
+typedef struct free_grid {
+  double lo[3], h;
+  long dim[3];
+  karst_int_t *start; /* cell c holds item[start[c] .. start[c + 1]) */
+  karst_int_t *item;  /* vertex indices, ascending within a cell */
+} free_grid_t;
+
+static long grid_cell(const free_grid_t *G, const double *p, int k) {
+  double c = floor((p[k] - G->lo[k]) / G->h);
+  return c < 0 ? 0 : (c >= (double)G->dim[k] ? G->dim[k] - 1 : (long)c);
+}
+
+/* Grid of the vertices v with !in_net[v]; *n_free their count. About two per cell.
+ * O(n + cells). */
+static karst_error_t grid_build(karst_ctx_t *ctx, karst_int_t n, const double *xyz,
+                                const unsigned char *in_net, free_grid_t *G, karst_int_t *n_free) {
+  double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  memset(G, 0, sizeof *G);
+  G->lo[0] = G->lo[1] = G->lo[2] = INFINITY;
+  karst_int_t m = 0;
+  for (karst_int_t v = 0; v < n; v++) {
+    if (in_net[v]) continue;
+    m++;
+    for (int k = 0; k < 3; k++) {
+      if (xyz[3 * v + k] < G->lo[k]) G->lo[k] = xyz[3 * v + k];
+      if (xyz[3 * v + k] > hi[k]) hi[k] = xyz[3 * v + k];
+    }
+  }
+  *n_free = m;
+  if (m == 0) return KARST_SUCCESS;
+  double ext[3], vol = 1;
+  for (int k = 0; k < 3; k++) {
+    ext[k] = hi[k] - G->lo[k];
+    if (!(ext[k] > 0)) ext[k] = 0;
+  }
+  double big = fmax(ext[0], fmax(ext[1], ext[2]));
+  for (int k = 0; k < 3; k++)
+    vol *= fmax(ext[k], 1e-6 * big + 1e-12);
+  G->h = cbrt(2 * vol / (double)m);
+  if (!(G->h > 0) || !isfinite(G->h)) G->h = 1;
+  long cells;
+  for (;;) { /* a flat or thin set of vertices: coarser cells, at most about 4 per vertex */
+    double prod = 1;
+    for (int k = 0; k < 3; k++)
+      prod *= floor(ext[k] / G->h) + 1;
+    if (prod <= 4.0 * (double)m + 64) break;
+    G->h *= 1.25;
+  }
+  cells = 1;
+  for (int k = 0; k < 3; k++) {
+    G->dim[k] = (long)(floor(ext[k] / G->h) + 1);
+    cells *= G->dim[k];
+  }
+  G->start = calloc((size_t)cells + 1, sizeof *G->start);
+  G->item = malloc((size_t)m * sizeof *G->item);
+  if (!G->start || !G->item)
+    return karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
+  for (karst_int_t v = 0; v < n; v++) {
+    if (in_net[v]) continue;
+    const double *p = &xyz[3 * v];
+    long c = (grid_cell(G, p, 2) * G->dim[1] + grid_cell(G, p, 1)) * G->dim[0] + grid_cell(G, p, 0);
+    G->start[c + 1]++;
+  }
+  for (long c = 0; c < cells; c++)
+    G->start[c + 1] += G->start[c];
+  karst_int_t *fill = malloc((size_t)cells * sizeof *fill);
+  if (!fill) return karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
+  memcpy(fill, G->start, (size_t)cells * sizeof *fill);
+  for (karst_int_t v = 0; v < n; v++) { /* ascending v: ascending within each cell */
+    if (in_net[v]) continue;
+    const double *p = &xyz[3 * v];
+    long c = (grid_cell(G, p, 2) * G->dim[1] + grid_cell(G, p, 1)) * G->dim[0] + grid_cell(G, p, 0);
+    G->item[fill[c]++] = v;
+  }
+  free(fill);
+  return KARST_SUCCESS;
+}
+
+/* The nearest vertex of the grid to @p p, ties to the smaller index (as a scan of every vertex
+ * in ascending order with a strict '<' finds): shells of cells at Chebyshev distance r around
+ * p's cell until the best distance is below (r - 1) h, the least distance of shell r. O(1)
+ * expected for points among the vertices. */
+static karst_int_t grid_nearest(const free_grid_t *G, const double *xyz, const double *p) {
+  long c0[3];
+  for (int k = 0; k < 3; k++)
+    c0[k] = grid_cell(G, p, k);
+  long rmax = G->dim[0] > G->dim[1] ? G->dim[0] : G->dim[1];
+  if (G->dim[2] > rmax) rmax = G->dim[2];
+  double best = INFINITY;
+  karst_int_t bv = -1;
+  for (long r = 0; r <= rmax; r++) {
+    /* p lies in its cell (or beyond the grid's side): shell r is at least (r - 1) h away */
+    if (r > 0 && best < (double)(r - 1) * G->h) break;
+    long lo[3], hi[3];
+    for (int k = 0; k < 3; k++) {
+      lo[k] = c0[k] - r < 0 ? 0 : c0[k] - r;
+      hi[k] = c0[k] + r >= G->dim[k] ? G->dim[k] - 1 : c0[k] + r;
+    }
+    for (long z = lo[2]; z <= hi[2]; z++)
+      for (long y = lo[1]; y <= hi[1]; y++) {
+        int face = labs(z - c0[2]) == r || labs(y - c0[1]) == r;
+        for (long x = lo[0]; x <= hi[0]; x++) {
+          if (!face && labs(x - c0[0]) != r) continue; /* inside the shell: done before */
+          long c = (z * G->dim[1] + y) * G->dim[0] + x;
+          for (karst_int_t j = G->start[c]; j < G->start[c + 1]; j++) {
+            karst_int_t v = G->item[j];
+            double d = dist3(&xyz[3 * v], p);
+            if (d < best || (d == best && v < bv)) best = d, bv = v;
+          }
+        }
+      }
+  }
+  return bv;
+}
+
+/* snap[i]: the vertex off the network nearest to point i, -1 when there is none (see
+ * amplification_internal.h). O(n + points) expected. */
+karst_error_t karst_i_amplification_snap(karst_ctx_t *ctx, karst_int_t n, const double *xyz,
+                                         const unsigned char *in_net, const double *pts, int n_pts,
+                                         karst_int_t *snap) {
+  free_grid_t G;
+  karst_int_t m = 0;
+  karst_error_t err = grid_build(ctx, n, xyz, in_net, &G, &m);
+  for (int i = 0; i < n_pts; i++)
+    snap[i] = err || m == 0 ? -1 : grid_nearest(&G, xyz, &pts[3 * i]);
+  free(G.start);
+  free(G.item);
+  return err;
 }
 
 /* The paper's draw (§5.2): @p n points uniformly in the bounding box of @p net clipped to the
@@ -224,7 +356,6 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   unsigned char *in_net = NULL, *blocked = NULL;
   double *pts = NULL;
   karst_int_t *snap = NULL;
-  double *snap_d = NULL;
   karst_int_t *cleared = NULL, *junc = NULL;
   karst_path_t p1, p2;
   karst_path_init(&p1);
@@ -246,8 +377,7 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   size_t max_pts = largest > 1 ? (size_t)largest : 1;
   pts = malloc(max_pts * 3 * sizeof *pts);
   snap = malloc(max_pts * sizeof *snap);
-  snap_d = malloc(max_pts * sizeof *snap_d);
-  if (!in_net || !blocked || !pts || !snap || !snap_d) {
+  if (!in_net || !blocked || !pts || !snap) {
     err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
     goto cleanup;
   }
@@ -267,16 +397,9 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
       goto cleanup;
     }
     reach *= am->reach_ratio;
-    /* Snap every point to its nearest vertex off the network: one pass over the graph. */
-    for (int i = 0; i < n_pts; i++)
-      snap[i] = -1, snap_d[i] = INFINITY;
-    for (karst_int_t v = 0; v < g->n; v++) {
-      if (in_net[v]) continue;
-      for (int i = 0; i < n_pts; i++) {
-        double d = dist3(&g->xyz[3 * v], &pts[3 * i]);
-        if (d < snap_d[i]) snap_d[i] = d, snap[i] = v;
-      }
-    }
+    /* Snap every point to its nearest vertex off the network (ties: the smaller index). */
+    if ((err = karst_i_amplification_snap(ctx, g->n, g->xyz, in_net, pts, n_pts, snap)))
+      goto cleanup;
     for (int i = 0; i < n_pts; i++) {
       if (karst_interrupted(ctx)) {
         err = karst_set_error(ctx, KARST_EINTERRUPTED, "amplification interrupted");
@@ -367,7 +490,6 @@ cleanup:
   free(blocked);
   free(pts);
   free(snap);
-  free(snap_d);
   free(cleared);
   free(junc);
   return err;

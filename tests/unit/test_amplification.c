@@ -4,13 +4,17 @@
  * loops, everything stays connected; the hierarchical draw stays near the previous
  * step and tributaries join passages, not junctions). */
 #include <limits.h>
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include <cmocka.h>
 
+#include "amplification/amplification_internal.h"
 #include "geology_fixture.h"
 #include "graph_fixture.h"
 #include "test_util.h"
@@ -396,6 +400,63 @@ static void test_displacement_scale_invariant(void **state) {
   }
 }
 
+/* The snap of amplification points to free graph vertices (a grid searched in shells) against the
+ * independent method it replaced: a scan of every vertex in ascending order with a strict '<'.
+ * Three clouds: random vertices with random points inside and outside their box; a lattice with
+ * points at cell centres and on lattice planes (many exact ties: the smaller index must win); a
+ * flat cloud (z = 0, the grid's thin case). A third of the vertices are in the network. */
+static void test_snap_matches_scan(void **state) {
+  (void)state;
+  karst_rng_t rng;
+  karst_rng_derive(&rng, 42, 7, 0);
+  enum { NV = 3000, NP = 2000 };
+  double *xyz = malloc(3 * NV * sizeof *xyz), *pts = malloc(3 * NP * sizeof *pts);
+  unsigned char *in_net = malloc(NV);
+  karst_int_t *snap = malloc(NP * sizeof *snap);
+  assert_non_null(xyz && pts && in_net && snap);
+  for (int cloud = 0; cloud < 3; cloud++) {
+    for (int v = 0; v < NV; v++) {
+      for (int k = 0; k < 3; k++)
+        xyz[3 * v + k] = cloud == 1 ? (double)((v / (k == 0   ? 1
+                                                     : k == 1 ? 15
+                                                              : 225)) %
+                                               15) *
+                                          2.0
+                                    : karst_rng_uniform_range(&rng, 0, 100);
+      if (cloud == 2) xyz[3 * v + 2] = 0;
+      in_net[v] = karst_rng_uniform(&rng) < 1.0 / 3;
+    }
+    for (int i = 0; i < NP; i++)
+      for (int k = 0; k < 3; k++) {
+        double u = karst_rng_uniform(&rng);
+        pts[3 * i + k] = cloud == 1 ? (double)(int)(u * 16) * (i % 2 ? 1.0 : 2.0) - 1
+                                    : -30 + 160 * u; /* some outside the box */
+      }
+    assert_int_equal(karst_i_amplification_snap(NULL, NV, xyz, in_net, pts, NP, snap),
+                     KARST_SUCCESS);
+    for (int i = 0; i < NP; i++) {
+      karst_int_t best = -1;
+      double bd = INFINITY;
+      for (int v = 0; v < NV; v++) {
+        if (in_net[v]) continue;
+        double dx = xyz[3 * v] - pts[3 * i], dy = xyz[3 * v + 1] - pts[3 * i + 1],
+               dz = xyz[3 * v + 2] - pts[3 * i + 2], d = sqrt(dx * dx + dy * dy + dz * dz);
+        if (d < bd) bd = d, best = v;
+      }
+      if (snap[i] != best)
+        print_error("cloud %d point %d: grid %lld, scan %lld\n", cloud, i, (long long)snap[i],
+                    (long long)best);
+      assert_int_equal(snap[i], best);
+    }
+  }
+  /* every vertex in the network: nothing to snap to */
+  memset(in_net, 1, NV);
+  assert_int_equal(karst_i_amplification_snap(NULL, NV, xyz, in_net, pts, 5, snap), KARST_SUCCESS);
+  for (int i = 0; i < 5; i++)
+    assert_int_equal(snap[i], -1);
+  free(xyz), free(pts), free(in_net), free(snap);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_theta_mapping),
@@ -403,6 +464,7 @@ int main(void) {
       cmocka_unit_test(test_displacement_scale_invariant),
       cmocka_unit_test(test_ramify),
       cmocka_unit_test(test_ramify_hierarchy),
+      cmocka_unit_test(test_snap_matches_scan),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
