@@ -37,8 +37,9 @@ typedef struct karst_generate_stats {
   karst_int_t n_nodes, n_edges;
   double total_length;
   karst_int_t n_skeleton_nodes; /**< graph vertices on the skeleton S before amplification (#S of
-                                   Table 1) */
-  double skeleton_length;       /**< total length (m) of S before amplification */
+                                   Table 1): surveyed legs and key-point routes, not the
+                                   ramified branches */
+  double skeleton_length;       /**< total length (m) of S before amplification (the same) */
   double stage_seconds[KARST_STAGE_COUNT];
   size_t peak_bytes; /**< peak resident memory of the process (getrusage), for benchmarks */
   uint64_t seed, realisation; /**< of the realisation */

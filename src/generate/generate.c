@@ -177,8 +177,14 @@ static karst_error_t run_generation(karst_ctx_t *ctx, const karst_geology_t *geo
   karst_generation_track_begin(&track, sk, gi);
   tracking = 1;
   karst_int_t kept = 0;
+  const karst_int_t nodes_before = sk->net.n_nodes;
+  const double length_before = stats ? total_length(&sk->net) : 0;
   if ((err = karst_skeleton_build_routes(ctx, g, &plan, view.reuse, lb_g, sk, &kept))) goto cleanup;
   if ((err = mark_key_points(ctx, sc, g, &plan, sk))) goto cleanup;
+  if (stats) { /* S before amplification: what this generation's routes added */
+    stats->n_skeleton_nodes += sk->net.n_nodes - nodes_before;
+    stats->skeleton_length += total_length(&sk->net) - length_before;
+  }
   if (station_vertex &&
       (err = karst_conditioning_assign_springs(ctx, &view, station_vertex, plan.key_spring, sk)))
     goto cleanup;
@@ -246,6 +252,10 @@ karst_error_t karst_i_generate_network(karst_ctx_t *ctx, const karst_geology_t *
   sk_ready = 1;
   /* The surveyed legs first (edge attribute "observed"), so that every route may follow them. */
   if ((err = karst_conditioning_lay(ctx, sc, g, station_vertex, &sk))) goto cleanup;
+  if (stats) { /* S counts the surveyed legs, then each generation's routes (run_generation) */
+    stats->n_skeleton_nodes = sk.net.n_nodes;
+    stats->skeleton_length = total_length(&sk.net);
+  }
   if (stats) stats->stage_seconds[KARST_STAGE_SKELETON] += karst_i_now() - t;
   karst_rng_derive(&r_amp, seed, realisation, KARST_I_STREAM_AMPLIFICATION);
   const int G = karst_generation_count(sc);
@@ -255,10 +265,6 @@ karst_error_t karst_i_generate_network(karst_ctx_t *ctx, const karst_geology_t *
     if ((err = run_generation(ctx, geo, seed, realisation, gi, g, station_vertex, lb, &r_amp, &sk,
                               stats)))
       goto cleanup;
-  if (stats) {
-    stats->n_skeleton_nodes = sk.net.n_nodes;
-    stats->skeleton_length = total_length(&sk.net);
-  }
 
   karst_progress(ctx, "amplification", 0, 1);
   t = karst_i_now();

@@ -233,6 +233,20 @@ static void test_generate_end_to_end(void **state) {
   ctx.nthreads = 2;
   assert_int_equal(karst_generate(&ctx, &f.sc, 7, 0, &b, NULL, NULL), KARST_SUCCESS);
   assert_same_network(&a, &b);
+  /* S is counted before amplification: the same with no amplification step (the ramified
+   * branches come after the skeleton and do not change it), and shorter than the network
+   * that the two steps of the fixture grow from it. */
+  assert_true(st.skeleton_length > 0 && st.n_skeleton_nodes > 1);
+  assert_true(st.skeleton_length < st.total_length);
+  assert_true(st.n_skeleton_nodes < st.n_nodes);
+  karst_generate_stats_t st0;
+  f.sc.amplification.steps = 0;
+  karst_network_destroy(&b);
+  karst_network_init(&b);
+  assert_int_equal(karst_generate(&ctx, &f.sc, 7, 0, &b, NULL, &st0), KARST_SUCCESS);
+  assert_int_equal(st0.n_skeleton_nodes, st.n_skeleton_nodes);
+  assert_true(st0.skeleton_length == st.skeleton_length);
+  assert_true(st0.n_nodes < st.n_nodes);
   karst_network_destroy(&a);
   karst_network_destroy(&b);
   karst_samples_destroy(&s);
