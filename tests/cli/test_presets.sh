@@ -49,16 +49,26 @@ PY
 import math, sys, vtk
 r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update(); pd = r.GetOutput()
 zone = pd.GetCellData().GetArray("zone")
+tt = pd.GetCellData().GetArray("tunnel_type")
+tn = pd.GetFieldData().GetAbstractArray("tunnel_type_names")
+names = [tn.GetValue(i) for i in range(tn.GetNumberOfValues())]
 length = [0.0, 0.0, 0.0]  # vadose, epiphreatic, phreatic
+by_type = {}
 for c in range(pd.GetNumberOfCells()):
     ids = pd.GetCell(c).GetPointIds()
     for i in range(ids.GetNumberOfIds() - 1):
         a, b = pd.GetPoint(ids.GetId(i)), pd.GetPoint(ids.GetId(i + 1))
         length[int(zone.GetValue(c))] += math.dist(a, b)
+        t = names[int(tt.GetValue(c))]
+        by_type[t] = by_type.get(t, 0.0) + math.dist(a, b)
 share = [x / sum(length) for x in length]
-print(sys.argv[2] + ": vadose %.2f, epiphreatic %.2f, phreatic %.2f" % tuple(share))
+tubes = (by_type.get("tube", 0) + by_type.get("passage", 0)) / sum(length)
+print(sys.argv[2] + ": vadose %.2f, epiphreatic %.2f, phreatic %.2f; tubes and passages %.2f"
+      % (*share, tubes))
 if sys.argv[2] in ("looping_cave", "rectilinear_maze"):
+    # issue 11: phreatic and epiphreatic conduits, tubes and passages at least half the length
     assert share[1] + share[2] >= 0.5, share
+    assert tubes >= 0.5, by_type
 else:
     assert share[0] >= 0.25, share
 PY
