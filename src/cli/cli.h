@@ -49,7 +49,7 @@ void cli_note_failed_output(karst_ctx_t *ctx, karst_error_t err, const char *out
 karst_error_t cli_add_output(karst_ctx_t *ctx, karst_fileset_t *outs, const char *path,
                              const char **tmp);
 /* When @p out names the same file as one of the @p n inputs (by device and inode, so symlinks
- * and ./paths count), print "karst CMD: -o OUT is the input IN; it would be replaced" and
+ * and ./paths count), print "karst CMD: the output OUT is the input IN; it would be replaced" and
  * return CLI_USAGE, before any work; CLI_OK otherwise (also when OUT does not exist yet). */
 int cli_refuse_output_over_input(const char *cmd, const char *out, const char *const *inputs,
                                  int n);

@@ -247,9 +247,10 @@ int cli_refuse_output_over_input(const char *cmd, const char *out, const char *c
   if (!out || stat(out, &so) != 0) return CLI_OK;
   for (int i = 0; i < n; i++)
     if (inputs[i] && stat(inputs[i], &si) == 0 && si.st_dev == so.st_dev && si.st_ino == so.st_ino)
-      return cli_usage_error(cmd,
-                             "-o %s is the input %s; it would be replaced (write the output "
-                             "elsewhere)",
-                             out, inputs[i]);
+      return cli_usage_error(
+          cmd,
+          "the output %s is the input %s; it would be replaced (write the output "
+          "elsewhere)",
+          out, inputs[i]);
   return CLI_OK;
 }

@@ -72,6 +72,18 @@ static int run(int argc, char **argv) {
   }
   opt.crs = crs;
   opt.qml_path = qml ? qml : style;
+  { /* neither output may replace what the export reads (karst_export_source_load) */
+    char net[4200], run_json[4200], ens[4200], key[4200];
+    snprintf(net, sizeof net, "%.4000s/network.vtp", input);
+    snprintf(run_json, sizeof run_json, "%.4000s/run.json", input);
+    snprintf(ens, sizeof ens, "%.4000s/../../ensemble.json", input);
+    snprintf(key, sizeof key, "%.4000s/../ensemble.key", input);
+    const char *ins[5] = {input, net, run_json, ens, key};
+    const char *outs[2] = {gpkg, opt.qml_path};
+    for (int o = 0; o < 2 && status == CLI_OK; o++)
+      status = cli_refuse_output_over_input("export", outs[o], ins, 5);
+    if (status != CLI_OK) goto cleanup;
+  }
   if ((err = source_date_epoch(&ctx, &opt.timestamp))) goto fail;
   if ((err = karst_export_source_load(&ctx, input, &src))) goto fail;
   if ((err = karst_export_gpkg(&ctx, gpkg, &src, &opt))) goto fail;

@@ -103,6 +103,22 @@ run 0 "the heightfield scenario validates" "$KARST" validate "$tmp/sc/s.yaml"
 run 2 "mesh -o a file the scenario reads" "$KARST" mesh "$tmp/in.vtp" --scenario "$tmp/sc/s.yaml" -o "$tmp/sc/hill.vtp"
 err_has "is the input $tmp/sc/hill.asc"
 [ "$(cksum < "$tmp/sc/hill.asc")" = "$sum" ] || { echo "FAIL: the heightfield was changed"; fail=1; }
+# export: neither the GeoPackage nor its style may replace what it reads (DIR/run.json here).
+sum=$(cksum < "$tmp/net/run.json")
+run 2 "export --qml DIR/run.json" "$KARST" export "$tmp/net" --gpkg "$tmp/x.gpkg" --qml "$tmp/net/run.json"
+err_has "is the input $tmp/net/run.json"
+[ "$(cksum < "$tmp/net/run.json")" = "$sum" ] || { echo "FAIL: export changed run.json"; fail=1; }
+[ -e "$tmp/x.gpkg" ] && { echo "FAIL: export wrote its GeoPackage"; fail=1; }
+# blocks: no output may replace a file the scenario reads (its relief image, named run.json in
+# the output directory); nothing is written, not even the tiles/ directory.
+mkdir "$tmp/bk"
+printf 'domain: {min: [0, 0, 0], max: [100, 100, 100]}\nterrain: {elevation: 90}\nkey_points:\n  - {type: sink, position: [10, 10, 80]}\n  - {type: spring, position: [90, 90, 20]}\nblocks:\n  tile_size: 10\n  strata: [{name: a, tile: tabular}]\n  warp: {relief: image, image: run.json, amplitude: 0.1}\n' > "$tmp/bk/s.yaml"
+echo '{"not": "an image"}' > "$tmp/bk/run.json"
+sum=$(cksum < "$tmp/bk/run.json")
+run 2 "blocks -o the directory of its image" "$KARST" blocks "$tmp/bk/s.yaml" -o "$tmp/bk"
+err_has "is the input $tmp/bk/run.json"
+[ "$(cksum < "$tmp/bk/run.json")" = "$sum" ] || { echo "FAIL: blocks changed its image"; fail=1; }
+[ -e "$tmp/bk/tiles" ] && { echo "FAIL: blocks made tiles/"; fail=1; }
 
 # ensemble.json is reproducible: a resumed ensemble (a member deleted, the same command again)
 # holds the same bytes as the uninterrupted one in every file but the run log ensemble_log.json,
