@@ -809,7 +809,7 @@ void karst_sdf_node_box(const karst_sdf_t *t, karst_int_t node, double box[6]) {
 /* Evaluation.                                                             */
 /* ---------------------------------------------------------------------- */
 
-double karst_i_sdbox(const double box[6], const double p[3]) {
+static inline double sdbox(const double box[6], const double p[3]) {
   double out = 0, in = -INFINITY;
   for (int a = 0; a < 3; a++) {
     double q = mx(box[a] - p[a], p[a] - box[a + 3]);
@@ -817,6 +817,25 @@ double karst_i_sdbox(const double box[6], const double p[3]) {
     if (q > in) in = q;
   }
   return sqrt(out) + mn(in, 0.0);
+}
+
+double karst_i_sdbox(const double box[6], const double p[3]) {
+  return sdbox(box, p);
+}
+
+/* 1 only when sdbox(box, p) >= best, without the square root for best > 0: p outside the box
+ * with squared distance above best² (1 + 1e-12), so that sqrt rounds to >= best; the boxes it
+ * skips are a subset of those the exact test skips, and the skipped ones cannot hold a value
+ * below best, so a union's value and label are the exact test's (the BVH culling of
+ * eval_union). */
+static inline int box_beyond(const double box[6], const double p[3], double best) {
+  if (!(best > 0)) return sdbox(box, p) >= best;
+  double out = 0;
+  for (int a = 0; a < 3; a++) {
+    double q = mx(box[a] - p[a], p[a] - box[a + 3]);
+    if (q > 0) out += q * q;
+  }
+  return out > best * best * (1 + 1e-12);
 }
 
 /* Exact extrusion combination of an in-plane distance w and a slab distance s. */
@@ -898,19 +917,19 @@ static double eval_union(const karst_sdf_t *t, const karst_i_node_t *nd, const d
     stack[top++] = nd->u.uni.bvh_root;
     while (top > 0) {
       const karst_i_bvh_t *b = &t->bvh[stack[--top]];
-      if (karst_i_sdbox(b->box, p) >= best) continue;
+      if (box_beyond(b->box, p, best)) continue;
       if (touched) (*touched)++;
       if (b->n > 0) {
         for (int k = 0; k < b->n; k++) {
           karst_int_t c = t->kids[b->a + k];
-          if (karst_i_sdbox(t->nodes[c].box, p) >= best) continue;
+          if (box_beyond(t->nodes[c].box, p, best)) continue;
           int l;
           double v = karst_i_sdf_eval(t, c, p, best, &l, touched);
           if (v < best) best = v, lab = l;
         }
       } else if (top + 2 <= (int)(sizeof stack / sizeof *stack)) {
         /* nearer child last so it is visited first */
-        double da = karst_i_sdbox(t->bvh[b->a].box, p), db = karst_i_sdbox(t->bvh[b->b].box, p);
+        double da = sdbox(t->bvh[b->a].box, p), db = sdbox(t->bvh[b->b].box, p);
         if (da <= db) {
           stack[top++] = b->b;
           stack[top++] = b->a;
@@ -1055,7 +1074,7 @@ double karst_i_sdf_eval(const karst_sdf_t *t, karst_int_t id, const double p[3],
     break;
   }
   if (nd->finite) {
-    double bl = karst_i_sdbox(nd->box, p);
+    double bl = sdbox(nd->box, p);
     if (bl > v) v = bl; /* clamp: the solid lies inside the box */
   }
   if (label) *label = lab;
