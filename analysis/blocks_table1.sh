@@ -27,9 +27,11 @@ for r in rows:
 print()
 loads = re.findall(r"load average (before|after): ([0-9.]+)", open(sys.argv[2]).read())
 load = ", ".join(f"{w} {v}" for w, v in loads)
+busy = max((float(v) for _, v in loads), default=0) > os.cpu_count() + 0.5
 print(f"Our times: best of 3, {rows[0]['threads']} threads on the 2-core test machine, wall clock "
-      f"and CPU time summed over the threads; one-minute load average {load} (other jobs "
-      "shared the two cores, so the wall times are inflated). The work does not wait on I/O, so on "
+      f"and CPU time summed over the threads; one-minute load average {load}" +
+      (" (other jobs shared the two cores, so the wall times are inflated)" if busy else
+       " (no more runnable jobs than cores)") + ". The work does not wait on I/O, so on "
       "an idle machine the wall time is at most the CPU time. The paper's times: a 4 GHz Intel "
       "Core i7. Our #B counts every cluster, down to single points; the paper's #B × mean is "
       "81–96 % of its #P, so its count leaves some points out, by a rule it does not give "
