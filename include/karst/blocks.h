@@ -318,7 +318,7 @@ typedef struct karst_blocks_section {
   karst_blocks_presence_t presence;
   int warp_relief; /**< karst_relief_kind_t */
   double warp_amplitude, warp_wavelength;
-  char *warp_image; /**< as given (relative to the scenario) */
+  char *warp_image; /**< resolved relative to the scenario's directory */
   int n_strata;
   karst_blocks_stratum_t *strata;
   int n_authored;                       /**< user-authored blocks (blocks.authored) */

@@ -91,6 +91,11 @@ static long grid_cell(const free_grid_t *G, const double *p, int k) {
   return c < 0 ? 0 : (c >= (double)G->dim[k] ? G->dim[k] - 1 : (long)c);
 }
 
+/* The cell of @p p (clamped to the grid), as one index. */
+static long grid_index(const free_grid_t *G, const double *p) {
+  return (grid_cell(G, p, 2) * G->dim[1] + grid_cell(G, p, 1)) * G->dim[0] + grid_cell(G, p, 0);
+}
+
 /* Grid of the vertices v with !in_net[v]; *n_free their count. About two per cell.
  * O(n + cells). */
 static karst_error_t grid_build(karst_ctx_t *ctx, karst_int_t n, const double *xyz,
@@ -138,9 +143,7 @@ static karst_error_t grid_build(karst_ctx_t *ctx, karst_int_t n, const double *x
     return karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
   for (karst_int_t v = 0; v < n; v++) {
     if (in_net[v]) continue;
-    const double *p = &xyz[3 * v];
-    long c = (grid_cell(G, p, 2) * G->dim[1] + grid_cell(G, p, 1)) * G->dim[0] + grid_cell(G, p, 0);
-    G->start[c + 1]++;
+    G->start[grid_index(G, &xyz[3 * v]) + 1]++;
   }
   for (long c = 0; c < cells; c++)
     G->start[c + 1] += G->start[c];
@@ -149,9 +152,7 @@ static karst_error_t grid_build(karst_ctx_t *ctx, karst_int_t n, const double *x
   memcpy(fill, G->start, (size_t)cells * sizeof *fill);
   for (karst_int_t v = 0; v < n; v++) { /* ascending v: ascending within each cell */
     if (in_net[v]) continue;
-    const double *p = &xyz[3 * v];
-    long c = (grid_cell(G, p, 2) * G->dim[1] + grid_cell(G, p, 1)) * G->dim[0] + grid_cell(G, p, 0);
-    G->item[fill[c]++] = v;
+    G->item[fill[grid_index(G, &xyz[3 * v])]++] = v;
   }
   free(fill);
   return KARST_SUCCESS;

@@ -15,7 +15,6 @@ struct karst_blocks_amplified {
   int *stratum_tile;
   karst_blocks_replica_t *rep;
   const karst_blocks_section_t *sec;
-  char *image;                 /* the relief image, relative to the scenario */
   karst_sdf_t *authored;       /* the section's authored blocks, borrowed by the tiles */
   karst_int_t *authored_nodes; /* their nodes, tile by tile */
   karst_blocks_disc_t *discs;  /* the section's user discs, tile by tile, borrowed by the tiles */
@@ -30,7 +29,6 @@ void karst_blocks_amplified_free(karst_blocks_amplified_t *a) {
   free(a->authored_nodes);
   free(a->discs);
   free(a->stratum_tile);
-  free(a->image);
   karst_blocks_replica_free(a->rep);
   free(a);
 }
@@ -76,17 +74,6 @@ karst_error_t karst_blocks_amplify(karst_ctx_t *ctx, const karst_scenario_t *sc,
     goto fail;
   }
   uint64_t seed = b->has_seed ? b->seed : sc->seed;
-  if (b->warp_image) { /* relative to the scenario's directory, as the heightfield */
-    const char *path = sc->path ? sc->path : "", *slash = strrchr(path, '/');
-    size_t dl = (b->warp_image[0] == '/' || !slash) ? 0 : (size_t)(slash - path) + 1;
-    a->image = malloc(dl + strlen(b->warp_image) + 1);
-    if (!a->image) {
-      err = karst_set_error(ctx, KARST_ENOMEM, "blocks: out of memory");
-      goto fail;
-    }
-    memcpy(a->image, path, dl);
-    strcpy(a->image + dl, b->warp_image);
-  }
   if (b->n_authored) {
     if ((err = karst_sdf_create(ctx, &a->authored))) goto fail;
     a->authored_nodes = malloc((size_t)b->n_authored * sizeof *a->authored_nodes);
@@ -110,7 +97,6 @@ karst_error_t karst_blocks_amplify(karst_ctx_t *ctx, const karst_scenario_t *sc,
     if (k == a->n_tiles) {
       karst_blocks_tile_params_t par;
       karst_blocks_section_tile_params(b, b->strata[i].tile, seed, &par);
-      par.warp.image = a->image;
       if (a->authored) { /* this type's authored blocks (tile coordinates) */
         if ((err = karst_blocks_section_authored(ctx, b, par.type, a->authored,
                                                  a->authored_nodes + used, &par.n_authored)))

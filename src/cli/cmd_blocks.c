@@ -156,33 +156,16 @@ static int run(int argc, char **argv) {
     err = karst_set_error(&ctx, KARST_EINVAL, "output directory name too long: %s", outdir);
     goto fail;
   }
-  if (scen) { /* no output may replace the scenario or a file it reads */
+  if (scen) { /* no output may replace the scenario or a file it reads (its relief image too) */
     char **sfiles = NULL;
     int nsf = 0, st = CLI_OK;
     if ((err = karst_scenario_files(&ctx, scen, &sfiles, &nsf))) goto fail;
-    char **ins = realloc(sfiles, (size_t)(nsf + 2) * sizeof *ins);
-    if (!ins) {
-      for (int k = 0; k < nsf; k++)
-        free(sfiles[k]);
-      free(sfiles);
-      err = karst_set_error(&ctx, KARST_ENOMEM, "out of memory");
-      goto fail;
-    }
-    ins[nsf] = strdup(scen);
-    ins[nsf + 1] = NULL;
-    if (sc.blocks->warp_image) { /* relative to the scenario's directory, as amplify.c reads it */
-      const char *slash = strrchr(scen, '/'), *im = sc.blocks->warp_image;
-      size_t dl = (im[0] == '/' || !slash) ? 0 : (size_t)(slash - scen) + 1;
-      if ((ins[nsf + 1] = malloc(dl + strlen(im) + 1))) {
-        memcpy(ins[nsf + 1], scen, dl);
-        strcpy(ins[nsf + 1] + dl, im);
-      }
-    }
     for (int i = 0; i < n_out && !st; i++)
-      st = cli_refuse_output_over_input("blocks", paths[i], (const char *const *)ins, nsf + 2);
-    for (int k = 0; k < nsf + 2; k++)
-      free(ins[k]);
-    free(ins);
+      if (!(st = cli_refuse_output_over_input("blocks", paths[i], &scen, 1)))
+        st = cli_refuse_output_over_input("blocks", paths[i], (const char *const *)sfiles, nsf);
+    for (int k = 0; k < nsf; k++)
+      free(sfiles[k]);
+    free(sfiles);
     if (st) {
       status = st;
       goto done;

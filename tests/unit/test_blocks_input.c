@@ -57,6 +57,14 @@ static void expect_error(const char *blocks, const char *line_col, const char *w
   karst_scenario_destroy(&sc);
 }
 
+/* expect_error on @p head followed by @p body (the rows of a list under test). */
+static void expect_error_after(const char *head, const char *body, const char *line_col,
+                               const char *words) {
+  char text[1024];
+  snprintf(text, sizeof text, "%s%s", head, body);
+  expect_error(text, line_col, words);
+}
+
 static void test_section_ok(void **state) {
   (void)state;
   karst_ctx_t ctx;
@@ -204,12 +212,7 @@ static void test_authored_errors(void **state) {
   (void)state;
   const char *head =
       "blocks:\n  tile_size: 10\n  strata: [{name: a, tile: tabular}]\n  authored:\n";
-  char text[1024];
-#define AUTH(body, lc, words)                                                                      \
-  do {                                                                                             \
-    snprintf(text, sizeof text, "%s%s", head, body);                                               \
-    expect_error(text, lc, words);                                                                 \
-  } while (0)
+#define AUTH(body, lc, words) expect_error_after(head, body, lc, words)
   AUTH("    - {sphere: {center: [5, 5, 5], radius: 1}}\n", ":10:7:", "needs 'tile'");
   AUTH("    - {tile: tabular}\n", ":10:7:", "must contain one of sphere, box");
   AUTH("    - {tile: columnar, sphere: {center: [5, 5, 5], radius: 1}}\n",
@@ -290,16 +293,41 @@ static void test_user_discs_ok(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* blocks.warp.image is resolved relative to the scenario's directory, like every file a scenario
+ * names, and karst_scenario_files lists it (so no output may replace it). */
+static void test_warp_image_path(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  assert_int_equal(load(&ctx,
+                        "blocks:\n"
+                        "  strata: [{name: a, tile: tabular}]\n"
+                        "  warp: {relief: image, image: relief.pgm, amplitude: 0.1}\n",
+                        &sc),
+                   KARST_SUCCESS);
+  char want[300];
+  snprintf(want, sizeof want, "%s/relief.pgm", dir);
+  assert_string_equal(sc.blocks->warp_image, want);
+  karst_scenario_destroy(&sc);
+  char path[300], **files = NULL;
+  int n = 0;
+  snprintf(path, sizeof path, "%s/s.yaml", dir);
+  assert_int_equal(karst_scenario_files(&ctx, path, &files, &n), KARST_SUCCESS);
+  int found = 0;
+  for (int i = 0; i < n; i++) {
+    found |= strcmp(files[i], want) == 0;
+    free(files[i]);
+  }
+  free(files);
+  assert_true(found);
+}
+
 static void test_user_discs_errors(void **state) {
   (void)state;
   const char *head =
       "blocks:\n  tile_size: 10\n  strata: [{name: a, tile: tabular}]\n  user_discs:\n";
-  char text[1024];
-#define DISC(body, lc, words)                                                                      \
-  do {                                                                                             \
-    snprintf(text, sizeof text, "%s%s", head, body);                                               \
-    expect_error(text, lc, words);                                                                 \
-  } while (0)
+#define DISC(body, lc, words) expect_error_after(head, body, lc, words)
   DISC("    - {center: [5, 5, 5], normal: [0, 0, 1], radius: 1}\n",
        ":10:7:", "required key 'tile'");
   DISC("    - {tile: tabular, normal: [0, 0, 1], radius: 1}\n", ":10:7:", "required key 'center'");
@@ -343,9 +371,10 @@ static int teardown(void **state) {
 
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_section_ok),    cmocka_unit_test(test_section_errors),
-      cmocka_unit_test(test_authored_ok),   cmocka_unit_test(test_authored_errors),
-      cmocka_unit_test(test_user_discs_ok), cmocka_unit_test(test_user_discs_errors),
+      cmocka_unit_test(test_section_ok),      cmocka_unit_test(test_section_errors),
+      cmocka_unit_test(test_authored_ok),     cmocka_unit_test(test_authored_errors),
+      cmocka_unit_test(test_user_discs_ok),   cmocka_unit_test(test_user_discs_errors),
+      cmocka_unit_test(test_warp_image_path),
   };
   return cmocka_run_group_tests(tests, setup, teardown);
 }
