@@ -24,6 +24,9 @@ extern "C" {
 #define KARST_BUDGET_BYTES_PER_SAMPLE 512.0          /**< a sample, its grids and geology */
 #define KARST_BUDGET_BYTES_PER_EDGE 48.0             /**< a k-NN edge, both CSR directions, cost */
 #define KARST_BUDGET_BYTES_PER_SEARCH_SAMPLE 40.0    /**< A* state per sample per thread */
+/** Tabulated routed costs of an edge per spring (both arcs, both ways), up to
+ *  KARST_ROUTING_ARC_BUDGET in all (include/karst/routing.h). */
+#define KARST_BUDGET_BYTES_PER_ROUTED_EDGE 32.0
 #define KARST_BUDGET_BYTES_PER_AMPLIFICATION_POINT 4096.0
 
 /** The estimate of one scenario (karst_budget_estimate). */

@@ -36,10 +36,24 @@ typedef struct karst_route {
   double vadose_factor;      /**< >= 1 */
   double rise_cost;          /**< >= 0, per metre of rise */
   double inv_phreatic_depth; /**< 1 / phreatic_depth (1/m), >= 0 */
+  /** Optional tables (karst_route_tabulate), NULL when not made: the routed cost of every arc a
+   *  of the graph (from v to adj[a]) in fwd[a], and of its reverse (adj[a] to v) in bwd[a], the
+   *  same doubles the formula gives, so searches read one value per arc instead of evaluating the
+   *  formula on two vertices' depths. Only valid while the graph's costs are unchanged. */
+  const double *arc_fwd, *arc_bwd;
 } karst_route_t;
 
 /** Routed cost of arc u → w whose base cost is @p base (see karst_route_t). O(1). */
 double karst_route_arc_cost(const karst_route_t *r, double base, karst_int_t u, karst_int_t w);
+
+/**
+ * Fill @p fwd and @p bwd (g->n_arcs each) with the routed costs of every arc of @p g under @p r
+ * in both directions (see karst_route_t: arc_fwd, arc_bwd), the vertices split over
+ * ctx->nthreads. The values do not depend on the thread count.
+ * Time complexity: O(n_arcs / threads).
+ */
+void karst_route_tabulate(const karst_ctx_t *ctx, const karst_graph_t *g, const karst_route_t *r,
+                          double *fwd, double *bwd);
 
 /** A path as graph vertex indices from its source to its target, and its cost. */
 typedef struct karst_path {

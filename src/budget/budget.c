@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "karst/budget.h"
+#include "karst/routing.h"
 
 /* Samples of radius r in a box of sides a, b, c: Kepler's bound on the box grown by r/2. */
 static double packing(double a, double b, double c, double r) {
@@ -57,7 +58,9 @@ void karst_budget_estimate(const karst_scenario_t *sc, int threads, karst_budget
   double m_edges = b->edges * KARST_BUDGET_BYTES_PER_EDGE;
   double m_search = search_threads * b->samples * KARST_BUDGET_BYTES_PER_SEARCH_SAMPLE;
   double m_amp = b->amplification_points * KARST_BUDGET_BYTES_PER_AMPLIFICATION_POINT;
-  b->bytes = KARST_BUDGET_BYTES_BASE + m_samples + m_edges + m_search + m_amp;
+  double m_route = fmin(b->edges * KARST_BUDGET_BYTES_PER_ROUTED_EDGE * (springs > 0 ? springs : 1),
+                        (double)KARST_ROUTING_ARC_BUDGET);
+  b->bytes = KARST_BUDGET_BYTES_BASE + m_samples + m_edges + m_search + m_amp + m_route;
   /* The key that drives the memory most. */
   double best = m_samples + m_search;
   if (b->samples_needed > cap) {
@@ -69,8 +72,8 @@ void karst_budget_estimate(const karst_scenario_t *sc, int threads, karst_budget
   } else {
     b->driver = "domain", b->driver_pos = sc->pos_domain;
   }
-  if (m_edges > best && (sc->pos_k.line > 0 || b->driver_pos.line == 0)) {
-    best = m_edges;
+  if (m_edges + m_route > best && (sc->pos_k.line > 0 || b->driver_pos.line == 0)) {
+    best = m_edges + m_route;
     b->driver = "sampling.k", b->driver_pos = sc->pos_k;
   }
   if (m_amp > best && (sc->pos_amplification_points.line > 0 || b->driver_pos.line == 0)) {

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "core/memory_internal.h"
+#include "core/parallel_internal.h"
 
 /*
  * Per-vertex search state. What every arc relaxation reads (g and whether
@@ -277,6 +278,31 @@ double karst_route_arc_cost(const karst_route_t *r, double base, karst_int_t u, 
   return r ? route_cost(r, base, u, w) : base;
 }
 
+typedef struct {
+  const karst_graph_t *g;
+  const karst_route_t *r;
+  double *fwd, *bwd;
+} tabulate_t;
+
+static void tabulate_worker(void *arg, int tid, int nthreads) {
+  const tabulate_t *t = arg;
+  const karst_graph_t *g = t->g;
+  const karst_int_t lo = g->n * tid / nthreads, hi = g->n * (tid + 1) / nthreads;
+  for (karst_int_t v = lo; v < hi; v++)
+    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
+      t->fwd[a] = route_cost(t->r, g->cost[a], v, g->adj[a]);
+      t->bwd[a] = route_cost(t->r, g->cost[a], g->adj[a], v);
+    }
+}
+
+void karst_route_tabulate(const karst_ctx_t *ctx, const karst_graph_t *g, const karst_route_t *r,
+                          double *fwd, double *bwd) {
+  tabulate_t t = {g, r, fwd, bwd};
+  int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
+  if (g->n_arcs < 100000) T = 1; /* not worth a thread */
+  karst_i_parallel_run(T, tabulate_worker, &t);
+}
+
 /* What a search run needs besides its sources (run_search). */
 typedef struct {
   karst_int_t target;             /* A* target, or -1 */
@@ -323,6 +349,10 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
   const unsigned char *blocked = o->blocked, *noexpand = o->noexpand, *is_target = o->is_target;
   const karst_route_t *route = o->route;
   const int backward = o->backward, want_pred = o->want_pred;
+  /* Tabulated routed costs replace the base costs and the formula (karst_route_tabulate). */
+  const double *restrict tab = route ? (backward ? route->arc_bwd : route->arc_fwd) : NULL;
+  const double *restrict arc_cost = tab ? tab : cost;
+  if (tab) route = NULL;
   node_t *restrict node = s->node;
   double *restrict hh = s->h;
   int32_t *restrict pred = s->pred;
@@ -358,10 +388,10 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
       if (o->stop_after > 0 && ++found >= o->stop_after) break;
     }
     if (noexpand && noexpand[v] && gv > 0.0) continue; /* a start (cost 0) is expanded */
-    if (s->hn > 0) prefetch_arcs(off, adj, cost, s->heap[0].v);
+    if (s->hn > 0) prefetch_arcs(off, adj, arc_cost, s->heap[0].v);
     for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
       karst_int_t w = adj[a];
-      double c = cost[a];
+      double c = arc_cost[a];
       if (!(c < INFINITY) || (blocked && blocked[w])) continue;
       if (route) c = backward ? route_cost(route, c, w, v) : route_cost(route, c, v, w);
       double nd = gv + c;
@@ -551,7 +581,9 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
   const unsigned char *flag = reuse->reused, *closed = reuse->closed, tag = reuse->tag;
   const karst_route_t *route = reuse->route;
   const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
-  const double *restrict cost = g->cost;
+  /* Tabulated routed costs replace the base costs and the formula (karst_route_tabulate). */
+  const double *restrict cost = route && route->arc_fwd ? route->arc_fwd : g->cost;
+  if (route && route->arc_fwd) route = NULL;
   node_t *restrict node = s->node;
   double *restrict hh = s->h;
   int32_t *restrict pred = s->pred;

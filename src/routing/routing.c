@@ -14,12 +14,14 @@
  *  beyond it no rows are kept and the skeleton's searches use the Euclidean bound alone. 1 GiB. */
 #define KARST_ROUTING_ROW_BUDGET ((size_t)1 << 30)
 
+
 void karst_routing_plan_init(karst_routing_plan_t *plan) {
   memset(plan, 0, sizeof *plan);
 }
 
 void karst_routing_plan_destroy(karst_routing_plan_t *plan) {
   free(plan->dz);
+  free(plan->arc_costs);
   free(plan->routes);
   free(plan->targets);
   free(plan->bound);
@@ -159,9 +161,23 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
       dz[2 * v] = (float)(karst_geology_water_table(geo, s, p[0], p[1]) - p[2]);
       dz[2 * v + 1] = (float)p[2];
     }
-    P.routes[s] = (karst_route_t){dz, (float)rt->water_table_band, rt->vadose_factor, rt->rise_cost,
-                                  1.0 / rt->phreatic_depth};
+    P.routes[s] = (karst_route_t){dz,           (float)rt->water_table_band,
+                                  rt->vadose_factor, rt->rise_cost,
+                                  1.0 / rt->phreatic_depth, NULL,
+                                  NULL};
   }
+  /* The routed cost of every arc, both ways, once: the searches below and the skeleton's then read
+   * one value per arc. Over the budget (or out of memory) they evaluate the same formula. */
+  const size_t tab = 2 * (size_t)g->n_arcs;
+  if (g->n_arcs > 0 && (size_t)S * tab * sizeof(double) <= KARST_ROUTING_ARC_BUDGET)
+    P.arc_costs = karst_i_alloc_large((size_t)S * tab * sizeof *P.arc_costs);
+  if (P.arc_costs)
+    for (int s = 0; s < S; s++) {
+      double *fwd = P.arc_costs + (size_t)s * tab, *bwd = fwd + g->n_arcs;
+      karst_route_tabulate(ctx, g, &P.routes[s], fwd, bwd);
+      P.routes[s].arc_fwd = fwd;
+      P.routes[s].arc_bwd = bwd;
+    }
   /* Only the key points of the generation routed take part (generations.h); the others are
    * ordinary vertices that paths may cross. */
   int n_src = 0;

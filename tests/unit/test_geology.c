@@ -287,7 +287,7 @@ static void test_route_costs(void **state) {
   /* vertices: 0 vadose at z 50 (depth −20), 1 vadose at z 60, 2 in the band (depth 0, z 30),
    * 3 phreatic (depth 25, z 5), 4 phreatic (depth 15, z 15) */
   const float dz[10] = {-20, 50, -30, 60, 0, 30, 25, 5, 15, 15};
-  karst_route_t r = {dz, 5.0f, 2.0, 4.0, 0.1};
+  karst_route_t r = {dz, 5.0f, 2.0, 4.0, 0.1, NULL, NULL};
   assert_close(karst_route_arc_cost(&r, 10, 0, 1), 10 * 2 + 4 * 10, 1e-12); /* rises 10 m */
   assert_close(karst_route_arc_cost(&r, 10, 1, 0), 20, 1e-12);              /* descends */
   assert_close(karst_route_arc_cost(&r, 10, 0, 2), 20, 1e-12); /* into the band: vadose */
@@ -324,8 +324,27 @@ static void test_routed_astar_matches_dijkstra(void **state) {
   for (karst_int_t v = 0; v < n; v++)
     dz[2 * v] = (float)(25 - 0.3 * xyz[3 * v] - xyz[3 * v + 2]),
            dz[2 * v + 1] = (float)xyz[3 * v + 2];
-  karst_route_t route = {dz, 2.0f, 2.5, 3.0, 1.0 / 15};
+  karst_route_t route = {dz, 2.0f, 2.5, 3.0, 1.0 / 15, NULL, NULL};
   const karst_route_t *routes[1] = {&route};
+  /* The tabulated route (karst_route_tabulate, two threads): every arc's value is the formula's,
+   * bit for bit, and every search below must give bit-identical results with it. */
+  double *fwd = malloc(sizeof *fwd * (size_t)g.n_arcs), *bwd = malloc(sizeof *bwd * (size_t)g.n_arcs);
+  karst_ctx_t ctx2;
+  karst_ctx_init(&ctx2);
+  ctx2.nthreads = 2;
+  karst_route_tabulate(&ctx2, &g, &route, fwd, bwd);
+  for (karst_int_t v = 0; v < n; v++)
+    for (karst_int_t a = g.offsets[v]; a < g.offsets[v + 1]; a++) {
+      assert_true(fwd[a] == karst_route_arc_cost(&route, g.cost[a], v, g.adj[a]));
+      assert_true(bwd[a] == karst_route_arc_cost(&route, g.cost[a], g.adj[a], v));
+    }
+  karst_route_t tabbed = route;
+  tabbed.arc_fwd = fwd;
+  tabbed.arc_bwd = bwd;
+  const karst_route_t *troutes[1] = {&tabbed};
+  float *bound2 = malloc(sizeof *bound2 * (size_t)n);
+  karst_path_t p2;
+  karst_path_init(&p2);
   karst_search_t *s = NULL, *s2 = NULL;
   assert_int_equal(karst_search_create(&ctx, &g, &s), KARST_SUCCESS);
   assert_int_equal(karst_search_create(&ctx, &g, &s2), KARST_SUCCESS);
@@ -340,6 +359,12 @@ static void test_routed_astar_matches_dijkstra(void **state) {
     assert_int_equal(karst_paths_target_rows(&ctx, &g, 1, &targets[t], routes, NULL, 5, sources,
                                              dist, bound, NULL),
                      KARST_SUCCESS);
+    double dist2[5];
+    assert_int_equal(karst_paths_target_rows(&ctx, &g, 1, &targets[t], troutes, NULL, 5, sources,
+                                             dist2, bound2, NULL),
+                     KARST_SUCCESS);
+    assert_memory_equal(dist, dist2, sizeof dist);
+    assert_memory_equal(bound, bound2, sizeof *bound * (size_t)n);
     for (int k = 0; k < 5; k++) {
       karst_int_t last = -1;
       unsigned char *is_t = calloc((size_t)n, 1);
@@ -359,6 +384,12 @@ static void test_routed_astar_matches_dijkstra(void **state) {
           karst_paths_astar_reuse(&ctx, s, sources[k], targets[t], 1.0, bound, &ru, &p),
           KARST_SUCCESS);
       assert_rel(p.cost, ref, 1e-9);
+      const karst_reuse_t ru2 = {1.0, NULL, NULL, NULL, NULL, 0, &tabbed, NULL};
+      assert_int_equal(
+          karst_paths_astar_reuse(&ctx, s2, sources[k], targets[t], 1.0, bound, &ru2, &p2),
+          KARST_SUCCESS);
+      assert_true(p2.cost == p.cost && p2.n == p.n);
+      assert_memory_equal(p.v, p2.v, sizeof *p.v * (size_t)p.n);
       /* Euclidean bound alone: the same optimum. */
       assert_int_equal(karst_paths_astar_reuse(&ctx, s, sources[k], targets[t], 1.0, NULL, &ru, &p),
                        KARST_SUCCESS);
@@ -374,6 +405,10 @@ static void test_routed_astar_matches_dijkstra(void **state) {
   }
   assert_true(checked >= 12);
   karst_path_destroy(&p);
+  karst_path_destroy(&p2);
+  free(bound2);
+  free(fwd);
+  free(bwd);
   karst_search_free(s);
   karst_search_free(s2);
   free(bound);
