@@ -64,7 +64,8 @@ typedef struct karst_graph {
   karst_int_t n_arcs;   /**< directed arcs = 2 * undirected edges */
   const double *xyz;    /**< vertex positions (3 * n), borrowed from the samples */
   karst_int_t *offsets; /**< n + 1 */
-  karst_int_t *adj;     /**< n_arcs */
+  int32_t *adj;         /**< n_arcs neighbour indices, 32 bits (the graph builders refuse
+                             n >= 2^31 - 1 vertices: half the memory and cache of 64-bit ones) */
   double *cost;         /**< n_arcs */
 } karst_graph_t;
 

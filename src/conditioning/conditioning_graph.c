@@ -40,7 +40,8 @@ karst_error_t karst_conditioning_add_legs(karst_ctx_t *ctx, const karst_scenario
   const double per_metre = fmin(1.0, sc->conditioning.cost_factor) * lb_per_metre;
   karst_error_t err = KARST_SUCCESS;
   arc_t *extra = malloc((size_t)s->n_legs * 2 * sizeof *extra);
-  karst_int_t *offsets = NULL, *adj = NULL;
+  karst_int_t *offsets = NULL;
+  int32_t *adj = NULL;
   double *cost = NULL;
   if (!extra) return karst_set_error(ctx, KARST_ENOMEM, "conditioning: out of memory");
   karst_int_t m = 0;
@@ -67,7 +68,7 @@ karst_error_t karst_conditioning_add_legs(karst_ctx_t *ctx, const karst_scenario
   for (karst_int_t i = 0, k = 0; i < m; i++) {
     if (i > 0 && extra[i].u == extra[i - 1].u && extra[i].v == extra[i - 1].v) continue;
     karst_int_t u = extra[i].u;
-    const karst_int_t *row = g->adj + g->offsets[u];
+    const int32_t *row = g->adj + g->offsets[u];
     karst_int_t deg = g->offsets[u + 1] - g->offsets[u];
     /* rows are sorted: binary search */
     karst_int_t lo = 0, hi = deg;
@@ -101,7 +102,7 @@ karst_error_t karst_conditioning_add_legs(karst_ctx_t *ctx, const karst_scenario
       }
       int take_extra = x < m && extra[x].u == u && (a >= end || extra[x].v <= g->adj[a]);
       if (take_extra) {
-        adj[w] = extra[x].v;
+        adj[w] = (int32_t)extra[x].v;
         cost[w] = extra[x].cost;
         if (a < end && g->adj[a] == extra[x].v) a++; /* the k-NN arc: replaced */
         x++;
@@ -121,7 +122,8 @@ karst_error_t karst_conditioning_add_legs(karst_ctx_t *ctx, const karst_scenario
   g->adj = adj;
   g->cost = cost;
   g->n_arcs = w;
-  offsets = adj = NULL;
+  offsets = NULL;
+  adj = NULL;
   cost = NULL;
 cleanup:
   free(extra);

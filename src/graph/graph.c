@@ -73,9 +73,10 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
   arc_t *arcs = NULL;
   karst_int_t *fillp = NULL;
   karst_error_t err = KARST_SUCCESS;
-  if (n < 0 || m < 0)
+  if (n < 0 || m < 0 || n >= INT32_MAX)
     return karst_set_error(ctx, KARST_EINVAL,
-                           "graph: vertex count %lld and edge count %lld must be >= 0",
+                           "graph: vertex count %lld and edge count %lld must be >= 0, with "
+                           "fewer than 2^31 - 1 vertices",
                            (long long)n, (long long)m);
   for (karst_int_t i = 0; i < m; i++) {
     if (u[i] < 0 || u[i] >= n || v[i] < 0 || v[i] >= n)
@@ -115,11 +116,11 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
   }
   r.offsets[n] = w;
   r.n_arcs = w;
-  r.adj = malloc(sizeof(karst_int_t) * ((size_t)w + 1));
+  r.adj = malloc(sizeof(int32_t) * ((size_t)w + 1));
   r.cost = malloc(sizeof(double) * ((size_t)w + 1));
   if (!r.adj || !r.cost) goto nomem;
   for (karst_int_t i = 0; i < w; i++)
-    r.adj[i] = arcs[i].v, r.cost[i] = arcs[i].c;
+    r.adj[i] = (int32_t)arcs[i].v, r.cost[i] = arcs[i].c;
   karst_graph_destroy(g);
   *g = r;
   karst_graph_init(&r);
@@ -137,7 +138,7 @@ cleanup:
 /* ------------------------------------------------------------------------ */
 /* The kNN graph                                                             */
 /* ------------------------------------------------------------------------ */
-static karst_int_t find_arc(const karst_int_t *adj, karst_int_t b, karst_int_t e, karst_int_t x) {
+static karst_int_t find_arc(const int32_t *adj, karst_int_t b, karst_int_t e, karst_int_t x) {
   while (b < e) {
     karst_int_t mid = b + (e - b) / 2;
     if (adj[mid] < x)
@@ -156,7 +157,7 @@ static karst_int_t find_arc(const karst_int_t *adj, karst_int_t b, karst_int_t e
  * entries precede x (neighbours have nearby indices in the samples' Morton
  * order): a short forward scan reads one cache line where a binary search
  * misses four; long runs fall back to the search. */
-static karst_int_t first_at_least(const karst_int_t *adj, karst_int_t b, karst_int_t e,
+static karst_int_t first_at_least(const int32_t *adj, karst_int_t b, karst_int_t e,
                                   karst_int_t x) {
   for (karst_int_t i = b; i < e && i < b + 8; i++)
     if (adj[i] >= x) return i;
@@ -226,15 +227,16 @@ static void task_scatter(void *p, int tid, int nth) {
       const int32_t *row = B->nbr + (size_t)u * k;
       for (int j = 0; j < k; j++) {
         int32_t w = row[j] < 0 ? ~row[j] : row[j];
-        g->adj[g->offsets[w] + cnt[w]++] = u;
+        g->adj[g->offsets[w] + cnt[w]++] = (int32_t)u;
       }
     }
   }
 }
 
-static void sort_small_i64(karst_int_t *v, karst_int_t n) {
-  for (karst_int_t i = 1; i < n; i++) {
-    karst_int_t x = v[i], j = i - 1;
+static void sort_small_i32(int32_t *v, int n) {
+  for (int i = 1; i < n; i++) {
+    int32_t x = v[i];
+    int j = i - 1;
     while (j >= 0 && v[j] > x)
       v[j + 1] = v[j], j--;
     v[j + 1] = x;
@@ -247,7 +249,7 @@ static void task_merge(void *p, int tid, int nth) {
   build_t *B = p;
   karst_graph_t *g = B->g;
   int k = B->k;
-  karst_int_t *tmp = malloc(sizeof(karst_int_t) * (size_t)(k + 1));
+  int32_t *tmp = malloc(sizeof(int32_t) * (size_t)(k + 1));
   if (!tmp) {
     B->failed[tid] = 1;
     return;
@@ -259,9 +261,9 @@ static void task_merge(void *p, int tid, int nth) {
     int m = 0;
     for (int j = 0; j < k; j++)
       if (row[j] < 0) tmp[m++] = ~row[j];
-    sort_small_i64(tmp, m);
+    sort_small_i32(tmp, m);
     /* Merge from the back: the free slots are at the end of the row. */
-    karst_int_t *adj = g->adj + g->offsets[v];
+    int32_t *adj = g->adj + g->offsets[v];
     karst_int_t i = g->offsets[v + 1] - g->offsets[v] - own - 1, w = i + own;
     int j = own - 1;
     while (j >= 0) {
@@ -394,7 +396,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
       g.offsets[v + 1] = g.offsets[v] + at + own[v];
     }
     g.n_arcs = g.offsets[n];
-    g.adj = karst_i_alloc_large(sizeof(karst_int_t) * (size_t)g.n_arcs);
+    g.adj = karst_i_alloc_large(sizeof(int32_t) * (size_t)g.n_arcs);
     if (!g.adj) goto nomem;
     karst_i_parallel_run(nth, task_scatter, &B);
     free(cnt), free(kidx), free(kd2);

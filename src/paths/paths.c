@@ -327,15 +327,19 @@ typedef struct {
  * when @p stop_after vertices marked in @p is_target are settled.
  */
 /* Ask for the arc list of u (probably the next vertex popped: the heap's top before v's arcs
- * are relaxed) while v's arcs are relaxed. */
-static inline void prefetch_arcs(const karst_int_t *off, const karst_int_t *adj, const double *cost,
+ * are relaxed) while v's arcs are relaxed. Always inlined: as a function of its own, GCC 12 finds
+ * it "looping pure" (a prefetch has no side effect), and drops every call to it. */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline void prefetch_arcs(const karst_int_t *off, const int32_t *adj, const double *cost,
                                  karst_int_t u) {
   const char *pa = (const char *)(adj + off[u]), *pc = (const char *)(cost + off[u]);
-  size_t bytes = (size_t)(off[u + 1] - off[u]) * sizeof *adj; /* = the costs' (8-byte each) */
-  for (size_t b = 0; b < bytes; b += 64) {
+  size_t deg = (size_t)(off[u + 1] - off[u]);
+  for (size_t b = 0; b < deg * sizeof *adj; b += 64)
     __builtin_prefetch(pa + b);
+  for (size_t b = 0; b < deg * sizeof *cost; b += 64)
     __builtin_prefetch(pc + b);
-  }
 }
 
 static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
@@ -344,7 +348,8 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
   const karst_int_t target = o->target;
   const double lb = o->lb;
   const int astar = target >= 0 && lb > 0 && g->xyz;
-  const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
+  const karst_int_t *restrict off = g->offsets;
+  const int32_t *restrict adj = g->adj;
   const double *restrict cost = g->cost;
   const unsigned char *blocked = o->blocked, *noexpand = o->noexpand, *is_target = o->is_target;
   const karst_route_t *route = o->route;
@@ -580,7 +585,8 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
   const double r = reuse->factor, rlb = g->xyz ? r * lb_per_metre : 0.0;
   const unsigned char *flag = reuse->reused, *closed = reuse->closed, tag = reuse->tag;
   const karst_route_t *route = reuse->route;
-  const karst_int_t *restrict off = g->offsets, *restrict adj = g->adj;
+  const karst_int_t *restrict off = g->offsets;
+  const int32_t *restrict adj = g->adj;
   /* Tabulated routed costs replace the base costs and the formula (karst_route_tabulate). */
   const double *restrict cost = route && route->arc_fwd ? route->arc_fwd : g->cost;
   if (route && route->arc_fwd) route = NULL;

@@ -122,7 +122,7 @@ static void test_knn_exact(void **state) {
     assert_true(g1.offsets[v + 1] - g1.offsets[v] >= 12);
   assert_int_equal(g1.n_arcs, g2.n_arcs);
   assert_memory_equal(g1.offsets, g2.offsets, sizeof(karst_int_t) * (size_t)(g1.n + 1));
-  assert_memory_equal(g1.adj, g2.adj, sizeof(karst_int_t) * (size_t)g1.n_arcs);
+  assert_memory_equal(g1.adj, g2.adj, sizeof *g1.adj * (size_t)g1.n_arcs);
   assert_memory_equal(g1.cost, g2.cost, sizeof(double) * (size_t)g1.n_arcs);
   for (karst_int_t v = 0; v < g1.n; v += 97)
     for (karst_int_t a = g1.offsets[v]; a < g1.offsets[v + 1]; a++)
@@ -363,7 +363,7 @@ static void test_costs_all_terms(void **state) {
   check_against_brute(&s, &g[0], 10);
   for (int t = 1; t < 3; t++) {
     assert_int_equal(g[0].n_arcs, g[t].n_arcs);
-    assert_memory_equal(g[0].adj, g[t].adj, sizeof(karst_int_t) * (size_t)g[0].n_arcs);
+    assert_memory_equal(g[0].adj, g[t].adj, sizeof *g[0].adj * (size_t)g[0].n_arcs);
     assert_memory_equal(g[0].cost, g[t].cost, sizeof(double) * (size_t)g[0].n_arcs);
   }
   for (karst_int_t v = 0; v < g[0].n; v++)
