@@ -25,6 +25,13 @@ extern "C" {
  *  slower: on the looping cave the tables take the routing searches from 0.33 to 0.22 s and the
  *  skeleton's from 0.58 to 0.35 s, 2 threads). 256 MiB: about 16 M arcs with one spring. */
 #define KARST_ROUTING_ARC_BUDGET ((size_t)1 << 28)
+/** A spring's costs are tabulated before its waypoints' routing rows when at least this many
+ *  rows use them (a row relaxes every arc once; tabulating costs about two), */
+#define KARST_ROUTING_TABULATE_MIN_ROWS 3
+/** or, with path sharing, before the skeleton when at least this many routes drain to it (each
+ *  A* search relaxes a thin shell of the graph; on the looping cave 990 routes relax 97 M arcs,
+ *  against 2.3 M tabulated). */
+#define KARST_ROUTING_TABULATE_MIN_ROUTES 64
 
 /** One route: a least-cost path to lay from key point @c src to key point @c dst. */
 typedef struct karst_route_pair {
@@ -40,8 +47,9 @@ typedef struct karst_routing_plan {
   int n_keys, n_springs, n_targets;
   float *dz;             /**< 2 n per spring: depth below its water table, z (karst_route_t) */
   karst_route_t *routes; /**< one per spring */
-  double *arc_costs;     /**< 2 n_arcs per spring: the routes' tabulated costs (arc_fwd, arc_bwd),
-                              or NULL beyond KARST_ROUTING_ARC_BUDGET */
+  double **arc_costs;    /**< per spring: its route's tabulated costs (2 n_arcs: arc_fwd then
+                              arc_bwd), or NULL (too few searches, or beyond the budget) */
+  size_t arc_bytes;      /**< memory of the tables, <= KARST_ROUTING_ARC_BUDGET */
   int *targets;          /**< key-point index of each target: springs first, then waypoints */
   float *bound;          /**< n_targets x n lower-bound rows (path-sharing heuristic), or NULL */
   int32_t *succ;         /**< n_targets x n successor rows (plain union), or NULL */

@@ -21,6 +21,9 @@ void karst_routing_plan_init(karst_routing_plan_t *plan) {
 
 void karst_routing_plan_destroy(karst_routing_plan_t *plan) {
   free(plan->dz);
+  if (plan->arc_costs)
+    for (int s = 0; s < plan->n_springs; s++)
+      free(plan->arc_costs[s]);
   free(plan->arc_costs);
   free(plan->routes);
   free(plan->targets);
@@ -105,6 +108,26 @@ static int pair_cmp(const void *x, const void *y) {
   return (p->dst > q->dst) - (p->dst < q->dst);
 }
 
+/* Tabulate the routed costs of spring @p s (karst_route_tabulate) when @p searches searches will
+ * read them and the budget allows: tabulating costs two formula evaluations and 16 bytes per arc,
+ * which a few searches over the whole graph (a routing row relaxes every arc once) or many
+ * path-sharing A* searches repay, and one search does not. Out of memory it is left undone (the
+ * searches then evaluate the same formula). */
+static void tabulate_spring(const karst_ctx_t *ctx, const karst_graph_t *g, karst_routing_plan_t *P,
+                            int s, int searches, int min_searches) {
+  const size_t bytes = 2 * (size_t)g->n_arcs * sizeof(double);
+  if (searches < min_searches || P->arc_costs[s] || g->n_arcs == 0 ||
+      P->arc_bytes + bytes > KARST_ROUTING_ARC_BUDGET)
+    return;
+  double *fwd = karst_i_alloc_large(bytes);
+  if (!fwd) return;
+  karst_route_tabulate(ctx, g, &P->routes[s], fwd, fwd + g->n_arcs);
+  P->arc_costs[s] = fwd;
+  P->arc_bytes += bytes;
+  P->routes[s].arc_fwd = fwd;
+  P->routes[s].arc_bwd = fwd + g->n_arcs;
+}
+
 /**
  * The routing plan (routing.h). The searches are exact and break ties by vertex index, so the
  * plan does not depend on the thread count.
@@ -135,6 +158,7 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
   const karst_routing_t *rt = &sc->routing;
   P.dz = karst_i_alloc_large((size_t)S * 2 * (size_t)n * sizeof *P.dz);
   P.routes = calloc((size_t)S, sizeof *P.routes);
+  P.arc_costs = calloc((size_t)S, sizeof *P.arc_costs);
   P.closed = calloc((size_t)n, 1);
   P.key_spring = malloc((size_t)K * sizeof *P.key_spring);
   P.targets = malloc((size_t)K * sizeof *P.targets);
@@ -147,7 +171,7 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
   perm = calloc((size_t)K * (size_t)K, 1);
   P.active = malloc((size_t)K);
   tspring = malloc((size_t)K * sizeof *tspring);
-  if (!P.dz || !P.routes || !P.closed || !P.key_spring || !P.targets || !srcs || !tv || !sv || !D ||
+  if (!P.dz || !P.routes || !P.arc_costs || !P.closed || !P.key_spring || !P.targets || !srcs || !tv || !sv || !D ||
       !troutes || !allowed || !perm || !P.active || !tspring) {
     err = karst_set_error(ctx, KARST_ENOMEM, "routing: out of memory for %lld vertices",
                           (long long)n);
@@ -166,18 +190,6 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
                                   1.0 / rt->phreatic_depth, NULL,
                                   NULL};
   }
-  /* The routed cost of every arc, both ways, once: the searches below and the skeleton's then read
-   * one value per arc. Over the budget (or out of memory) they evaluate the same formula. */
-  const size_t tab = 2 * (size_t)g->n_arcs;
-  if (g->n_arcs > 0 && (size_t)S * tab * sizeof(double) <= KARST_ROUTING_ARC_BUDGET)
-    P.arc_costs = karst_i_alloc_large((size_t)S * tab * sizeof *P.arc_costs);
-  if (P.arc_costs)
-    for (int s = 0; s < S; s++) {
-      double *fwd = P.arc_costs + (size_t)s * tab, *bwd = fwd + g->n_arcs;
-      karst_route_tabulate(ctx, g, &P.routes[s], fwd, bwd);
-      P.routes[s].arc_fwd = fwd;
-      P.routes[s].arc_bwd = bwd;
-    }
   /* Only the key points of the generation routed take part (generations.h); the others are
    * ordinary vertices that paths may cross. */
   int n_src = 0;
@@ -247,8 +259,15 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
     }
     P.key_spring[w] = tspring[best];
   }
-  /* 3. One backward search per waypoint, on the routed costs of its spring. */
+  /* 3. One backward search per waypoint, on the routed costs of its spring (tabulated first for a
+   *    spring that several waypoints drain to). */
   if (T > n_spring_targets) {
+    for (int q = 0; q < n_spring_targets; q++) {
+      int rows_on = 0;
+      for (int t = n_spring_targets; t < T; t++)
+        rows_on += P.key_spring[P.targets[t]] == tspring[q];
+      tabulate_spring(ctx, g, &P, tspring[q], rows_on, KARST_ROUTING_TABULATE_MIN_ROWS);
+    }
     for (int t = n_spring_targets; t < T; t++)
       tv[t - n_spring_targets] = P.targets[t],
              troutes[t - n_spring_targets] = &P.routes[P.key_spring[P.targets[t]]];
@@ -348,6 +367,14 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
       P.pairs[P.n_pairs++] = (karst_route_pair_t){dab, a, b, tidx[b], spring, required};
     }
   qsort(P.pairs, (size_t)P.n_pairs, sizeof *P.pairs, pair_cmp);
+  /* The skeleton's path-sharing searches (no successor rows wanted) on each spring's costs. */
+  if (!want_succ)
+    for (int q = 0; q < S; q++) {
+      int routes_on = 0;
+      for (int i = 0; i < P.n_pairs; i++)
+        routes_on += P.pairs[i].spring == q;
+      tabulate_spring(ctx, g, &P, q, routes_on, KARST_ROUTING_TABULATE_MIN_ROUTES);
+    }
   for (int k = 0; k < K; k++)
     if (P.active[k] && sc->key_points[k].type == KARST_KEYPOINT_SPRING)
       P.key_spring[k] = karst_geology_spring_of_key(geo, k);
