@@ -74,6 +74,10 @@
 #include <vtkXMLPolyDataWriter.h>
 #include <vtkZLibDataCompressor.h>
 
+/* zlib level of every file written (VTK's default is 5). Level 1 writes the looping cave's
+ * files several times faster for files about 10 % larger; the data are the same. */
+#define KARST_VTK_ZLIB_LEVEL 1
+
 namespace {
 
 /* ------------------------------------------------------------------------ */
@@ -458,6 +462,7 @@ karst_error_t write_atomically(karst_ctx_t *ctx, const char *path, StreamedWrite
     writer->UseStream(&os);
     writer->SetDataModeToBinary(); /* inline binary; see the file comment */
     writer->SetCompressorTypeToZLib();
+    writer->SetCompressionLevel(KARST_VTK_ZLIB_LEVEL);
     writer->SetHeaderTypeToUInt64(); /* arrays larger than 4 GiB stay readable */
     catcher->watch(writer->GetCompressor());
     int ok = writer->Write();
