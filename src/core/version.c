@@ -8,9 +8,9 @@
 #include <CGAL/version.h>
 #include <GeographicLib/Config.h>
 #include <flann/config.h>
-#include <gdal.h>
+#include <gdal_version.h>
 #include <igraph_version.h>
-#include <ogr_srs_api.h>
+#include <proj.h>
 #include <vtkVersionMacros.h>
 #include <yaml.h>
 
@@ -50,7 +50,6 @@ int karst_versions(karst_component_t out[KARST_COMPONENTS_MAX]) {
   int n = 0;
   char buf[96];
   const char *igraph = NULL;
-  int maj = 0, min = 0, patch = 0;
   put(out, &n, "karst", karst_version());
 #if defined(__clang__)
   put(out, &n, "compiler", "clang " __clang_version__);
@@ -66,9 +65,11 @@ int karst_versions(karst_component_t out[KARST_COMPONENTS_MAX]) {
   put(out, &n, "GeographicLib", GEOGRAPHICLIB_VERSION_STRING);
   put(out, &n, "CGAL", KARST_STR(CGAL_VERSION));
   put(out, &n, "libyaml", yaml_get_version_string());
-  put(out, &n, "GDAL", GDALVersionInfo("RELEASE_NAME"));
-  OSRGetPROJVersion(&maj, &min, &patch);
-  snprintf(buf, sizeof buf, "%d.%d.%d", maj, min, patch);
+  /* GDAL is loaded only by the GeoPackage export (src/export/gdal_api_internal.h): the version
+   * karst was built against, which the soname it loads pins. */
+  put(out, &n, "GDAL", GDAL_RELEASE_NAME);
+  PJ_INFO pj = proj_info();
+  snprintf(buf, sizeof buf, "%d.%d.%d", pj.major, pj.minor, pj.patch);
   put(out, &n, "PROJ", buf);
 #if KARST_HAVE_MPI && defined(OMPI_MAJOR_VERSION)
   snprintf(buf, sizeof buf, "Open MPI %d.%d.%d (MPI %d.%d)", OMPI_MAJOR_VERSION, OMPI_MINOR_VERSION,

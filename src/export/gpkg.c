@@ -5,12 +5,7 @@
 #include <string.h>
 #include <time.h>
 
-#include <cpl_conv.h>
-#include <cpl_error.h>
-#include <gdal.h>
-#include <ogr_api.h>
-#include <ogr_srs_api.h>
-
+#include "export/gdal_api_internal.h"
 #include "karst/arrays.h"
 #include "karst/export.h"
 #include "karst/io.h"
@@ -41,7 +36,7 @@ typedef struct {
 
 static void CPL_STDCALL on_gdal_error(CPLErr cls, CPLErrorNum num, const char *msg) {
   (void)num;
-  gdal_errors_t *g = CPLGetErrorHandlerUserData();
+  gdal_errors_t *g = karst_i_gdal.CPLGetErrorHandlerUserData();
   if (!g) return;
   if (cls >= CE_Failure) {
     g->failed = 1;
@@ -110,9 +105,9 @@ static karst_error_t plan_fields(karst_ctx_t *ctx, const karst_attr_t *attrs, in
 }
 
 static int add_field(OGRLayerH layer, const char *name, OGRFieldType type) {
-  OGRFieldDefnH d = OGR_Fld_Create(name, type);
-  int ok = OGR_L_CreateField(layer, d, TRUE) == OGRERR_NONE;
-  OGR_Fld_Destroy(d);
+  OGRFieldDefnH d = karst_i_gdal.OGR_Fld_Create(name, type);
+  int ok = karst_i_gdal.OGR_L_CreateField(layer, d, TRUE) == OGRERR_NONE;
+  karst_i_gdal.OGR_Fld_Destroy(d);
   return ok;
 }
 
@@ -133,25 +128,25 @@ static int create_fields(OGRLayerH layer, const fields_t *fs) {
 static void set_fields(OGRFeatureH feat, OGRFeatureDefnH defn, const fields_t *fs, karst_int_t i) {
   for (int k = 0; k < fs->n; k++) {
     const field_t *f = &fs->f[k];
-    int idx = OGR_FD_GetFieldIndex(defn, f->name);
+    int idx = karst_i_gdal.OGR_FD_GetFieldIndex(defn, f->name);
     double v = f->attr->data[(size_t)i * (size_t)f->attr->ncomp + (size_t)f->comp];
     if (!isfinite(v)) {
-      OGR_F_SetFieldNull(feat, idx);
+      karst_i_gdal.OGR_F_SetFieldNull(feat, idx);
     } else if (f->attr->integer) {
-      OGR_F_SetFieldInteger64(feat, idx, (GIntBig)v);
+      karst_i_gdal.OGR_F_SetFieldInteger64(feat, idx, (GIntBig)v);
     } else {
-      OGR_F_SetFieldDouble(feat, idx, v);
+      karst_i_gdal.OGR_F_SetFieldDouble(feat, idx, v);
     }
     if (f->names) {
       char nm[96];
       snprintf(nm, sizeof nm, "%s_name", f->name);
       const karst_palette_category_t *c =
           isfinite(v) ? karst_palette_category(f->names, (int)v) : NULL;
-      int j = OGR_FD_GetFieldIndex(defn, nm);
+      int j = karst_i_gdal.OGR_FD_GetFieldIndex(defn, nm);
       if (c)
-        OGR_F_SetFieldString(feat, j, c->name);
+        karst_i_gdal.OGR_F_SetFieldString(feat, j, c->name);
       else
-        OGR_F_SetFieldNull(feat, j);
+        karst_i_gdal.OGR_F_SetFieldNull(feat, j);
     }
   }
 }
@@ -165,7 +160,7 @@ static OGRLayerH create_layer(GDALDatasetH ds, const char *name, OGRSpatialRefer
   char desc[512];
   snprintf(desc, sizeof desc, "DESCRIPTION=%s", description);
   char *options[] = {"FID=fid", "GEOMETRY_NAME=geom", desc, NULL};
-  return GDALDatasetCreateLayer(ds, name, srs, type, options);
+  return karst_i_gdal.GDALDatasetCreateLayer(ds, name, srs, type, options);
 }
 
 typedef struct {
@@ -187,7 +182,7 @@ static karst_error_t tick(writer_t *w) {
 }
 
 static karst_error_t put_feature(writer_t *w, OGRLayerH layer, OGRFeatureH feat) {
-  if (OGR_L_CreateFeature(layer, feat) != OGRERR_NONE)
+  if (karst_i_gdal.OGR_L_CreateFeature(layer, feat) != OGRERR_NONE)
     return gdal_fail(w->ctx, w->g, w->path, "writing a feature");
   return tick(w);
 }
@@ -208,24 +203,24 @@ static karst_error_t write_conduits(writer_t *w, GDALDatasetH ds, OGRSpatialRefe
     free(fs.f);
     return gdal_fail(w->ctx, w->g, w->path, "creating the conduits layer");
   }
-  OGRFeatureDefnH defn = OGR_L_GetLayerDefn(layer);
-  int i_edge = OGR_FD_GetFieldIndex(defn, "edge"), i_from = OGR_FD_GetFieldIndex(defn, "from_node");
-  int i_to = OGR_FD_GetFieldIndex(defn, "to_node"), i_len = OGR_FD_GetFieldIndex(defn, "length");
+  OGRFeatureDefnH defn = karst_i_gdal.OGR_L_GetLayerDefn(layer);
+  int i_edge = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "edge"), i_from = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "from_node");
+  int i_to = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "to_node"), i_len = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "length");
   for (karst_int_t e = 0; e < net->n_edges && !err; e++) {
-    OGRFeatureH feat = OGR_F_Create(defn);
-    OGRGeometryH g = OGR_G_CreateGeometry(wkbLineString25D);
+    OGRFeatureH feat = karst_i_gdal.OGR_F_Create(defn);
+    OGRGeometryH g = karst_i_gdal.OGR_G_CreateGeometry(wkbLineString25D);
     for (int k = 0; k < 2; k++) {
       const double *p = &net->xyz[3 * net->edges[2 * e + k]];
-      OGR_G_AddPoint(g, p[0], p[1], p[2]);
+      karst_i_gdal.OGR_G_AddPoint(g, p[0], p[1], p[2]);
     }
-    OGR_F_SetGeometryDirectly(feat, g);
-    OGR_F_SetFieldInteger64(feat, i_edge, e);
-    OGR_F_SetFieldInteger64(feat, i_from, net->edges[2 * e]);
-    OGR_F_SetFieldInteger64(feat, i_to, net->edges[2 * e + 1]);
-    OGR_F_SetFieldDouble(feat, i_len, karst_network_edge_length(net, e));
+    karst_i_gdal.OGR_F_SetGeometryDirectly(feat, g);
+    karst_i_gdal.OGR_F_SetFieldInteger64(feat, i_edge, e);
+    karst_i_gdal.OGR_F_SetFieldInteger64(feat, i_from, net->edges[2 * e]);
+    karst_i_gdal.OGR_F_SetFieldInteger64(feat, i_to, net->edges[2 * e + 1]);
+    karst_i_gdal.OGR_F_SetFieldDouble(feat, i_len, karst_network_edge_length(net, e));
     set_fields(feat, defn, &fs, e);
     err = put_feature(w, layer, feat);
-    OGR_F_Destroy(feat);
+    karst_i_gdal.OGR_F_Destroy(feat);
   }
   free(fs.f);
   return err;
@@ -244,19 +239,19 @@ static karst_error_t write_nodes(writer_t *w, GDALDatasetH ds, OGRSpatialReferen
     free(fs.f);
     return gdal_fail(w->ctx, w->g, w->path, "creating the nodes layer");
   }
-  OGRFeatureDefnH defn = OGR_L_GetLayerDefn(layer);
-  int i_node = OGR_FD_GetFieldIndex(defn, "node"), i_label = OGR_FD_GetFieldIndex(defn, "label");
+  OGRFeatureDefnH defn = karst_i_gdal.OGR_L_GetLayerDefn(layer);
+  int i_node = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "node"), i_label = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "label");
   for (karst_int_t i = 0; i < net->n_nodes && !err; i++) {
-    OGRFeatureH feat = OGR_F_Create(defn);
-    OGRGeometryH g = OGR_G_CreateGeometry(wkbPoint25D);
-    OGR_G_SetPoint(g, 0, net->xyz[3 * i], net->xyz[3 * i + 1], net->xyz[3 * i + 2]);
-    OGR_F_SetGeometryDirectly(feat, g);
-    OGR_F_SetFieldInteger64(feat, i_node, i);
+    OGRFeatureH feat = karst_i_gdal.OGR_F_Create(defn);
+    OGRGeometryH g = karst_i_gdal.OGR_G_CreateGeometry(wkbPoint25D);
+    karst_i_gdal.OGR_G_SetPoint(g, 0, net->xyz[3 * i], net->xyz[3 * i + 1], net->xyz[3 * i + 2]);
+    karst_i_gdal.OGR_F_SetGeometryDirectly(feat, g);
+    karst_i_gdal.OGR_F_SetFieldInteger64(feat, i_node, i);
     if (net->node_labels && net->node_labels[i])
-      OGR_F_SetFieldString(feat, i_label, net->node_labels[i]);
+      karst_i_gdal.OGR_F_SetFieldString(feat, i_label, net->node_labels[i]);
     set_fields(feat, defn, &fs, i);
     err = put_feature(w, layer, feat);
-    OGR_F_Destroy(feat);
+    karst_i_gdal.OGR_F_Destroy(feat);
   }
   free(fs.f);
   return err;
@@ -272,7 +267,7 @@ static karst_error_t write_key_points(writer_t *w, GDALDatasetH ds, OGRSpatialRe
       !add_field(layer, "kind", OFTInteger) || !add_field(layer, "kind_name", OFTString) ||
       !add_field(layer, "node", OFTInteger64))
     return gdal_fail(w->ctx, w->g, w->path, "creating the key_points layer");
-  OGRFeatureDefnH defn = OGR_L_GetLayerDefn(layer);
+  OGRFeatureDefnH defn = karst_i_gdal.OGR_L_GetLayerDefn(layer);
   karst_error_t err = KARST_SUCCESS;
   for (int k = 0; k < src->n_key_points && !err; k++) {
     const karst_export_keypoint_t *kp = &src->key_points[k];
@@ -280,21 +275,21 @@ static karst_error_t write_key_points(writer_t *w, GDALDatasetH ds, OGRSpatialRe
                                               KARST_NODE_WAYPOINT};
     static const char *const types[] = {"sink", "spring", "waypoint"};
     int t = kp->type >= KARST_KEYPOINT_SINK && kp->type <= KARST_KEYPOINT_WAYPOINT ? kp->type : 2;
-    OGRFeatureH feat = OGR_F_Create(defn);
-    OGRGeometryH g = OGR_G_CreateGeometry(wkbPoint25D);
-    OGR_G_SetPoint(g, 0, kp->p[0], kp->p[1], kp->p[2]);
-    OGR_F_SetGeometryDirectly(feat, g);
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "name"), kp->name);
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "type"), types[t]);
-    OGR_F_SetFieldInteger(feat, OGR_FD_GetFieldIndex(defn, "kind"), kinds[t]);
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "kind_name"),
+    OGRFeatureH feat = karst_i_gdal.OGR_F_Create(defn);
+    OGRGeometryH g = karst_i_gdal.OGR_G_CreateGeometry(wkbPoint25D);
+    karst_i_gdal.OGR_G_SetPoint(g, 0, kp->p[0], kp->p[1], kp->p[2]);
+    karst_i_gdal.OGR_F_SetGeometryDirectly(feat, g);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "name"), kp->name);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "type"), types[t]);
+    karst_i_gdal.OGR_F_SetFieldInteger(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "kind"), kinds[t]);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "kind_name"),
                          karst_node_kind_name(kinds[t]));
     if (kp->node >= 0)
-      OGR_F_SetFieldInteger64(feat, OGR_FD_GetFieldIndex(defn, "node"), kp->node);
+      karst_i_gdal.OGR_F_SetFieldInteger64(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "node"), kp->node);
     else
-      OGR_F_SetFieldNull(feat, OGR_FD_GetFieldIndex(defn, "node"));
+      karst_i_gdal.OGR_F_SetFieldNull(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "node"));
     err = put_feature(w, layer, feat);
-    OGR_F_Destroy(feat);
+    karst_i_gdal.OGR_F_Destroy(feat);
   }
   return err;
 }
@@ -304,7 +299,7 @@ static karst_error_t write_key_points(writer_t *w, GDALDatasetH ds, OGRSpatialRe
 static karst_error_t write_styles(writer_t *w, GDALDatasetH ds, const char *const qml[3],
                                   const char *const layers[3], const struct tm *utc) {
   char *options[] = {"FID=id", NULL};
-  OGRLayerH layer = GDALDatasetCreateLayer(ds, "layer_styles", NULL, wkbNone, options);
+  OGRLayerH layer = karst_i_gdal.GDALDatasetCreateLayer(ds, "layer_styles", NULL, wkbNone, options);
   static const char *const text[] = {"f_table_catalog", "f_table_schema",
                                      "f_table_name",    "f_geometry_column",
                                      "styleName",       "styleQML",
@@ -314,31 +309,31 @@ static karst_error_t write_styles(writer_t *w, GDALDatasetH ds, const char *cons
   for (size_t i = 0; ok && i < sizeof text / sizeof text[0]; i++)
     ok = add_field(layer, text[i], OFTString);
   if (ok) {
-    OGRFieldDefnH d = OGR_Fld_Create("useAsDefault", OFTInteger);
-    OGR_Fld_SetSubType(d, OFSTBoolean);
-    ok = OGR_L_CreateField(layer, d, TRUE) == OGRERR_NONE;
-    OGR_Fld_Destroy(d);
+    OGRFieldDefnH d = karst_i_gdal.OGR_Fld_Create("useAsDefault", OFTInteger);
+    karst_i_gdal.OGR_Fld_SetSubType(d, OFSTBoolean);
+    ok = karst_i_gdal.OGR_L_CreateField(layer, d, TRUE) == OGRERR_NONE;
+    karst_i_gdal.OGR_Fld_Destroy(d);
   }
   if (ok) ok = add_field(layer, "update_time", OFTDateTime);
   if (!ok) return gdal_fail(w->ctx, w->g, w->path, "creating the layer_styles table");
-  OGRFeatureDefnH defn = OGR_L_GetLayerDefn(layer);
+  OGRFeatureDefnH defn = karst_i_gdal.OGR_L_GetLayerDefn(layer);
   karst_error_t err = KARST_SUCCESS;
   for (int i = 0; i < 3 && !err; i++) {
-    OGRFeatureH feat = OGR_F_Create(defn);
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "f_table_catalog"), "");
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "f_table_schema"), "");
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "f_table_name"), layers[i]);
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "f_geometry_column"), "geom");
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "styleName"), layers[i]);
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "styleQML"), qml[i]);
-    OGR_F_SetFieldString(feat, OGR_FD_GetFieldIndex(defn, "description"),
+    OGRFeatureH feat = karst_i_gdal.OGR_F_Create(defn);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_table_catalog"), "");
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_table_schema"), "");
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_table_name"), layers[i]);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_geometry_column"), "geom");
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "styleName"), layers[i]);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "styleQML"), qml[i]);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "description"),
                          "karst palette (include/karst/palette.h)");
-    OGR_F_SetFieldInteger(feat, OGR_FD_GetFieldIndex(defn, "useAsDefault"), 1);
-    OGR_F_SetFieldDateTime(feat, OGR_FD_GetFieldIndex(defn, "update_time"), utc->tm_year + 1900,
+    karst_i_gdal.OGR_F_SetFieldInteger(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "useAsDefault"), 1);
+    karst_i_gdal.OGR_F_SetFieldDateTime(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "update_time"), utc->tm_year + 1900,
                            utc->tm_mon + 1, utc->tm_mday, utc->tm_hour, utc->tm_min, utc->tm_sec,
                            100);
     err = put_feature(w, layer, feat);
-    OGR_F_Destroy(feat);
+    karst_i_gdal.OGR_F_Destroy(feat);
   }
   return err;
 }
@@ -427,15 +422,15 @@ static karst_error_t write_data_columns(writer_t *w, GDALDatasetH ds, const char
       "VALUES ('gpkg_data_columns', NULL, 'gpkg_schema', "
       "'http://www.geopackage.org/spec121/#extension_schema', 'read-write')"};
   for (size_t i = 0; i < sizeof create / sizeof create[0]; i++) {
-    GDALDatasetExecuteSQL(ds, create[i], NULL, NULL);
+    karst_i_gdal.GDALDatasetExecuteSQL(ds, create[i], NULL, NULL);
     if (w->g->failed) return gdal_fail(w->ctx, w->g, w->path, "creating gpkg_data_columns");
   }
   for (int l = 0; l < n_layers; l++) {
-    OGRLayerH layer = GDALDatasetGetLayerByName(ds, layers[l]);
+    OGRLayerH layer = karst_i_gdal.GDALDatasetGetLayerByName(ds, layers[l]);
     if (!layer) continue;
-    OGRFeatureDefnH defn = OGR_L_GetLayerDefn(layer);
-    for (int i = 0; i < OGR_FD_GetFieldCount(defn); i++) {
-      const char *col = OGR_Fld_GetNameRef(OGR_FD_GetFieldDefn(defn, i)), *description = NULL;
+    OGRFeatureDefnH defn = karst_i_gdal.OGR_L_GetLayerDefn(layer);
+    for (int i = 0; i < karst_i_gdal.OGR_FD_GetFieldCount(defn); i++) {
+      const char *col = karst_i_gdal.OGR_Fld_GetNameRef(karst_i_gdal.OGR_FD_GetFieldDefn(defn, i)), *description = NULL;
       char title[192], q[5][640], sql[3400];
       describe_column(col, title, sizeof title, &description);
       if (!sql_quote(q[0], sizeof q[0], layers[l]) || !sql_quote(q[1], sizeof q[1], col) ||
@@ -445,7 +440,7 @@ static karst_error_t write_data_columns(writer_t *w, GDALDatasetH ds, const char
                "INSERT INTO gpkg_data_columns (table_name, column_name, name, title, description) "
                "VALUES (%s, %s, %s, %s, %s)",
                q[0], q[1], q[2], q[2], q[3]);
-      GDALDatasetExecuteSQL(ds, sql, NULL, NULL);
+      karst_i_gdal.GDALDatasetExecuteSQL(ds, sql, NULL, NULL);
       if (w->g->failed) return gdal_fail(w->ctx, w->g, w->path, "describing the fields");
     }
   }
@@ -456,22 +451,22 @@ static karst_error_t write_data_columns(writer_t *w, GDALDatasetH ds, const char
 static void write_metadata(GDALDatasetH ds, const karst_export_source_t *src, const char *crs,
                            const char *versions) {
   char buf[64];
-  GDALSetMetadataItem(ds, "karst_version", karst_version(), NULL);
-  GDALSetMetadataItem(ds, "versions", versions, NULL);
-  GDALSetMetadataItem(ds, "network", src->network_path, NULL);
-  if (src->provenance_path) GDALSetMetadataItem(ds, "provenance", src->provenance_path, NULL);
-  if (src->scenario) GDALSetMetadataItem(ds, "scenario", src->scenario, NULL);
-  if (src->scenario_hash) GDALSetMetadataItem(ds, "scenario_hash", src->scenario_hash, NULL);
+  karst_i_gdal.GDALSetMetadataItem(ds, "karst_version", karst_version(), NULL);
+  karst_i_gdal.GDALSetMetadataItem(ds, "versions", versions, NULL);
+  karst_i_gdal.GDALSetMetadataItem(ds, "network", src->network_path, NULL);
+  if (src->provenance_path) karst_i_gdal.GDALSetMetadataItem(ds, "provenance", src->provenance_path, NULL);
+  if (src->scenario) karst_i_gdal.GDALSetMetadataItem(ds, "scenario", src->scenario, NULL);
+  if (src->scenario_hash) karst_i_gdal.GDALSetMetadataItem(ds, "scenario_hash", src->scenario_hash, NULL);
   if (src->have_seed) {
     snprintf(buf, sizeof buf, "%llu", (unsigned long long)src->seed);
-    GDALSetMetadataItem(ds, "seed", buf, NULL);
+    karst_i_gdal.GDALSetMetadataItem(ds, "seed", buf, NULL);
   }
   if (src->member >= 0) {
     snprintf(buf, sizeof buf, "%lld", (long long)src->member);
-    GDALSetMetadataItem(ds, "member", buf, NULL);
+    karst_i_gdal.GDALSetMetadataItem(ds, "member", buf, NULL);
   }
-  GDALSetMetadataItem(ds, "crs", crs ? crs : "undefined", NULL);
-  if (src->net.title) GDALSetMetadataItem(ds, "title", src->net.title, NULL);
+  karst_i_gdal.GDALSetMetadataItem(ds, "crs", crs ? crs : "undefined", NULL);
+  if (src->net.title) karst_i_gdal.GDALSetMetadataItem(ds, "title", src->net.title, NULL);
 }
 
 static int has_gpkg_extension(const char *path) {
@@ -533,9 +528,10 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
   if (err) return err;
   if ((err = karst_check_writable(ctx, path))) return err;
   if (opt->qml_path && (err = karst_check_writable(ctx, opt->qml_path))) return err;
+  if ((err = karst_i_gdal_load(ctx))) return err;
 
   gdal_errors_t g = {ctx, 0, ""};
-  CPLPushErrorHandlerEx(on_gdal_error, &g);
+  karst_i_gdal.CPLPushErrorHandlerEx(on_gdal_error, &g);
   OGRSpatialReferenceH srs = NULL;
   GDALDatasetH ds = NULL;
   karst_fileset_t files;
@@ -548,9 +544,9 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
                 (double)(src->net.n_edges + src->net.n_nodes + src->n_key_points)};
 
   if (crs) {
-    srs = OSRNewSpatialReference(NULL);
+    srs = karst_i_gdal.OSRNewSpatialReference(NULL);
     if (!srs) goto nomem;
-    if (OSRSetFromUserInput(srs, crs) != OGRERR_NONE) {
+    if (karst_i_gdal.OSRSetFromUserInput(srs, crs) != OGRERR_NONE) {
       err =
           karst_set_error(ctx, KARST_EPARSE,
                           "%s: coordinate system '%s' is not one GDAL/PROJ "
@@ -560,12 +556,12 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
                           opt->crs ? "" : "; give the right one with --crs, e.g. --crs EPSG:2154");
       goto cleanup;
     }
-    OSRSetAxisMappingStrategy(srs, OAMS_TRADITIONAL_GIS_ORDER);
+    karst_i_gdal.OSRSetAxisMappingStrategy(srs, OAMS_TRADITIONAL_GIS_ORDER);
   } else {
     /* No coordinate system: the GeoPackage's "Undefined Cartesian SRS" (srs_id -1). Without
      * an SRS GDAL would write srs_id 0, "Undefined geographic SRS", and QGIS would take the
      * metres for degrees. */
-    srs = OSRNewSpatialReference(UNDEFINED_CARTESIAN_WKT);
+    srs = karst_i_gdal.OSRNewSpatialReference(UNDEFINED_CARTESIAN_WKT);
     if (!srs) goto nomem;
   }
   const int have_type = karst_network_attr_find(&src->net, KARST_ATTR_EDGE, "tunnel_type") != NULL;
@@ -594,22 +590,22 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
                           path, (long long)when);
     goto cleanup;
   }
-  CPLSetThreadLocalConfigOption("OGR_CURRENT_DATE", stamp);
+  karst_i_gdal.CPLSetThreadLocalConfigOption("OGR_CURRENT_DATE", stamp);
   stamped = 1;
 
-  GDALAllRegister();
-  GDALDriverH drv = GDALGetDriverByName("GPKG");
+  karst_i_gdal.GDALAllRegister();
+  GDALDriverH drv = karst_i_gdal.GDALGetDriverByName("GPKG");
   if (!drv) {
     err = karst_set_error(ctx, KARST_EUNSUPPORTED,
                           "%s: this GDAL has no GPKG driver (install Debian's libgdal32)", path);
     goto cleanup;
   }
-  ds = GDALCreate(drv, tmp, 0, 0, 0, GDT_Unknown, NULL);
+  ds = karst_i_gdal.GDALCreate(drv, tmp, 0, 0, 0, GDT_Unknown, NULL);
   if (!ds) {
     err = gdal_fail(ctx, &g, path, "creating the GeoPackage");
     goto cleanup;
   }
-  if (GDALDatasetStartTransaction(ds, FALSE) != OGRERR_NONE) {
+  if (karst_i_gdal.GDALDatasetStartTransaction(ds, FALSE) != OGRERR_NONE) {
     err = gdal_fail(ctx, &g, path, "starting a transaction");
     goto cleanup;
   }
@@ -621,12 +617,12 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
                                         KARST_EXPORT_LAYER_KEY_POINTS};
   if ((err = write_styles(&w, ds, (const char *const *)qml, layers, &utc))) goto cleanup;
   if ((err = write_data_columns(&w, ds, layers, 3))) goto cleanup;
-  if (GDALDatasetCommitTransaction(ds) != OGRERR_NONE) {
+  if (karst_i_gdal.GDALDatasetCommitTransaction(ds) != OGRERR_NONE) {
     err = gdal_fail(ctx, &g, path, "committing the transaction");
     goto cleanup;
   }
   write_metadata(ds, src, crs, versions);
-  GDALClose(ds);
+  karst_i_gdal.GDALClose(ds);
   ds = NULL;
   if (g.failed) {
     err = gdal_fail(ctx, &g, path, "closing the GeoPackage");
@@ -648,11 +644,11 @@ karst_error_t karst_export_gpkg(karst_ctx_t *ctx, const char *path,
 nomem:
   err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
 cleanup:
-  if (ds) GDALClose(ds);
-  if (stamped) CPLSetThreadLocalConfigOption("OGR_CURRENT_DATE", NULL);
+  if (ds) karst_i_gdal.GDALClose(ds);
+  if (stamped) karst_i_gdal.CPLSetThreadLocalConfigOption("OGR_CURRENT_DATE", NULL);
   karst_fileset_abort(&files);
-  if (srs) OSRDestroySpatialReference(srs);
-  CPLPopErrorHandler();
+  if (srs) karst_i_gdal.OSRDestroySpatialReference(srs);
+  karst_i_gdal.CPLPopErrorHandler();
   for (int i = 0; i < 3; i++)
     free(qml[i]);
   free(versions);

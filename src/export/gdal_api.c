@@ -1,0 +1,49 @@
+/* GDAL loaded on first use (src/export/gdal_api_internal.h). */
+#include "export/gdal_api_internal.h"
+
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <string.h>
+
+#ifndef KARST_GDAL_SONAME
+#error "KARST_GDAL_SONAME (the soname of libgdal, e.g. libgdal.so.32) is set by CMakeLists.txt"
+#endif
+
+karst_i_gdal_t karst_i_gdal;
+
+static pthread_once_t once = PTHREAD_ONCE_INIT;
+static char load_error[512]; /* empty once loaded */
+
+static void load(void) {
+  void *lib = dlopen(KARST_GDAL_SONAME, RTLD_NOW | RTLD_LOCAL);
+  if (!lib) {
+    const char *why = dlerror();
+    snprintf(load_error, sizeof load_error, "%s", why ? why : "dlopen failed");
+    return;
+  }
+  /* dlsym returns void *; POSIX guarantees it converts to a function pointer. */
+#define KARST_I_GDAL_LOOKUP(name)                                                                  \
+  {                                                                                                \
+    void *sym = dlsym(lib, #name);                                                                 \
+    if (!sym) {                                                                                    \
+      snprintf(load_error, sizeof load_error, "%s has no function %s", KARST_GDAL_SONAME, #name); \
+      return;                                                                                      \
+    }                                                                                              \
+    memcpy(&karst_i_gdal.name, &sym, sizeof sym);                                                  \
+  }
+  KARST_I_GDAL_FUNCTIONS(KARST_I_GDAL_LOOKUP)
+#undef KARST_I_GDAL_LOOKUP
+  load_error[0] = '\0';
+}
+
+karst_error_t karst_i_gdal_load(karst_ctx_t *ctx) {
+  if (pthread_once(&once, load) != 0)
+    return karst_set_error(ctx, KARST_ENOTIMPL, "cannot load GDAL (%s)", KARST_GDAL_SONAME);
+  if (load_error[0])
+    return karst_set_error(ctx, KARST_ENOTIMPL,
+                           "GeoPackage export needs GDAL, which could not be loaded: %s "
+                           "(Debian: apt-get install libgdal32)",
+                           load_error);
+  return KARST_SUCCESS;
+}
