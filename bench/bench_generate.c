@@ -2,7 +2,8 @@
  * karst_generate on the shipped presets and on a 1.5-million-sample domain
  * with k = 100, and the measurement behind the choice of method for the
  * key-point distance matrix (multi-target Dijkstra rows vs A* pairs).
- * Usage: bench_generate [--threads N] [--runs R] [--skip-large] [--presets-only] [--large-only] */
+ * Usage: bench_generate [--threads N] [--runs R] [--skip-large] [--presets-only] [--large-only]
+ *                       [--large-samples N]   (the large block's size, default 1.505e6) */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -167,10 +168,14 @@ static void run_scenario(karst_ctx_t *ctx, const karst_scenario_t *sc, const cha
  * per 0.228 m³ (≈ 1.62 r³, a little denser than V / (1.41 r³)); 1070 m per side scales that by
  * 1.145 to ≈ 1.51 M. */
 #define LARGE_SIDE 1070.0
-static void large_scenario(karst_scenario_t *sc) {
+#define LARGE_SAMPLES 1.505e6
+/* The block for about @p samples samples: the same 300 m thickness, the side scaled by
+ * sqrt(samples / 1.505 M) (400 k samples: 552 m). */
+static void large_scenario(karst_scenario_t *sc, double samples) {
+  const double side = LARGE_SIDE * sqrt(samples / LARGE_SAMPLES);
   karst_scenario_init(sc);
   sc->name = strdup("large_1p5M");
-  sc->domain_max[0] = sc->domain_max[1] = LARGE_SIDE;
+  sc->domain_max[0] = sc->domain_max[1] = side;
   sc->domain_max[2] = 300;
   sc->terrain.elevation = 300;
   sc->water_table.given = 1, sc->water_table.elevation = 80;
@@ -191,20 +196,22 @@ static void large_scenario(karst_scenario_t *sc) {
     k->type =
         i == 0 ? KARST_KEYPOINT_SPRING : (i < 12 ? KARST_KEYPOINT_SINK : KARST_KEYPOINT_WAYPOINT);
     snprintf(k->name, sizeof k->name, "k%d", i);
-    k->p[0] = 50 + (LARGE_SIDE - 100) * karst_rng_uniform(&r);
-    k->p[1] = 50 + (LARGE_SIDE - 100) * karst_rng_uniform(&r);
+    k->p[0] = 50 + (side - 100) * karst_rng_uniform(&r);
+    k->p[1] = 50 + (side - 100) * karst_rng_uniform(&r);
     k->p[2] = i == 0 ? 80 : (i < 12 ? 295 : 100 + 150 * karst_rng_uniform(&r));
   }
 }
 
 int main(int argc, char **argv) {
   int threads = 2, skip_large = 0, presets_only = 0, large_only = 0, runs = 5;
+  double large_samples = LARGE_SAMPLES;
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) threads = atoi(argv[++i]);
     if (strcmp(argv[i], "--runs") == 0 && i + 1 < argc) runs = atoi(argv[++i]);
     if (strcmp(argv[i], "--skip-large") == 0) skip_large = 1;
     if (strcmp(argv[i], "--presets-only") == 0) presets_only = skip_large = 1;
     if (strcmp(argv[i], "--large-only") == 0) large_only = presets_only = 1;
+    if (strcmp(argv[i], "--large-samples") == 0 && i + 1 < argc) large_samples = atof(argv[++i]);
   }
   if (runs < 1) runs = 1;
   printf("bench_generate: %d thread(s), presets run %d times each\n", threads, runs);
@@ -237,8 +244,11 @@ int main(int argc, char **argv) {
     karst_ctx_init(&ctx);
     ctx.nthreads = threads;
     karst_scenario_t sc;
-    large_scenario(&sc);
-    run_scenario(&ctx, &sc, "1.5M samples, k=100", 1);
+    if (!(large_samples >= 1e4 && large_samples <= 2e7)) large_samples = LARGE_SAMPLES;
+    large_scenario(&sc, large_samples);
+    char label[64];
+    snprintf(label, sizeof label, "%.3gM samples, k=100", large_samples / 1e6);
+    run_scenario(&ctx, &sc, label, 1);
     karst_scenario_destroy(&sc);
   }
   return 0;

@@ -1,0 +1,253 @@
+/*
+ * Benchmark (not a test): karst on the same work as the two peer generators whose figures
+ * docs/performance.md records, whole process (`karst generate SCENARIO -o DIR --threads 1`,
+ * the CLI as a user runs it: start-up, parsing, every stage, every output file), one thread.
+ *
+ *   1. Karst-Synthesis (Paris et al. 2021's code, aparis69/Karst-Synthesis at 386b243), its
+ *      rectilinear scene (Code/Source/main.cpp, RectilinearMazeNetwork): about 23 450 samples in
+ *      2000 x 2000 x 250 m, k = 32, the scene's 7 sinks, 5 springs and the 10 waypoints that lie
+ *      in the sampled slab, three axis-aligned fracture directions of weight 10, gamma 2, plain
+ *      union of the least-cost paths, 10 amplification points (half dead ends).
+ *   2. KarstNSim (Gouy et al. 2024, ISSKA/KarstNSim_Public at fd31889), its shipped example
+ *      (Input_files/instructions.txt): about 115 000 samples, k = 100, 5 sinks all draining to
+ *      spring 1 (its connectivity matrix), 2 springs each with its own water table, 2 inception
+ *      horizons, 2 vertical fracture families (azimuths 0 and 60 degrees, weight 0.5), gamma 2,
+ *      15 dead ends and 20 loops of amplification; its no-karst spheres off (the example
+ *      crashes with them on).
+ * What differs from the peers' own runs is listed in docs/performance.md.
+ *
+ *   bench_peers [--runs R] [--keep DIR]    (default 5 runs; --keep writes the scenarios to DIR)
+ *
+ * Prints, per scene, the sample and edge counts of the run, the fastest and median wall time of
+ * R runs, the peak resident memory, and the ratio to the peer's figure.
+ */
+#include <errno.h>
+#include <spawn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+extern char **environ;
+
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* Karst-Synthesis's rectilinear key points (main.cpp l.159-186), y up in its frame: here
+ * (x, z, y) so that z is up. Four of its 14 waypoints lie 164-336 m above every sample and get
+ * no edge there (its Results/rectilinear_nodes.dat has none of them); they are left out. The
+ * five waypoints whose height is an uninitialised 4.9e-313 are at 0. */
+static const double KS_SINKS[7][3] = {
+    {60.4311, 261.446, 52.6541},  {-101.237, 219.241, 52.1485}, {-255.377, 138.243, 44.3283},
+    {-289.637, 358.579, 37.8691}, {-86.1126, 382.429, 37.8371}, {-446.468, 383.381, 30.5388},
+    {328.728, 414.128, 48.0858}};
+static const double KS_SPRINGS[5][3] = {{225.946, -324.888, 37.5715},
+                                        {95.9676, -337.74, 37.9612},
+                                        {-110.653, -373.92, 35.7709},
+                                        {-275.73, -314.632, 34.0925},
+                                        {472.035, -456.167, 46.3118}};
+static const double KS_WAYPOINTS[10][3] = {
+    {-40, -42, 45},   {-262.777, -35, 30.5283}, {311.746, -35, -129.463}, {0, -25, 0},
+    {412.401, -14, 57.8162}, {0, -65, 0}, {99.8656, -17, 1.7859}, {0, -26, 0},
+    {0, -40, 0},      {0, -29, 0}};
+
+/* The fill radius that gives Karst-Synthesis's sample count: its baked cloud holds 23 434
+ * points (spacing >= 30 m) and the scene 23 446 graph nodes; at 30.8 m karst places about as
+ * many in the same slab (the bench prints the count it got). */
+#define KS_FILL_RADIUS 30.8
+/* KarstNSim's example: about 115 000 samples in its box; its box file is not in the public
+ * snapshot, so the box here is 990 x 790 x 500 m (the later v1.3 example's plan, topped at
+ * 500 m above every sink) and 12.8 m gives about 117 000 samples. */
+#define KNS_FILL_RADIUS 12.8
+
+static int write_ks(const char *path) {
+  FILE *f = fopen(path, "w");
+  if (!f) return -1;
+  fprintf(f, "# Karst-Synthesis's rectilinear scene as karst scenario (bench/bench_peers.c)\n"
+             "name: ks_rectilinear\nunits: m\n"
+             "domain: {min: [-1000, -1000, -200], max: [1000, 1000, 60]}\n"
+             "terrain: {elevation: 60}\n"
+             "fractures:\n"
+             "  - {dip_direction: 90, dip: 90, weight: 1.0}\n"
+             "  - {dip_direction: 0, dip: 90, weight: 1.0}\n"
+             "  - {dip_direction: 0, dip: 0, weight: 1.0}\n"
+             "key_points:\n");
+  for (int i = 0; i < 7; i++)
+    fprintf(f, "  - {name: sink%d, type: sink, position: [%.6g, %.6g, %.6g]}\n", i + 1,
+            KS_SINKS[i][0], KS_SINKS[i][1], KS_SINKS[i][2]);
+  for (int i = 0; i < 5; i++)
+    fprintf(f, "  - {name: spring%d, type: spring, position: [%.6g, %.6g, %.6g]}\n", i + 1,
+            KS_SPRINGS[i][0], KS_SPRINGS[i][1], KS_SPRINGS[i][2]);
+  for (int i = 0; i < 10; i++)
+    fprintf(f, "  - {name: way%d, type: waypoint, position: [%.6g, %.6g, %.6g]}\n", i + 1,
+            KS_WAYPOINTS[i][0], KS_WAYPOINTS[i][1], KS_WAYPOINTS[i][2]);
+  fprintf(f,
+          "cost: {w0: 1, fracture: 10, fracture_combine: min}\n"
+          "sampling: {fill_radius: %g, feature_radius: %g, k: 32}\n"
+          "skeleton: {gamma: 2, reuse: 1}\n"
+          "amplification: {steps: 1, points: 10, dead_end_fraction: 0.5}\n",
+          KS_FILL_RADIUS, KS_FILL_RADIUS);
+  return fclose(f) == 0 ? 0 : -1;
+}
+
+static int write_kns(const char *path) {
+  FILE *f = fopen(path, "w");
+  if (!f) return -1;
+  fprintf(f,
+          "# KarstNSim's shipped example as karst scenario (bench/bench_peers.c)\n"
+          "name: karstnsim_example\nunits: m\n"
+          "domain: {min: [0, 0, 0], max: [990, 790, 500]}\n"
+          "terrain: {elevation: 500}\n"
+          "# its two inception surfaces (z 404-481 and 239-371) as planes at their mid-heights,\n"
+          "# within its max_inception_surface_distance of 50 m\n"
+          "horizons:\n"
+          "  - {elevation: 442, dip: 0, dip_direction: 0, radius: 50}\n"
+          "  - {elevation: 305, dip: 0, dip_direction: 0, radius: 50}\n"
+          "# fracture azimuths 0 and 60 degrees: vertical planes striking N and N60E\n"
+          "fractures:\n"
+          "  - {dip_direction: 90, dip: 90, weight: 0.5}\n"
+          "  - {dip_direction: 150, dip: 90, weight: 0.5}\n"
+          "# each spring's water table: the plane through it (its own base level)\n"
+          "key_points:\n"
+          "  - {name: sink1, type: sink, position: [299.795, 108.19, 482.581]}\n"
+          "  - {name: sink2, type: sink, position: [137.711, 316.738, 472.322]}\n"
+          "  - {name: sink3, type: sink, position: [157.161, 544.737, 474.809]}\n"
+          "  - {name: sink4, type: sink, position: [373.274, 733.836, 466.029]}\n"
+          "  - {name: sink5, type: sink, position: [411.093, 613.893, 421.587]}\n"
+          "  - {name: spring1, type: spring, position: [608.498, 583.364, 355.684]}\n"
+          "  - {name: spring2, type: spring, position: [777.934, 409.003, 249.472]}\n"
+          "connectivity:\n"
+          "  matrix: [[1, 0], [1, 0], [1, 0], [1, 0], [1, 0]]\n"
+          "sampling: {fill_radius: %g, feature_radius: %g, k: 100}\n"
+          "skeleton: {gamma: 2, reuse: 1}\n"
+          "# 15 dead ends and 20 loops\n"
+          "amplification: {steps: 1, points: 35, dead_end_fraction: 0.43}\n",
+          KNS_FILL_RADIUS, KNS_FILL_RADIUS);
+  return fclose(f) == 0 ? 0 : -1;
+}
+
+/* One whole-process run: wall time and peak RSS (KiB), or -1 on failure. */
+static double run_once(const char *scenario, const char *out, long *rss_kib) {
+  char *argv[] = {(char *)KARST_CLI, "generate", (char *)scenario, "-o", (char *)out,
+                  "--threads",       "1",        "--quiet",        NULL};
+  double t0 = now_s();
+  pid_t pid;
+  if (posix_spawn(&pid, KARST_CLI, NULL, NULL, argv, environ) != 0) return -1;
+  int status;
+  struct rusage ru;
+  if (wait4(pid, &status, 0, &ru) < 0) return -1;
+  double t = now_s() - t0;
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return -1;
+  *rss_kib = ru.ru_maxrss;
+  return t;
+}
+
+/* The integer after "key": in the counts of DIR/run.json, or -1. */
+static long json_count(const char *dir, const char *key) {
+  char path[4096], pat[64];
+  snprintf(path, sizeof path, "%s/run.json", dir);
+  FILE *f = fopen(path, "r");
+  if (!f) return -1;
+  static char buf[1 << 20];
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  fclose(f);
+  buf[n] = '\0';
+  snprintf(pat, sizeof pat, "\"%s\":", key);
+  const char *p = strstr(buf, "\"counts\"");
+  p = p ? strstr(p, pat) : NULL;
+  return p ? strtol(p + strlen(pat), NULL, 10) : -1;
+}
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+typedef struct {
+  const char *name, *file;
+  int (*write)(const char *);
+  int k;
+  const char *peer;
+  double peer_s; /* the peer's whole-process time, one thread (docs/performance.md) */
+} scene_t;
+
+int main(int argc, char **argv) {
+  int runs = 5;
+  const char *keep = NULL;
+  for (int i = 1; i < argc; i++) {
+    if (strcmp(argv[i], "--runs") == 0 && i + 1 < argc)
+      runs = atoi(argv[++i]);
+    else if (strcmp(argv[i], "--keep") == 0 && i + 1 < argc)
+      keep = argv[++i];
+    else {
+      fprintf(stderr, "usage: bench_peers [--runs R >= 1] [--keep DIR]\n");
+      return 2;
+    }
+  }
+  if (runs < 1 || runs > 100) {
+    fprintf(stderr, "bench_peers: --runs must be within [1, 100]\n");
+    return 2;
+  }
+  char tmp[] = "/tmp/karst_bench_peers_XXXXXX";
+  if (!mkdtemp(tmp)) {
+    perror("bench_peers: mkdtemp");
+    return 1;
+  }
+  const char *dir = keep ? keep : tmp;
+  if (keep && mkdir(keep, 0777) != 0 && errno != EEXIST) {
+    perror("bench_peers: --keep");
+    return 1;
+  }
+  const scene_t scenes[2] = {
+      {"Karst-Synthesis rectilinear", "ks_rectilinear.yaml", write_ks, 32,
+       "Karst-Synthesis 386b243, g++ -O3 -march=native, 1 thread", 1.46},
+      {"KarstNSim example", "karstnsim_example.yaml", write_kns, 100,
+       "KarstNSim fd31889 on its own example, 1 thread (no-karst spheres off)", 22.3},
+  };
+  int status = 0;
+  printf("bench_peers: whole process (%s generate ... --threads 1), %d runs each\n", KARST_CLI,
+         runs);
+  for (int s = 0; s < 2; s++) {
+    const scene_t *S = &scenes[s];
+    char path[4096], out[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, S->file);
+    snprintf(out, sizeof out, "%s/out_%d", tmp, s);
+    if (S->write(path) != 0) {
+      fprintf(stderr, "bench_peers: cannot write %s\n", path);
+      status = 1;
+      continue;
+    }
+    double t[100];
+    long rss = 0, peak = 0;
+    int ok = 1;
+    for (int r = 0; r < runs && ok; r++) {
+      t[r] = run_once(path, out, &rss);
+      if (t[r] < 0) ok = 0;
+      if (rss > peak) peak = rss;
+    }
+    if (!ok) {
+      fprintf(stderr, "bench_peers: karst generate %s failed\n", path);
+      status = 1;
+      continue;
+    }
+    qsort(t, (size_t)runs, sizeof *t, cmp_double);
+    double med = runs % 2 ? t[runs / 2] : 0.5 * (t[runs / 2 - 1] + t[runs / 2]);
+    printf("%-28s samples %7ld  edges %8ld  k %3d  key points %2ld: %.3f s fastest, %.3f s "
+           "median, peak RSS %.0f MiB\n",
+           S->name, json_count(out, "samples"), json_count(out, "graph_edges"), S->k,
+           json_count(out, "key_points"), t[0], med, peak / 1024.0);
+    printf("%-28s %s: %.2f s, %.1fx karst's median (target >= 10x)\n", "", S->peer, S->peer_s,
+           S->peer_s / med);
+  }
+  char cmd[256];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
+  if (system(cmd) != 0) fprintf(stderr, "bench_peers: could not remove %s\n", tmp);
+  return status;
+}
