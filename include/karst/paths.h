@@ -80,6 +80,18 @@ void karst_search_free(karst_search_t *s);
 double karst_search_dist(const karst_search_t *s, karst_int_t v);
 /** Number of vertices the last search settled (for benchmarks). */
 karst_int_t karst_search_settled(const karst_search_t *s);
+/**
+ * Record, from the next search on, every vertex a search touches (gives a distance to) in a
+ * list, the trail (n 32-bit entries, allocated here). karst_paths_astar_reuse and
+ * karst_paths_lower_distances record it; what a path-sharing A* read of the mutable state (arc
+ * flags of the vertices it expanded, network distances of the vertices it touched) lies within
+ * its trail, which is what lets the skeleton keep a speculative search (src/skeleton/).
+ * @return KARST_SUCCESS or KARST_ENOMEM.
+ */
+karst_error_t karst_search_record_trail(karst_ctx_t *ctx, karst_search_t *s);
+/** The trail of the last search (karst_search_record_trail), *n entries; NULL when not
+ *  recording. Valid until the next search. */
+const int32_t *karst_search_trail(const karst_search_t *s, karst_int_t *n);
 /** Path from the last search's nearest source to @p v (which must have been settled). */
 karst_error_t karst_search_path_to(karst_ctx_t *ctx, const karst_search_t *s, karst_int_t v,
                                    karst_path_t *path);

@@ -47,6 +47,8 @@ struct karst_search {
   heap_entry_t *heap; /* slots 0 .. hn-1; children of i are D i + 1 .. D i + D */
   karst_int_t hn;
   karst_int_t n_settled;
+  int32_t *trail; /* vertices touched by the current search (karst_search_record_trail), or NULL */
+  karst_int_t n_trail;
 };
 
 /* ------------------------------------------------------------------------ */
@@ -157,13 +159,28 @@ void karst_search_free(karst_search_t *s) {
   free(s->pred);
   free(s->settled);
   free(s->heap_mem);
+  free(s->trail);
   free(s);
+}
+
+karst_error_t karst_search_record_trail(karst_ctx_t *ctx, karst_search_t *s) {
+  if (s->trail) return KARST_SUCCESS;
+  s->trail = karst_i_alloc_large((size_t)(s->g->n > 0 ? s->g->n : 1) * sizeof *s->trail);
+  if (!s->trail) return karst_set_error(ctx, KARST_ENOMEM, "search: out of memory for its trail");
+  s->n_trail = 0;
+  return KARST_SUCCESS;
+}
+
+const int32_t *karst_search_trail(const karst_search_t *s, karst_int_t *n) {
+  *n = s->trail ? s->n_trail : 0;
+  return s->trail;
 }
 
 /* Start a new search generation: all distances become "unset" in O(1). */
 static void search_begin(karst_search_t *s) {
   s->hn = 0;
   s->n_settled = 0;
+  s->n_trail = 0;
   if (++s->cur == 0) { /* wrapped after 2^32 searches: clear the stamps once */
     for (karst_int_t v = 0; v < s->g->n; v++)
       s->node[v].stamp = s->settled[v] = 0;
@@ -178,6 +195,7 @@ static inline node_t *touch(karst_search_t *s, karst_int_t v) {
     nv->stamp = s->cur;
     nv->dist = INFINITY;
     nv->pos = -1;
+    if (s->trail) s->trail[s->n_trail++] = (int32_t)v;
   }
   return nv;
 }
@@ -405,6 +423,7 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
         if (!(nd < INFINITY)) continue;
         nw->stamp = s->cur;
         nw->pos = -1;
+        if (s->trail) s->trail[s->n_trail++] = (int32_t)w;
         if (astar) hh[w] = lb * euclid(g->xyz, w, target);
       } else if (!(nd < nw->dist)) {
         continue;
@@ -594,6 +613,7 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
   double *restrict hh = s->h;
   int32_t *restrict pred = s->pred;
   uint32_t *restrict settled = s->settled;
+  int32_t *trail = s->trail;
   search_begin(s);
   node_t *ns = touch(s, source);
   ns->dist = 0.0;
@@ -623,6 +643,7 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
         if (!(nd < INFINITY)) continue;
         nw->stamp = s->cur;
         nw->pos = -1;
+        if (trail) trail[s->n_trail++] = (int32_t)w;
         hh[w] = reuse_h(g, w, target, rlb, target_bound, reuse);
       } else if (!(nd < nw->dist)) {
         continue;

@@ -375,6 +375,9 @@ typedef struct {
   karst_error_t err;
   char msg[KARST_ERRMSG_MAX];
   int ready;
+  karst_int_t pair;    /* the pair whose result this is (when ready) */
+  int32_t *trail;      /* the vertices its search touched (karst_search_trail) */
+  karst_int_t n_trail, cap_trail;
 } spec_slot_t;
 
 typedef struct {
@@ -395,6 +398,9 @@ typedef struct {
   int in_flight, mutating, stop;
   karst_error_t err;
   karst_int_t kept;
+  uint32_t *mark;      /* per vertex: the change (mark_id) that last altered what it reads */
+  uint32_t mark_id;
+  karst_int_t n_kept_results; /* speculative results kept across a network change (statistics) */
   atomic_int cancel; /* read by the searches without the lock */
 } spec_t;
 
@@ -432,8 +438,29 @@ static void spec_commit_one(spec_t *sp, int tid) {
     pthread_cond_wait(&sp->cv, &sp->mu);
   flag_path_arcs(sp->L->g, &sl->path, sp->L->flag, P->tag);
   err = karst_paths_lower_distances(sp->ctx, sp->ws[tid], sl->path.n, sl->path.v, sp->L->to_net);
-  for (karst_int_t i = 0; i < sp->window; i++)
-    sp->slot[i].ready = 0;
+  /* A finished search stays valid if it read nothing this change altered: the new flags are on
+   * arcs between the path's vertices (read only when one of them is expanded, so touched), the
+   * lowered network distances are at the vertices lower_distances touched (read only at a
+   * touched vertex). Then the search would have run identically on the new network. */
+  if (++sp->mark_id == 0) { /* wrapped: clear the marks once */
+    memset(sp->mark, 0, (size_t)sp->L->g->n * sizeof *sp->mark);
+    sp->mark_id = 1;
+  }
+  karst_int_t n_changed = 0;
+  const int32_t *changed = karst_search_trail(sp->ws[tid], &n_changed);
+  for (karst_int_t i = 0; i < n_changed; i++)
+    sp->mark[changed[i]] = sp->mark_id;
+  for (karst_int_t i = 0; i < sl->path.n; i++)
+    sp->mark[sl->path.v[i]] = sp->mark_id;
+  for (karst_int_t i = 0; i < sp->window; i++) {
+    spec_slot_t *o = &sp->slot[i];
+    if (!o->ready) continue;
+    int valid = o->pair >= sp->commit && !o->err && o->n_trail >= 0;
+    for (karst_int_t j = 0; j < o->n_trail && valid; j++)
+      valid = sp->mark[o->trail[j]] != sp->mark_id;
+    o->ready = valid;
+    sp->n_kept_results += valid;
+  }
   sp->next = sp->commit;
   sp->mutating = 0;
   if (err) {
@@ -451,21 +478,34 @@ static void spec_worker(void *arg, int tid, int nthreads) {
   karst_ctx_init(&wctx);
   karst_path_t local;
   karst_path_init(&local);
+  int32_t *local_trail = NULL;
+  karst_int_t local_cap = 0;
   pthread_mutex_lock(&sp->mu);
   while (!sp->stop && sp->commit < sp->n_pairs) {
+    if (sp->next < sp->commit) sp->next = sp->commit; /* committed from a kept slot meanwhile */
     if (sp->mutating || sp->next >= sp->n_pairs || sp->next >= sp->commit + sp->window) {
       pthread_cond_wait(&sp->cv, &sp->mu);
       continue;
     }
     const karst_int_t k = sp->next++;
+    spec_slot_t *mine = &sp->slot[k % sp->window];
+    if (mine->ready && mine->pair == k) continue; /* kept across a network change */
     const unsigned epoch = sp->epoch;
     sp->in_flight++;
     pthread_mutex_unlock(&sp->mu);
     karst_error_t err =
         search_pair(&wctx, sp->ws[tid], sp->L, &sp->pairs[k], spec_cancelled, sp, &local);
+    karst_int_t n_trail = 0;
+    const int32_t *trail = err ? NULL : karst_search_trail(sp->ws[tid], &n_trail);
+    if (trail && n_trail > local_cap) { /* grown outside the lock */
+      int32_t *nt = realloc(local_trail, (size_t)n_trail * sizeof *nt);
+      if (nt) local_trail = nt, local_cap = n_trail;
+    }
+    int have_trail = trail && n_trail <= local_cap;
+    if (have_trail) memcpy(local_trail, trail, (size_t)n_trail * sizeof *trail);
     pthread_mutex_lock(&sp->mu);
     sp->in_flight--;
-    if (epoch == sp->epoch && !sp->stop) {
+    if (epoch == sp->epoch && !sp->stop && k >= sp->commit) {
       spec_slot_t *sl = &sp->slot[k % sp->window];
       karst_path_t t = sl->path;
       sl->path = local;
@@ -473,7 +513,17 @@ static void spec_worker(void *arg, int tid, int nthreads) {
       sl->err = err;
       if (err) snprintf(sl->msg, sizeof sl->msg, "%s", wctx.errmsg);
       sl->ready = 1;
-      while (!sp->stop && sp->commit < sp->n_pairs && sp->slot[sp->commit % sp->window].ready)
+      sl->pair = k;
+      /* Its trail goes with it (swapped, not copied, under the lock); without one (no memory)
+       * it cannot be kept across a change: an empty trail there would wrongly mean "read
+       * nothing", so it is marked by n_trail < 0. */
+      int32_t *tt = sl->trail;
+      karst_int_t tc = sl->cap_trail;
+      sl->trail = local_trail, sl->cap_trail = local_cap;
+      sl->n_trail = have_trail ? n_trail : -1;
+      local_trail = tt, local_cap = tc;
+      while (!sp->stop && sp->commit < sp->n_pairs && sp->slot[sp->commit % sp->window].ready &&
+             sp->slot[sp->commit % sp->window].pair == sp->commit)
         spec_commit_one(sp, tid);
     }
     pthread_cond_broadcast(&sp->cv);
@@ -481,6 +531,7 @@ static void spec_worker(void *arg, int tid, int nthreads) {
   pthread_cond_broadcast(&sp->cv);
   pthread_mutex_unlock(&sp->mu);
   karst_path_destroy(&local);
+  free(local_trail);
 }
 
 /* Lay the sorted pairs with path sharing on @p T >= 2 threads (see above). */
@@ -504,7 +555,14 @@ static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const lay_t *L, int T,
     goto cleanup;
   }
   for (int t = 0; t < T; t++)
-    if ((err = karst_search_create(ctx, L->g, &sp.ws[t]))) goto cleanup;
+    if ((err = karst_search_create(ctx, L->g, &sp.ws[t])) ||
+        (err = karst_search_record_trail(ctx, sp.ws[t])))
+      goto cleanup;
+  sp.mark = calloc((size_t)(L->g->n > 0 ? L->g->n : 1), sizeof *sp.mark);
+  if (!sp.mark) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
+    goto cleanup;
+  }
   if (pthread_mutex_init(&sp.mu, NULL)) {
     err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: cannot create a mutex");
     goto cleanup;
@@ -518,14 +576,20 @@ static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const lay_t *L, int T,
   pthread_cond_destroy(&sp.cv);
   pthread_mutex_destroy(&sp.mu);
   err = sp.err;
+  karst_log(ctx, KARST_LOG_DEBUG,
+            "skeleton: %lld pairs on %d threads, %lld speculative results kept across a change",
+            (long long)n_pairs, T, (long long)sp.n_kept_results);
 cleanup:
   *kept = sp.kept;
   if (sp.ws)
     for (int t = 0; t < T; t++)
       karst_search_free(sp.ws[t]);
   if (sp.slot)
-    for (karst_int_t i = 0; i < sp.window; i++)
+    for (karst_int_t i = 0; i < sp.window; i++) {
       karst_path_destroy(&sp.slot[i].path);
+      free(sp.slot[i].trail);
+    }
+  free(sp.mark);
   free(sp.ws);
   free(sp.slot);
   return err;
