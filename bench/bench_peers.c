@@ -22,23 +22,14 @@
  * R runs, the peak resident memory, and the ratio to the peer's figure.
  */
 #include <errno.h>
-#include <spawn.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
-#include <time.h>
 #include <unistd.h>
 
-extern char **environ;
-
-static double now_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
+#include "bench_spawn.h"
 
 /* Karst-Synthesis's rectilinear key points (main.cpp l.159-186), y up in its frame: here
  * (x, z, y) so that z is up. Four of its 14 waypoints lie 164-336 m above every sample and get
@@ -137,32 +128,13 @@ static int write_kns(const char *path) {
 static double run_once(const char *scenario, const char *out, long *rss_kib) {
   char *argv[] = {(char *)KARST_CLI, "generate", (char *)scenario, "-o", (char *)out,
                   "--threads",       "1",        "--quiet",        NULL};
-  double t0 = now_s();
-  pid_t pid;
-  if (posix_spawn(&pid, KARST_CLI, NULL, NULL, argv, environ) != 0) return -1;
-  int status;
-  struct rusage ru;
-  if (wait4(pid, &status, 0, &ru) < 0) return -1;
-  double t = now_s() - t0;
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return -1;
-  *rss_kib = ru.ru_maxrss;
-  return t;
+  return bench_run(argv, rss_kib);
 }
 
-/* The integer after "key": in the counts of DIR/run.json, or -1. */
+/* The count @p key of the counts of DIR/run.json, or -1. */
 static long json_count(const char *dir, const char *key) {
-  char path[4096], pat[64];
-  snprintf(path, sizeof path, "%s/run.json", dir);
-  FILE *f = fopen(path, "r");
-  if (!f) return -1;
-  static char buf[1 << 20];
-  size_t n = fread(buf, 1, sizeof buf - 1, f);
-  fclose(f);
-  buf[n] = '\0';
-  snprintf(pat, sizeof pat, "\"%s\":", key);
-  const char *p = strstr(buf, "\"counts\"");
-  p = p ? strstr(p, pat) : NULL;
-  return p ? strtol(p + strlen(pat), NULL, 10) : -1;
+  double v = bench_json_number(bench_run_json(dir), "counts", key);
+  return isnan(v) ? -1 : (long)v;
 }
 
 static int cmp_double(const void *a, const void *b) {

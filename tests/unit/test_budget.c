@@ -7,8 +7,8 @@
  *   feature = 2 (slopes) x 2 layers x sqrt(2) (103)(103)(2+3) / 3^3 = 11113.623469049...
  *   samples = fill + feature + 2 key points                      = 12142.342515331...
  *   edges   = samples x 40;  searches = 2 key points x 1 spring  = 2
- *   bytes   = 96 MiB + samples (512 + 40 x 48 + 1 thread x 40
- *             + 40 x 32 routed costs x 1 spring, far below the 256 MiB cap) = 146221365.11...
+ *   bytes   = 96 MiB + samples (512 + 40 x 24 + 1 thread x 40
+ *             + 40 x 32 routed costs x 1 spring, far below the 256 MiB cap) = 134564716.30...
  */
 #include <math.h>
 #include <setjmp.h>
@@ -46,14 +46,14 @@ static void test_counts_of_a_box(void **state) {
   assert_close(b.edges, 12142.342515331879 * 40);
   assert_close(b.searches, 2);
   assert_close(b.amplification_points, 0);
-  assert_close(b.bytes, 96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 48 + 40 + 40 * 32));
-  /* the edges drive it (40 x (48 + 32) bytes per sample against 512 + 40): sampling.k, which the file
+  assert_close(b.bytes, 96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 24 + 40 + 40 * 32));
+  /* the edges drive it (40 x (24 + 32) bytes per sample against 512 + 40): sampling.k, which the file
    * leaves to its default (position 0, reported as 1:1) */
   assert_string_equal(b.driver, "sampling.k");
   /* 4 threads: four A* states, but only as many as there are searches (2) */
   karst_budget_estimate(&sc, 4, &b);
   assert_close(b.bytes,
-               96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 48 + 2 * 40 + 40 * 32));
+               96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 24 + 2 * 40 + 40 * 32));
   /* max_samples caps the samples (sampling refuses more) and then drives the estimate when the
    * file gives it (a key the file gives is named before a defaulted one, here sampling.k) */
   sc.sampling.max_samples = 1000;
@@ -80,7 +80,7 @@ static void test_check_refuses(void **state) {
   /* 1 MiB: refused with the file, the estimate and the limit */
   assert_int_equal(karst_budget_check(&ctx, &sc, 1, 1024.0 * 1024, NULL), KARST_ERANGE);
   assert_non_null(strstr(ctx.errmsg, MINIMAL ":1:1: sampling.k: the run needs an "
-                                             "estimated 139 MiB of memory"));
+                                             "estimated 128 MiB of memory"));
   assert_non_null(strstr(ctx.errmsg, "more than the limit of 1 MiB"));
   /* a domain whose volume overflows, and more steps than any hierarchy */
   sc.domain_max[0] = sc.domain_max[1] = 1e300;

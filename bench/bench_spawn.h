@@ -1,0 +1,61 @@
+/* Helpers of the benchmarks that time the karst program as a user runs it (whole process):
+ * bench_peers.c, bench_massif.c. */
+#ifndef KARST_BENCH_SPAWN_H
+#define KARST_BENCH_SPAWN_H
+
+#include <spawn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <time.h>
+
+extern char **environ;
+
+static inline double bench_now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* Run @p argv (argv[0] the program) to completion: its wall time in seconds and its peak
+ * resident memory (KiB, *rss_kib), or -1 when it could not start or did not exit with 0. */
+static inline double bench_run(char *const argv[], long *rss_kib) {
+  double t0 = bench_now_s();
+  pid_t pid;
+  if (posix_spawn(&pid, argv[0], NULL, NULL, argv, environ) != 0) return -1;
+  int status;
+  struct rusage ru;
+  if (wait4(pid, &status, 0, &ru) < 0) return -1;
+  double t = bench_now_s() - t0;
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return -1;
+  *rss_kib = ru.ru_maxrss;
+  return t;
+}
+
+/* DIR/run.json as a string (static storage, overwritten by the next call), or NULL. */
+static inline const char *bench_run_json(const char *dir) {
+  static char buf[1 << 20];
+  char path[4096];
+  snprintf(path, sizeof path, "%s/run.json", dir);
+  FILE *f = fopen(path, "r");
+  if (!f) return NULL;
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  fclose(f);
+  buf[n] = '\0';
+  return buf;
+}
+
+/* The number after "key": within the object "section" of @p json, or NAN. */
+static inline double bench_json_number(const char *json, const char *section, const char *key) {
+  char pat[128];
+  if (!json) return NAN;
+  snprintf(pat, sizeof pat, "\"%s\"", section);
+  const char *p = strstr(json, pat);
+  snprintf(pat, sizeof pat, "\"%s\":", key);
+  p = p ? strstr(p, pat) : NULL;
+  return p ? strtod(p + strlen(pat), NULL) : NAN;
+}
+
+#endif
