@@ -120,7 +120,7 @@ static int heap_alloc(karst_search_t *s, size_t n) {
 
 /**
  * Create a search workspace for graph @p g (borrowed: it must outlive the
- * workspace). O(n) memory (48 bytes per vertex) and time, once; each later
+ * workspace). O(n) memory (48 bytes per vertex, 52 with a trail) and time, once; each later
  * search costs what it visits.
  * @return KARST_SUCCESS, KARST_EINVAL, KARST_ENOMEM; KARST_ERANGE for a graph
  *         of 2^31 − 1 vertices or more (vertex indices are stored in 32 bits).
