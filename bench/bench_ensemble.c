@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -23,16 +24,21 @@ static double now_s(void) {
 }
 
 /* What one member costs, one thread, in the ensemble's own order: karst_generate (its stages
- * from the statistics, and the rest: the realisation's geology, allocations), the member's
- * files (network.vtp, the Karstnet files, the ParaView script: as the ensemble writes them) and
- * its metrics. Mean of @p n members; then the throughput they imply on a 64-core machine. */
-static int per_member_costs(karst_ctx_t *ctx, const karst_scenario_t *sc, const char *dir, int n,
+ * from the statistics, and the rest: the realisation's geology, allocations; the pipeline's
+ * realise hook is this call without the statistics), then the pipeline's own hooks for the
+ * member's files and its metrics. Mean of @p n members; then the throughput they imply on a
+ * 64-core machine. */
+static int per_member_costs(karst_ctx_t *ctx, const karst_scenario_t *sc,
+                            const karst_ensemble_hooks_t *hooks, const char *dir, int n,
                             double wall, int members, int threads) {
   double stages[KARST_STAGE_COUNT] = {0}, gen = 0, out = 0, met = 0;
-  char vtp[4200], prefix[4200], script[4300];
-  snprintf(vtp, sizeof vtp, "%s/member.vtp", dir);
-  snprintf(prefix, sizeof prefix, "%s/member", dir);
-  snprintf(script, sizeof script, "%s/member.paraview.py", dir);
+  double values[KARST_ENSEMBLE_MAX_METRICS];
+  char mdir[4200];
+  snprintf(mdir, sizeof mdir, "%s/member", dir);
+  if (mkdir(mdir, 0777) != 0) {
+    perror("bench_ensemble: member directory");
+    return 1;
+  }
   int saved = ctx->nthreads;
   ctx->nthreads = 1;
   for (int i = 0; i < n; i++) {
@@ -42,15 +48,9 @@ static int per_member_costs(karst_ctx_t *ctx, const karst_scenario_t *sc, const 
     double t0 = now_s();
     karst_error_t err = karst_generate(ctx, sc, 1000 + (uint64_t)i, 0, &net, NULL, &st);
     double t1 = now_s();
-    if (!err) err = karst_vtk_write_network(ctx, vtp, &net);
-    if (!err) err = karst_write_karstnet(ctx, prefix, &net);
-    karst_view_item_t item = {vtp, KARST_VIEW_NETWORK, NULL};
-    if (!err) err = karst_view_write_script(ctx, script, script, &item, 1);
+    if (!err) err = hooks->write(ctx, hooks->user, mdir, &net);
     double t2 = now_s();
-    karst_metrics_options_t mo;
-    karst_metrics_options_init(&mo);
-    karst_metrics_t m;
-    if (!err) err = karst_metrics_compute(ctx, &net, &mo, &m);
+    if (!err) err = hooks->measure(ctx, hooks->user, &net, values);
     double t3 = now_s();
     karst_network_destroy(&net);
     if (err) {
@@ -76,7 +76,8 @@ static int per_member_costs(karst_ctx_t *ctx, const karst_scenario_t *sc, const 
          stages[KARST_STAGE_AMPLIFICATION] / n, stages[KARST_STAGE_CLASSIFICATION] / n,
          gen / n - sum, out / n, met / n);
   /* Members are independent: T threads (or ranks) run T at a time; the measured run gives the
-   * efficiency of T on this machine, which the estimate assumes for 64 cores (docs/ensembles.md). */
+   * efficiency of T on this machine, which the estimate assumes for 64 cores (docs/ensembles.md).
+   */
   double eff = member * members / (wall * threads);
   printf("bench_ensemble: %d threads ran at %.0f %% of %d x one member; 64 cores at that "
          "efficiency: about %.0f members per second (%.1f s for 10 000)\n",
@@ -140,7 +141,8 @@ int main(int argc, char **argv) {
   printf("bench_ensemble: branchwork, %d members, %d threads, %ld cores online: %.2f s wall "
          "(%.3f s per member, target <= 8 s for 100 on 2 threads), peak RSS %.1f MiB\n",
          members, threads, ncpu, wall, wall / members, ru.ru_maxrss / 1024.0);
-  status = per_member_costs(&ctx, &sc, dir, members < 20 ? members : 20, wall, members, threads);
+  status =
+      per_member_costs(&ctx, &sc, &hooks, dir, members < 20 ? members : 20, wall, members, threads);
 cleanup : {
   char cmd[128];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);

@@ -234,9 +234,9 @@ static void scaling(double samples) {
   printf("scaling %.3gM samples (%lld), k=100, 1 -> 2 threads:", samples / 1e6,
          (long long)st[0].n_samples);
   for (int s = 0; s < KARST_STAGE_COUNT; s++)
-    printf(" %s %.2f -> %.2f s (x%.2f)", s == KARST_STAGE_GRAPH ? "graph+costs" : karst_stage_name(s),
-           st[0].stage_seconds[s], st[1].stage_seconds[s],
-           st[0].stage_seconds[s] / fmax(st[1].stage_seconds[s], 1e-9));
+    printf(" %s %.2f -> %.2f s (x%.2f)",
+           s == KARST_STAGE_GRAPH ? "graph+costs" : karst_stage_name(s), st[0].stage_seconds[s],
+           st[1].stage_seconds[s], st[0].stage_seconds[s] / fmax(st[1].stage_seconds[s], 1e-9));
   printf("; sampling-to-skeleton %.2f -> %.2f s (x%.2f), total %.2f -> %.2f s; one thread %.1f us "
          "per sample%s\n",
          to_skeleton(&st[0]), to_skeleton(&st[1]), to_skeleton(&st[0]) / to_skeleton(&st[1]),

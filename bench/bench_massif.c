@@ -22,13 +22,15 @@ int main(int argc, char **argv) {
     return 2;
   }
   char dir[] = "/tmp/karst_bench_massif_XXXXXX";
-  if (!mkdtemp(dir)) {
-    perror("bench_massif: mkdtemp");
-    return 1;
-  }
-  char *run[] = {(char *)KARST_CLI, "generate",  KARST_SOURCE_DIR "/datasets/scenarios/massif.yaml",
-                 "-o",              dir,         "--threads",
-                 (char *)threads,   NULL};
+  if (!bench_mkdtemp(dir, "bench_massif")) return 1;
+  char *run[] = {(char *)KARST_CLI,
+                 "generate",
+                 KARST_SOURCE_DIR "/datasets/scenarios/massif.yaml",
+                 "-o",
+                 dir,
+                 "--threads",
+                 (char *)threads,
+                 NULL};
   long rss = 0;
   double wall = bench_run(run, &rss);
   int status = 0;
@@ -37,8 +39,8 @@ int main(int argc, char **argv) {
     status = 1;
   } else {
     const char *json = bench_run_json(dir);
-    static const char *stages[] = {"sampling",      "graph",         "paths", "skeleton",
-                                   "amplification", "classification"};
+    static const char *stages[] = {"sampling", "graph",         "paths",
+                                   "skeleton", "amplification", "classification"};
     printf("bench_massif: massif.yaml, %s threads: %.1f s wall (target <= 300 s), peak RSS %.2f "
            "GiB (target <= 12 GB = 11.18 GiB); %.0f samples, %.0f graph edges, %.0f key points, "
            "%.0f network edges\n",
@@ -51,8 +53,6 @@ int main(int argc, char **argv) {
       printf(" %s %.2f s", stages[s], bench_json_number(json, "stage_seconds", stages[s]));
     printf("\n");
   }
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-  if (system(cmd) != 0) fprintf(stderr, "bench_massif: could not remove %s\n", dir);
+  bench_remove_dir(dir, "bench_massif");
   return status;
 }

@@ -35,19 +35,25 @@
  * (x, z, y) so that z is up. Four of its 14 waypoints lie 164-336 m above every sample and get
  * no edge there (its Results/rectilinear_nodes.dat has none of them); they are left out. The
  * five waypoints whose height is an uninitialised 4.9e-313 are at 0. */
-static const double KS_SINKS[7][3] = {
-    {60.4311, 261.446, 52.6541},  {-101.237, 219.241, 52.1485}, {-255.377, 138.243, 44.3283},
-    {-289.637, 358.579, 37.8691}, {-86.1126, 382.429, 37.8371}, {-446.468, 383.381, 30.5388},
-    {328.728, 414.128, 48.0858}};
+static const double KS_SINKS[7][3] = {{60.4311, 261.446, 52.6541},  {-101.237, 219.241, 52.1485},
+                                      {-255.377, 138.243, 44.3283}, {-289.637, 358.579, 37.8691},
+                                      {-86.1126, 382.429, 37.8371}, {-446.468, 383.381, 30.5388},
+                                      {328.728, 414.128, 48.0858}};
 static const double KS_SPRINGS[5][3] = {{225.946, -324.888, 37.5715},
                                         {95.9676, -337.74, 37.9612},
                                         {-110.653, -373.92, 35.7709},
                                         {-275.73, -314.632, 34.0925},
                                         {472.035, -456.167, 46.3118}};
-static const double KS_WAYPOINTS[10][3] = {
-    {-40, -42, 45},   {-262.777, -35, 30.5283}, {311.746, -35, -129.463}, {0, -25, 0},
-    {412.401, -14, 57.8162}, {0, -65, 0}, {99.8656, -17, 1.7859}, {0, -26, 0},
-    {0, -40, 0},      {0, -29, 0}};
+static const double KS_WAYPOINTS[10][3] = {{-40, -42, 45},
+                                           {-262.777, -35, 30.5283},
+                                           {311.746, -35, -129.463},
+                                           {0, -25, 0},
+                                           {412.401, -14, 57.8162},
+                                           {0, -65, 0},
+                                           {99.8656, -17, 1.7859},
+                                           {0, -26, 0},
+                                           {0, -40, 0},
+                                           {0, -29, 0}};
 
 /* The fill radius that gives Karst-Synthesis's sample count: its baked cloud holds 23 434
  * points (spacing >= 30 m) and the scene 23 446 graph nodes; at 30.8 m karst places about as
@@ -131,9 +137,9 @@ static double run_once(const char *scenario, const char *out, long *rss_kib) {
   return bench_run(argv, rss_kib);
 }
 
-/* The count @p key of the counts of DIR/run.json, or -1. */
-static long json_count(const char *dir, const char *key) {
-  double v = bench_json_number(bench_run_json(dir), "counts", key);
+/* The number @p key in the object @p section of DIR/run.json, or -1. */
+static long run_value(const char *dir, const char *section, const char *key) {
+  double v = bench_json_number(bench_run_json(dir), section, key);
   return isnan(v) ? -1 : (long)v;
 }
 
@@ -145,7 +151,6 @@ static int cmp_double(const void *a, const void *b) {
 typedef struct {
   const char *name, *file;
   int (*write)(const char *);
-  int k;
   const char *peer;
   double peer_s; /* the peer's whole-process time, one thread (docs/performance.md) */
 } scene_t;
@@ -167,20 +172,17 @@ int main(int argc, char **argv) {
     fprintf(stderr, "bench_peers: --runs must be within [1, 100]\n");
     return 2;
   }
-  char tmp[] = "/tmp/karst_bench_peers_XXXXXX";
-  if (!mkdtemp(tmp)) {
-    perror("bench_peers: mkdtemp");
-    return 1;
-  }
-  const char *dir = keep ? keep : tmp;
   if (keep && mkdir(keep, 0777) != 0 && errno != EEXIST) {
-    perror("bench_peers: --keep");
+    fprintf(stderr, "bench_peers: --keep %s: %s\n", keep, strerror(errno));
     return 1;
   }
+  char tmp[] = "/tmp/karst_bench_peers_XXXXXX";
+  if (!bench_mkdtemp(tmp, "bench_peers")) return 1;
+  const char *dir = keep ? keep : tmp;
   const scene_t scenes[2] = {
-      {"Karst-Synthesis rectilinear", "ks_rectilinear.yaml", write_ks, 32,
+      {"Karst-Synthesis rectilinear", "ks_rectilinear.yaml", write_ks,
        "Karst-Synthesis 386b243, g++ -O3 -march=native, 1 thread", 1.46},
-      {"KarstNSim example", "karstnsim_example.yaml", write_kns, 100,
+      {"KarstNSim example", "karstnsim_example.yaml", write_kns,
        "KarstNSim fd31889 on its own example, 1 thread (no-karst spheres off)", 22.3},
   };
   int status = 0;
@@ -211,15 +213,14 @@ int main(int argc, char **argv) {
     }
     qsort(t, (size_t)runs, sizeof *t, cmp_double);
     double med = runs % 2 ? t[runs / 2] : 0.5 * (t[runs / 2 - 1] + t[runs / 2]);
-    printf("%-28s samples %7ld  edges %8ld  k %3d  key points %2ld: %.3f s fastest, %.3f s "
+    printf("%-28s samples %7ld  edges %8ld  k %3ld  key points %2ld: %.3f s fastest, %.3f s "
            "median, peak RSS %.0f MiB\n",
-           S->name, json_count(out, "samples"), json_count(out, "graph_edges"), S->k,
-           json_count(out, "key_points"), t[0], med, peak / 1024.0);
+           S->name, run_value(out, "counts", "samples"), run_value(out, "counts", "graph_edges"),
+           run_value(out, "sampling", "k"), run_value(out, "counts", "key_points"), t[0], med,
+           peak / 1024.0);
     printf("%-28s %s: %.2f s, %.1fx karst's median (target >= 10x)\n", "", S->peer, S->peer_s,
            S->peer_s / med);
   }
-  char cmd[256];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
-  if (system(cmd) != 0) fprintf(stderr, "bench_peers: could not remove %s\n", tmp);
+  bench_remove_dir(tmp, "bench_peers");
   return status;
 }

@@ -1,8 +1,9 @@
-/* Helpers of the benchmarks that time the karst program as a user runs it (whole process):
- * bench_peers.c, bench_massif.c. */
+/* Helpers of the benchmarks: running the karst program as a user runs it (whole process:
+ * bench_peers.c, bench_massif.c), reading its run.json, and their scratch directories. */
 #ifndef KARST_BENCH_SPAWN_H
 #define KARST_BENCH_SPAWN_H
 
+#include <errno.h>
 #include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -12,6 +13,21 @@
 #include <time.h>
 
 extern char **environ;
+
+/* A fresh scratch directory from @p tmpl ("/tmp/NAME_XXXXXX", overwritten), or NULL with a
+ * message naming @p who. */
+static inline char *bench_mkdtemp(char *tmpl, const char *who) {
+  char *d = mkdtemp(tmpl);
+  if (!d) fprintf(stderr, "%s: cannot create %s: %s\n", who, tmpl, strerror(errno));
+  return d;
+}
+
+/* Remove the scratch directory @p dir and everything in it. */
+static inline void bench_remove_dir(const char *dir, const char *who) {
+  char cmd[4200];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  if (system(cmd) != 0) fprintf(stderr, "%s: could not remove %s\n", who, dir);
+}
 
 static inline double bench_now_s(void) {
   struct timespec ts;

@@ -48,8 +48,8 @@ typedef struct karst_routing_plan {
   float *dz;             /**< 2 n per spring: depth below its water table, z (karst_route_t) */
   karst_route_t *routes; /**< one per spring */
   double **arc_costs;    /**< per spring: its route's tabulated costs (2 n_arcs: arc_fwd then
-                              arc_bwd), or NULL (too few searches, or beyond the budget) */
-  size_t arc_bytes;      /**< memory of the tables, <= KARST_ROUTING_ARC_BUDGET */
+                              arc_bwd), or NULL (too few searches, or beyond the budget: all
+                              together stay within KARST_ROUTING_ARC_BUDGET) */
   int *targets;          /**< key-point index of each target: springs first, then waypoints */
   float *bound;          /**< n_targets x n lower-bound rows (path-sharing heuristic), or NULL */
   int32_t *succ;         /**< n_targets x n successor rows (plain union), or NULL */

@@ -13,7 +13,7 @@
 karst_i_gdal_t karst_i_gdal;
 
 static pthread_once_t once = PTHREAD_ONCE_INIT;
-static char load_error[512]; /* empty once loaded */
+static char load_error[512]; /* why the load failed; empty when it succeeded */
 
 static void load(void) {
   void *lib = dlopen(KARST_GDAL_SONAME, RTLD_NOW | RTLD_LOCAL);
@@ -27,14 +27,13 @@ static void load(void) {
   {                                                                                                \
     void *sym = dlsym(lib, #name);                                                                 \
     if (!sym) {                                                                                    \
-      snprintf(load_error, sizeof load_error, "%s has no function %s", KARST_GDAL_SONAME, #name); \
+      snprintf(load_error, sizeof load_error, "%s has no function %s", KARST_GDAL_SONAME, #name);  \
       return;                                                                                      \
     }                                                                                              \
     memcpy(&karst_i_gdal.name, &sym, sizeof sym);                                                  \
   }
   KARST_I_GDAL_FUNCTIONS(KARST_I_GDAL_LOOKUP)
 #undef KARST_I_GDAL_LOOKUP
-  load_error[0] = '\0';
 }
 
 karst_error_t karst_i_gdal_load(karst_ctx_t *ctx) {

@@ -204,8 +204,10 @@ static karst_error_t write_conduits(writer_t *w, GDALDatasetH ds, OGRSpatialRefe
     return gdal_fail(w->ctx, w->g, w->path, "creating the conduits layer");
   }
   OGRFeatureDefnH defn = karst_i_gdal.OGR_L_GetLayerDefn(layer);
-  int i_edge = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "edge"), i_from = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "from_node");
-  int i_to = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "to_node"), i_len = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "length");
+  int i_edge = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "edge"),
+      i_from = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "from_node");
+  int i_to = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "to_node"),
+      i_len = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "length");
   for (karst_int_t e = 0; e < net->n_edges && !err; e++) {
     OGRFeatureH feat = karst_i_gdal.OGR_F_Create(defn);
     OGRGeometryH g = karst_i_gdal.OGR_G_CreateGeometry(wkbLineString25D);
@@ -240,7 +242,8 @@ static karst_error_t write_nodes(writer_t *w, GDALDatasetH ds, OGRSpatialReferen
     return gdal_fail(w->ctx, w->g, w->path, "creating the nodes layer");
   }
   OGRFeatureDefnH defn = karst_i_gdal.OGR_L_GetLayerDefn(layer);
-  int i_node = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "node"), i_label = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "label");
+  int i_node = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "node"),
+      i_label = karst_i_gdal.OGR_FD_GetFieldIndex(defn, "label");
   for (karst_int_t i = 0; i < net->n_nodes && !err; i++) {
     OGRFeatureH feat = karst_i_gdal.OGR_F_Create(defn);
     OGRGeometryH g = karst_i_gdal.OGR_G_CreateGeometry(wkbPoint25D);
@@ -279,13 +282,17 @@ static karst_error_t write_key_points(writer_t *w, GDALDatasetH ds, OGRSpatialRe
     OGRGeometryH g = karst_i_gdal.OGR_G_CreateGeometry(wkbPoint25D);
     karst_i_gdal.OGR_G_SetPoint(g, 0, kp->p[0], kp->p[1], kp->p[2]);
     karst_i_gdal.OGR_F_SetGeometryDirectly(feat, g);
-    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "name"), kp->name);
-    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "type"), types[t]);
-    karst_i_gdal.OGR_F_SetFieldInteger(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "kind"), kinds[t]);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "name"),
+                                      kp->name);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "type"),
+                                      types[t]);
+    karst_i_gdal.OGR_F_SetFieldInteger(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "kind"),
+                                       kinds[t]);
     karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "kind_name"),
-                         karst_node_kind_name(kinds[t]));
+                                      karst_node_kind_name(kinds[t]));
     if (kp->node >= 0)
-      karst_i_gdal.OGR_F_SetFieldInteger64(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "node"), kp->node);
+      karst_i_gdal.OGR_F_SetFieldInteger64(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "node"),
+                                           kp->node);
     else
       karst_i_gdal.OGR_F_SetFieldNull(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "node"));
     err = put_feature(w, layer, feat);
@@ -320,18 +327,25 @@ static karst_error_t write_styles(writer_t *w, GDALDatasetH ds, const char *cons
   karst_error_t err = KARST_SUCCESS;
   for (int i = 0; i < 3 && !err; i++) {
     OGRFeatureH feat = karst_i_gdal.OGR_F_Create(defn);
-    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_table_catalog"), "");
-    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_table_schema"), "");
-    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_table_name"), layers[i]);
-    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_geometry_column"), "geom");
-    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "styleName"), layers[i]);
-    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "styleQML"), qml[i]);
+    karst_i_gdal.OGR_F_SetFieldString(
+        feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_table_catalog"), "");
+    karst_i_gdal.OGR_F_SetFieldString(
+        feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_table_schema"), "");
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_table_name"),
+                                      layers[i]);
+    karst_i_gdal.OGR_F_SetFieldString(
+        feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "f_geometry_column"), "geom");
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "styleName"),
+                                      layers[i]);
+    karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "styleQML"),
+                                      qml[i]);
     karst_i_gdal.OGR_F_SetFieldString(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "description"),
-                         "karst palette (include/karst/palette.h)");
-    karst_i_gdal.OGR_F_SetFieldInteger(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "useAsDefault"), 1);
-    karst_i_gdal.OGR_F_SetFieldDateTime(feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "update_time"), utc->tm_year + 1900,
-                           utc->tm_mon + 1, utc->tm_mday, utc->tm_hour, utc->tm_min, utc->tm_sec,
-                           100);
+                                      "karst palette (include/karst/palette.h)");
+    karst_i_gdal.OGR_F_SetFieldInteger(feat,
+                                       karst_i_gdal.OGR_FD_GetFieldIndex(defn, "useAsDefault"), 1);
+    karst_i_gdal.OGR_F_SetFieldDateTime(
+        feat, karst_i_gdal.OGR_FD_GetFieldIndex(defn, "update_time"), utc->tm_year + 1900,
+        utc->tm_mon + 1, utc->tm_mday, utc->tm_hour, utc->tm_min, utc->tm_sec, 100);
     err = put_feature(w, layer, feat);
     karst_i_gdal.OGR_F_Destroy(feat);
   }
@@ -430,7 +444,8 @@ static karst_error_t write_data_columns(writer_t *w, GDALDatasetH ds, const char
     if (!layer) continue;
     OGRFeatureDefnH defn = karst_i_gdal.OGR_L_GetLayerDefn(layer);
     for (int i = 0; i < karst_i_gdal.OGR_FD_GetFieldCount(defn); i++) {
-      const char *col = karst_i_gdal.OGR_Fld_GetNameRef(karst_i_gdal.OGR_FD_GetFieldDefn(defn, i)), *description = NULL;
+      const char *col = karst_i_gdal.OGR_Fld_GetNameRef(karst_i_gdal.OGR_FD_GetFieldDefn(defn, i)),
+                 *description = NULL;
       char title[192], q[5][640], sql[3400];
       describe_column(col, title, sizeof title, &description);
       if (!sql_quote(q[0], sizeof q[0], layers[l]) || !sql_quote(q[1], sizeof q[1], col) ||
@@ -454,9 +469,11 @@ static void write_metadata(GDALDatasetH ds, const karst_export_source_t *src, co
   karst_i_gdal.GDALSetMetadataItem(ds, "karst_version", karst_version(), NULL);
   karst_i_gdal.GDALSetMetadataItem(ds, "versions", versions, NULL);
   karst_i_gdal.GDALSetMetadataItem(ds, "network", src->network_path, NULL);
-  if (src->provenance_path) karst_i_gdal.GDALSetMetadataItem(ds, "provenance", src->provenance_path, NULL);
+  if (src->provenance_path)
+    karst_i_gdal.GDALSetMetadataItem(ds, "provenance", src->provenance_path, NULL);
   if (src->scenario) karst_i_gdal.GDALSetMetadataItem(ds, "scenario", src->scenario, NULL);
-  if (src->scenario_hash) karst_i_gdal.GDALSetMetadataItem(ds, "scenario_hash", src->scenario_hash, NULL);
+  if (src->scenario_hash)
+    karst_i_gdal.GDALSetMetadataItem(ds, "scenario_hash", src->scenario_hash, NULL);
   if (src->have_seed) {
     snprintf(buf, sizeof buf, "%llu", (unsigned long long)src->seed);
     karst_i_gdal.GDALSetMetadataItem(ds, "seed", buf, NULL);

@@ -157,8 +157,7 @@ static karst_int_t find_arc(const int32_t *adj, karst_int_t b, karst_int_t e, ka
  * entries precede x (neighbours have nearby indices in the samples' Morton
  * order): a short forward scan reads one cache line where a binary search
  * misses four; long runs fall back to the search. */
-static karst_int_t first_at_least(const int32_t *adj, karst_int_t b, karst_int_t e,
-                                  karst_int_t x) {
+static karst_int_t first_at_least(const int32_t *adj, karst_int_t b, karst_int_t e, karst_int_t x) {
   for (karst_int_t i = b; i < e && i < b + 8; i++)
     if (adj[i] >= x) return i;
   return find_arc(adj, b, e, x);

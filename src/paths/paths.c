@@ -350,8 +350,8 @@ typedef struct {
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-static inline void prefetch_arcs(const karst_int_t *off, const int32_t *adj, const double *cost,
-                                 karst_int_t u) {
+static inline void
+prefetch_arcs(const karst_int_t *off, const int32_t *adj, const double *cost, karst_int_t u) {
   const char *pa = (const char *)(adj + off[u]), *pc = (const char *)(cost + off[u]);
   size_t deg = (size_t)(off[u + 1] - off[u]);
   for (size_t b = 0; b < deg * sizeof *adj; b += 64)

@@ -14,7 +14,6 @@
  *  beyond it no rows are kept and the skeleton's searches use the Euclidean bound alone. 1 GiB. */
 #define KARST_ROUTING_ROW_BUDGET ((size_t)1 << 30)
 
-
 void karst_routing_plan_init(karst_routing_plan_t *plan) {
   memset(plan, 0, sizeof *plan);
 }
@@ -116,14 +115,16 @@ static int pair_cmp(const void *x, const void *y) {
 static void tabulate_spring(const karst_ctx_t *ctx, const karst_graph_t *g, karst_routing_plan_t *P,
                             int s, int searches, int min_searches) {
   const size_t bytes = 2 * (size_t)g->n_arcs * sizeof(double);
+  size_t tables = 1; /* with this one */
+  for (int q = 0; q < P->n_springs; q++)
+    tables += P->arc_costs[q] != NULL;
   if (searches < min_searches || P->arc_costs[s] || g->n_arcs == 0 ||
-      P->arc_bytes + bytes > KARST_ROUTING_ARC_BUDGET)
+      tables * bytes > KARST_ROUTING_ARC_BUDGET)
     return;
   double *fwd = karst_i_alloc_large(bytes);
   if (!fwd) return;
   karst_route_tabulate(ctx, g, &P->routes[s], fwd, fwd + g->n_arcs);
   P->arc_costs[s] = fwd;
-  P->arc_bytes += bytes;
   P->routes[s].arc_fwd = fwd;
   P->routes[s].arc_bwd = fwd + g->n_arcs;
 }
@@ -171,8 +172,8 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
   perm = calloc((size_t)K * (size_t)K, 1);
   P.active = malloc((size_t)K);
   tspring = malloc((size_t)K * sizeof *tspring);
-  if (!P.dz || !P.routes || !P.arc_costs || !P.closed || !P.key_spring || !P.targets || !srcs || !tv || !sv || !D ||
-      !troutes || !allowed || !perm || !P.active || !tspring) {
+  if (!P.dz || !P.routes || !P.arc_costs || !P.closed || !P.key_spring || !P.targets || !srcs ||
+      !tv || !sv || !D || !troutes || !allowed || !perm || !P.active || !tspring) {
     err = karst_set_error(ctx, KARST_ENOMEM, "routing: out of memory for %lld vertices",
                           (long long)n);
     goto cleanup;
@@ -185,9 +186,12 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
       dz[2 * v] = (float)(karst_geology_water_table(geo, s, p[0], p[1]) - p[2]);
       dz[2 * v + 1] = (float)p[2];
     }
-    P.routes[s] = (karst_route_t){dz,           (float)rt->water_table_band,
-                                  rt->vadose_factor, rt->rise_cost,
-                                  1.0 / rt->phreatic_depth, NULL,
+    P.routes[s] = (karst_route_t){dz,
+                                  (float)rt->water_table_band,
+                                  rt->vadose_factor,
+                                  rt->rise_cost,
+                                  1.0 / rt->phreatic_depth,
+                                  NULL,
                                   NULL};
   }
   /* Only the key points of the generation routed take part (generations.h); the others are

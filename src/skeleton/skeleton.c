@@ -375,8 +375,8 @@ typedef struct {
   karst_error_t err;
   char msg[KARST_ERRMSG_MAX];
   int ready;
-  karst_int_t pair;    /* the pair whose result this is (when ready) */
-  int32_t *trail;      /* the vertices its search touched (karst_search_trail) */
+  karst_int_t pair; /* the pair whose result this is (when ready) */
+  int32_t *trail;   /* the vertices its search touched (karst_search_trail) */
   karst_int_t n_trail, cap_trail;
 } spec_slot_t;
 
@@ -398,7 +398,7 @@ typedef struct {
   int in_flight, mutating, stop;
   karst_error_t err;
   karst_int_t kept;
-  uint32_t *mark;      /* per vertex: the change (mark_id) that last altered what it reads */
+  uint32_t *mark; /* per vertex: the change (mark_id) that last altered what it reads */
   uint32_t mark_id;
   karst_int_t n_kept_results; /* speculative results kept across a network change (statistics) */
   atomic_int cancel; /* read by the searches without the lock */

@@ -47,8 +47,8 @@ static void test_counts_of_a_box(void **state) {
   assert_close(b.searches, 2);
   assert_close(b.amplification_points, 0);
   assert_close(b.bytes, 96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 24 + 40 + 40 * 32));
-  /* the edges drive it (40 x (24 + 32) bytes per sample against 512 + 40): sampling.k, which the file
-   * leaves to its default (position 0, reported as 1:1) */
+  /* the edges drive it (40 x (24 + 32) bytes per sample against 512 + 40): sampling.k, which the
+   * file leaves to its default (position 0, reported as 1:1) */
   assert_string_equal(b.driver, "sampling.k");
   /* 4 threads: four A* states, but only as many as there are searches (2) */
   karst_budget_estimate(&sc, 4, &b);

@@ -328,7 +328,8 @@ static void test_routed_astar_matches_dijkstra(void **state) {
   const karst_route_t *routes[1] = {&route};
   /* The tabulated route (karst_route_tabulate, two threads): every arc's value is the formula's,
    * bit for bit, and every search below must give bit-identical results with it. */
-  double *fwd = malloc(sizeof *fwd * (size_t)g.n_arcs), *bwd = malloc(sizeof *bwd * (size_t)g.n_arcs);
+  double *fwd = malloc(sizeof *fwd * (size_t)g.n_arcs),
+         *bwd = malloc(sizeof *bwd * (size_t)g.n_arcs);
   karst_ctx_t ctx2;
   karst_ctx_init(&ctx2);
   ctx2.nthreads = 2;
