@@ -34,10 +34,13 @@ extern "C" {
 #define KARST_COST_PRESCRIBED_MAX_ANGLE 30.0
 /**
  * Relative safety margin subtracted from karst_cost_lower_bound_per_metre so
- * that rounding in the eigenvalue and in the edge integrals can never make the
- * A* heuristic overestimate. Default 1e-9 (rounding is ~1e-15 relative).
+ * that rounding can never make the A* heuristic overestimate: the eigenvalue
+ * and the edge integrals (~1e-15 relative) and, above all, the single-precision
+ * arc costs (include/karst/graph.h), each rounded at most three times (stored,
+ * routed, scaled by a generation's cohesion), at most (1 + 2^-24)^3 - 1 < 1.8e-7
+ * relative. Default 1e-6.
  */
-#define KARST_COST_LB_MARGIN 1e-9
+#define KARST_COST_LB_MARGIN 1e-6
 
 /** Non-zero when @p p is in the bedrock (karst_geology_in_bedrock). */
 int karst_cost_in_bedrock(const karst_geology_t *g, const double p[3]);

@@ -7,6 +7,9 @@
 #ifndef KARST_GRAPH_H
 #define KARST_GRAPH_H
 
+#include <float.h>
+#include <math.h>
+
 #include "karst/common.h"
 #include "karst/geology.h"
 #include "karst/scenario.h"
@@ -58,15 +61,32 @@ karst_error_t karst_samples_add(karst_samples_t *s, const double p[3], karst_sam
  * directions with the same cost (the line integral of Paris et al. 2021, §4,
  * is symmetric because c_F depends on (n·d)^2). Excluded edges (cost
  * INFINITY: leaving the bedrock) are removed, so every stored cost is finite.
+ *
+ * Costs are stored in single precision (karst_arc_cost_t: 4 bytes per arc instead of 8), each
+ * the float nearest the double the cost model computed; searches add them up in double. With
+ * u = 2^-24 (the unit roundoff of float), a stored cost c' of an exact cost c has
+ * |c' - c| <= u c, so every path's stored cost is within a factor (1 ± u) of its exact one (the
+ * double sums add at most (len - 1) 2^-53 relative more), and the least-cost path the searches
+ * return costs at most (1 + u) / (1 - u) - 1 <= 1.2e-7 relatively more than the exact least
+ * cost, for any path length (tests/unit/test_paths.c checks both bounds against a double-cost
+ * Dijkstra).
  */
+typedef float karst_arc_cost_t;
+
+/** The stored cost of an arc whose cost is @p c: the nearest float (ties to even), INFINITY for
+ *  INFINITY, and FLT_MAX for finite costs above it (an arc so dear stays an arc). */
+static inline karst_arc_cost_t karst_arc_cost_round(double c) {
+  return c > (double)FLT_MAX && c < INFINITY ? FLT_MAX : (karst_arc_cost_t)c;
+}
+
 typedef struct karst_graph {
-  karst_int_t n;        /**< vertices */
-  karst_int_t n_arcs;   /**< directed arcs = 2 * undirected edges */
-  const double *xyz;    /**< vertex positions (3 * n), borrowed from the samples */
-  karst_int_t *offsets; /**< n + 1 */
-  int32_t *adj;         /**< n_arcs neighbour indices, 32 bits (the graph builders refuse
-                             n >= 2^31 - 1 vertices: half the memory and cache of 64-bit ones) */
-  double *cost;         /**< n_arcs */
+  karst_int_t n;          /**< vertices */
+  karst_int_t n_arcs;     /**< directed arcs = 2 * undirected edges */
+  const double *xyz;      /**< vertex positions (3 * n), borrowed from the samples */
+  karst_int_t *offsets;   /**< n + 1 */
+  int32_t *adj;           /**< n_arcs neighbour indices, 32 bits (the graph builders refuse
+                               n >= 2^31 - 1 vertices: half the memory and cache of 64-bit ones) */
+  karst_arc_cost_t *cost; /**< n_arcs, single precision (above) */
 } karst_graph_t;
 
 void karst_graph_init(karst_graph_t *g);

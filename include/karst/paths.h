@@ -38,12 +38,14 @@ typedef struct karst_route {
   double inv_phreatic_depth; /**< 1 / phreatic_depth (1/m), >= 0 */
   /** Optional tables (karst_route_tabulate), NULL when not made: the routed cost of every arc a
    *  of the graph (from v to adj[a]) in fwd[a], and of its reverse (adj[a] to v) in bwd[a], the
-   *  same doubles the formula gives, so searches read one value per arc instead of evaluating the
-   *  formula on two vertices' depths. Only valid while the graph's costs are unchanged. */
-  const double *arc_fwd, *arc_bwd;
+   *  same values the formula gives (rounded to single precision like the base costs, by the
+   *  formula too), so searches read one value per arc instead of evaluating the formula on two
+   *  vertices' depths. Only valid while the graph's costs are unchanged. */
+  const karst_arc_cost_t *arc_fwd, *arc_bwd;
 } karst_route_t;
 
-/** Routed cost of arc u → w whose base cost is @p base (see karst_route_t). O(1). */
+/** Routed cost of arc u → w whose base cost is @p base (see karst_route_t), rounded to single
+ *  precision like the stored costs (include/karst/graph.h). O(1). */
 double karst_route_arc_cost(const karst_route_t *r, double base, karst_int_t u, karst_int_t w);
 
 /**
@@ -53,7 +55,7 @@ double karst_route_arc_cost(const karst_route_t *r, double base, karst_int_t u, 
  * Time complexity: O(n_arcs / threads).
  */
 void karst_route_tabulate(const karst_ctx_t *ctx, const karst_graph_t *g, const karst_route_t *r,
-                          double *fwd, double *bwd);
+                          karst_arc_cost_t *fwd, karst_arc_cost_t *bwd);
 
 /** A path as graph vertex indices from its source to its target, and its cost. */
 typedef struct karst_path {

@@ -20,10 +20,10 @@
 extern "C" {
 #endif
 
-/** Memory (bytes) a plan may spend on tabulated routed arc costs (16 bytes per arc per spring,
+/** Memory (bytes) a plan may spend on tabulated routed arc costs (8 bytes per arc per spring,
  *  karst_route_tabulate); beyond it the searches evaluate the same formula per arc (same values,
  *  slower: on the looping cave the tables take the routing searches from 0.33 to 0.22 s and the
- *  skeleton's from 0.58 to 0.35 s, 2 threads). 256 MiB: about 16 M arcs with one spring. */
+ *  skeleton's from 0.58 to 0.35 s, 2 threads). 256 MiB: about 33 M arcs with one spring. */
 #define KARST_ROUTING_ARC_BUDGET ((size_t)1 << 28)
 /** A spring's costs are tabulated before its waypoints' routing rows when at least this many
  *  rows use them (a row relaxes every arc once; tabulating costs about two), */
@@ -47,7 +47,7 @@ typedef struct karst_routing_plan {
   int n_keys, n_springs, n_targets;
   float *dz;             /**< 2 n per spring: depth below its water table, z (karst_route_t) */
   karst_route_t *routes; /**< one per spring */
-  double **arc_costs;    /**< per spring: its route's tabulated costs (2 n_arcs: arc_fwd then
+  karst_arc_cost_t **arc_costs; /**< per spring: its route's tabulated costs (2 n_arcs: arc_fwd then
                               arc_bwd), or NULL (too few searches, or beyond the budget: all
                               together stay within KARST_ROUTING_ARC_BUDGET) */
   int *targets;          /**< key-point index of each target: springs first, then waypoints */
@@ -71,13 +71,14 @@ const karst_route_t *karst_routing_route(const karst_routing_plan_t *plan, int s
 /**
  * Build the routing plan of graph @p g (whose vertices 0 .. n_keys − 1 are the scenario's key
  * points) under geology @p geo, for the key points of the generation the geology's scenario
- * routes (karst_generation_key_active; the others are plain vertices): per spring the vertex depths below its water table; one backward
- * search per spring, then one per waypoint (each waypoint drains to the spring it reaches most
- * cheaply); each sink's springs (required ones from the connectivity matrix or drains_to, else
- * the cheapest allowed one); the candidate routes sink → spring, sink → waypoint (whose spring the
- * sink may drain to), waypoint → its spring, waypoint → waypoint of the same spring; then the
- * γ rule with waypoints as the only intermediates. @p want_succ asks for successor rows (plain
- * union, skeleton.reuse = 1), otherwise lower-bound rows are kept for path sharing.
+ * routes (karst_generation_key_active; the others are plain vertices): per spring the vertex depths
+ * below its water table; one backward search per spring, then one per waypoint (each waypoint
+ * drains to the spring it reaches most cheaply); each sink's springs (required ones from the
+ * connectivity matrix or drains_to, else the cheapest allowed one); the candidate routes sink →
+ * spring, sink → waypoint (whose spring the sink may drain to), waypoint → its spring, waypoint →
+ * waypoint of the same spring; then the γ rule with waypoints as the only intermediates. @p
+ * want_succ asks for successor rows (plain union, skeleton.reuse = 1), otherwise lower-bound rows
+ * are kept for path sharing.
  * @return KARST_SUCCESS; KARST_EUNREACHABLE naming the key points (FILE:LINE:COLUMN) when a
  *         required connection, a sink's every allowed spring, or a waypoint's every spring is out
  *         of reach; KARST_EINVAL, KARST_ENOMEM, KARST_EINTERRUPTED.

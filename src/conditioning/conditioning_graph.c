@@ -42,7 +42,7 @@ karst_error_t karst_conditioning_add_legs(karst_ctx_t *ctx, const karst_scenario
   arc_t *extra = malloc((size_t)s->n_legs * 2 * sizeof *extra);
   karst_int_t *offsets = NULL;
   int32_t *adj = NULL;
-  double *cost = NULL;
+  karst_arc_cost_t *cost = NULL;
   if (!extra) return karst_set_error(ctx, KARST_ENOMEM, "conditioning: out of memory");
   karst_int_t m = 0;
   for (karst_int_t l = 0; l < s->n_legs; l++) {
@@ -103,7 +103,10 @@ karst_error_t karst_conditioning_add_legs(karst_ctx_t *ctx, const karst_scenario
       int take_extra = x < m && extra[x].u == u && (a >= end || extra[x].v <= g->adj[a]);
       if (take_extra) {
         adj[w] = (int32_t)extra[x].v;
-        cost[w] = extra[x].cost;
+        /* Rounded up: a leg costs exactly the A* bound per metre times its length, and the
+         * heuristic must not exceed it by the rounding of the store. */
+        cost[w] = karst_arc_cost_round(extra[x].cost);
+        if ((double)cost[w] < extra[x].cost) cost[w] = nextafterf(cost[w], INFINITY);
         if (a < end && g->adj[a] == extra[x].v) a++; /* the k-NN arc: replaced */
         x++;
       } else {

@@ -99,7 +99,7 @@ karst_error_t karst_generation_discount(karst_ctx_t *ctx, karst_graph_t *g,
       if (a < 0) continue;
       if (push_arc(saved, a, g->cost[a]))
         return karst_set_error(ctx, KARST_ENOMEM, "generations: out of memory");
-      g->cost[a] *= factor;
+      g->cost[a] = karst_arc_cost_round(g->cost[a] * factor);
     }
   }
   return KARST_SUCCESS;
@@ -107,7 +107,7 @@ karst_error_t karst_generation_discount(karst_ctx_t *ctx, karst_graph_t *g,
 
 void karst_generation_restore(karst_graph_t *g, karst_inherited_t *saved) {
   for (karst_int_t i = saved->n - 1; i >= 0; i--)
-    g->cost[saved->arc[i]] = saved->cost[i];
+    g->cost[saved->arc[i]] = (karst_arc_cost_t)saved->cost[i]; /* exact: saved from a float */
   saved->n = 0;
 }
 
@@ -156,8 +156,7 @@ static uint64_t pair_key(karst_int_t a, karst_int_t b) {
  * Time complexity: O(edges + recorded steps) expected.
  */
 karst_error_t karst_generation_track_finish(karst_ctx_t *ctx, karst_generation_track_t *t,
-                                            karst_skeleton_t *sk,
-                                            karst_generation_stats_t *stats) {
+                                            karst_skeleton_t *sk, karst_generation_stats_t *stats) {
   sk->on_path = NULL;
   sk->on_path_arg = NULL;
   karst_network_t *net = &sk->net;

@@ -117,10 +117,10 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
   r.offsets[n] = w;
   r.n_arcs = w;
   r.adj = malloc(sizeof(int32_t) * ((size_t)w + 1));
-  r.cost = malloc(sizeof(double) * ((size_t)w + 1));
+  r.cost = malloc(sizeof *r.cost * ((size_t)w + 1));
   if (!r.adj || !r.cost) goto nomem;
   for (karst_int_t i = 0; i < w; i++)
-    r.adj[i] = (int32_t)arcs[i].v, r.cost[i] = arcs[i].c;
+    r.adj[i] = (int32_t)arcs[i].v, r.cost[i] = karst_arc_cost_round(arcs[i].c);
   karst_graph_destroy(g);
   *g = r;
   karst_graph_init(&r);
@@ -305,10 +305,11 @@ static void task_cost(void *p, int tid, int nth) {
                          ? karst_i_cost_edge_inside(B->model, g->xyz + 3 * u, g->xyz + 3 * v)
                          : INFINITY;
         n_inf += !isfinite(cst);
-        g->cost[a] = cst;
+        const karst_arc_cost_t cf = karst_arc_cost_round(cst);
+        g->cost[a] = cf;
         if (cursor[v] < 0)
           cursor[v] = (int32_t)(first_at_least(g->adj, b, g->offsets[v + 1], u0) - b);
-        g->cost[b + cursor[v]++] = cst;
+        g->cost[b + cursor[v]++] = cf;
       }
     }
     for (karst_int_t u = u0; u < u1; u++) /* reset what this chunk started */
@@ -405,7 +406,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
     nbr = NULL, own = NULL;
     for (int t = 0; t < KARST_I_MAX_THREADS; t++)
       if (B.failed[t]) goto nomem;
-    g.cost = karst_i_alloc_large(sizeof(double) * (size_t)g.n_arcs);
+    g.cost = karst_i_alloc_large(sizeof *g.cost * (size_t)g.n_arcs);
     if (!g.cost) goto nomem;
     karst_progress(ctx, "edge costs", 0, 1);
     /* Several chunks per thread balance the costlier regions (near

@@ -268,8 +268,9 @@ static float float_below(double x) {
   return f;
 }
 
-/* The routed cost of arc u → w (karst_route_t). */
-static inline double route_cost(const karst_route_t *r, double base, karst_int_t u, karst_int_t w) {
+/* The routed cost of arc u → w (karst_route_t) in double precision. */
+static inline double route_cost_exact(const karst_route_t *r, double base, karst_int_t u,
+                                      karst_int_t w) {
   const float du = r->dz[2 * u], dw = r->dz[2 * w], band = r->band;
   if (dw < -band) {                     /* w in the vadose zone */
     if (!(du < -band)) return INFINITY; /* no rising back into the vadose zone */
@@ -292,6 +293,12 @@ static inline double route_cost(const karst_route_t *r, double base, karst_int_t
   return base * r->vadose_factor + (rise > 0 ? r->rise_cost * rise : 0.0);
 }
 
+/* The routed cost of arc u → w rounded to single precision like the stored costs (graph.h), so
+ * that the tables (karst_route_tabulate) and the formula evaluated during a search agree. */
+static inline double route_cost(const karst_route_t *r, double base, karst_int_t u, karst_int_t w) {
+  return (double)karst_arc_cost_round(route_cost_exact(r, base, u, w));
+}
+
 double karst_route_arc_cost(const karst_route_t *r, double base, karst_int_t u, karst_int_t w) {
   return r ? route_cost(r, base, u, w) : base;
 }
@@ -299,7 +306,7 @@ double karst_route_arc_cost(const karst_route_t *r, double base, karst_int_t u, 
 typedef struct {
   const karst_graph_t *g;
   const karst_route_t *r;
-  double *fwd, *bwd;
+  karst_arc_cost_t *fwd, *bwd;
 } tabulate_t;
 
 static void tabulate_worker(void *arg, int tid, int nthreads) {
@@ -308,13 +315,13 @@ static void tabulate_worker(void *arg, int tid, int nthreads) {
   const karst_int_t lo = g->n * tid / nthreads, hi = g->n * (tid + 1) / nthreads;
   for (karst_int_t v = lo; v < hi; v++)
     for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      t->fwd[a] = route_cost(t->r, g->cost[a], v, g->adj[a]);
-      t->bwd[a] = route_cost(t->r, g->cost[a], g->adj[a], v);
+      t->fwd[a] = (karst_arc_cost_t)route_cost(t->r, g->cost[a], v, g->adj[a]);
+      t->bwd[a] = (karst_arc_cost_t)route_cost(t->r, g->cost[a], g->adj[a], v);
     }
 }
 
 void karst_route_tabulate(const karst_ctx_t *ctx, const karst_graph_t *g, const karst_route_t *r,
-                          double *fwd, double *bwd) {
+                          karst_arc_cost_t *fwd, karst_arc_cost_t *bwd) {
   tabulate_t t = {g, r, fwd, bwd};
   int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
   if (g->n_arcs < 100000) T = 1; /* not worth a thread */
@@ -351,7 +358,8 @@ typedef struct {
 __attribute__((always_inline))
 #endif
 static inline void
-prefetch_arcs(const karst_int_t *off, const int32_t *adj, const double *cost, karst_int_t u) {
+prefetch_arcs(const karst_int_t *off, const int32_t *adj, const karst_arc_cost_t *cost,
+              karst_int_t u) {
   const char *pa = (const char *)(adj + off[u]), *pc = (const char *)(cost + off[u]);
   size_t deg = (size_t)(off[u + 1] - off[u]);
   for (size_t b = 0; b < deg * sizeof *adj; b += 64)
@@ -368,13 +376,14 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
   const int astar = target >= 0 && lb > 0 && g->xyz;
   const karst_int_t *restrict off = g->offsets;
   const int32_t *restrict adj = g->adj;
-  const double *restrict cost = g->cost;
+  const karst_arc_cost_t *restrict cost = g->cost;
   const unsigned char *blocked = o->blocked, *noexpand = o->noexpand, *is_target = o->is_target;
   const karst_route_t *route = o->route;
   const int backward = o->backward, want_pred = o->want_pred;
   /* Tabulated routed costs replace the base costs and the formula (karst_route_tabulate). */
-  const double *restrict tab = route ? (backward ? route->arc_bwd : route->arc_fwd) : NULL;
-  const double *restrict arc_cost = tab ? tab : cost;
+  const karst_arc_cost_t *restrict tab =
+      route ? (backward ? route->arc_bwd : route->arc_fwd) : NULL;
+  const karst_arc_cost_t *restrict arc_cost = tab ? tab : cost;
   if (tab) route = NULL;
   node_t *restrict node = s->node;
   double *restrict hh = s->h;
@@ -607,7 +616,7 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
   const karst_int_t *restrict off = g->offsets;
   const int32_t *restrict adj = g->adj;
   /* Tabulated routed costs replace the base costs and the formula (karst_route_tabulate). */
-  const double *restrict cost = route && route->arc_fwd ? route->arc_fwd : g->cost;
+  const karst_arc_cost_t *restrict cost = route && route->arc_fwd ? route->arc_fwd : g->cost;
   if (route && route->arc_fwd) route = NULL;
   node_t *restrict node = s->node;
   double *restrict hh = s->h;

@@ -108,20 +108,20 @@ static int pair_cmp(const void *x, const void *y) {
 }
 
 /* Tabulate the routed costs of spring @p s (karst_route_tabulate) when @p searches searches will
- * read them and the budget allows: tabulating costs two formula evaluations and 16 bytes per arc,
+ * read them and the budget allows: tabulating costs two formula evaluations and 8 bytes per arc,
  * which a few searches over the whole graph (a routing row relaxes every arc once) or many
  * path-sharing A* searches repay, and one search does not. Out of memory it is left undone (the
  * searches then evaluate the same formula). */
 static void tabulate_spring(const karst_ctx_t *ctx, const karst_graph_t *g, karst_routing_plan_t *P,
                             int s, int searches, int min_searches) {
-  const size_t bytes = 2 * (size_t)g->n_arcs * sizeof(double);
+  const size_t bytes = 2 * (size_t)g->n_arcs * sizeof(karst_arc_cost_t);
   size_t tables = 1; /* with this one */
   for (int q = 0; q < P->n_springs; q++)
     tables += P->arc_costs[q] != NULL;
   if (searches < min_searches || P->arc_costs[s] || g->n_arcs == 0 ||
       tables * bytes > KARST_ROUTING_ARC_BUDGET)
     return;
-  double *fwd = karst_i_alloc_large(bytes);
+  karst_arc_cost_t *fwd = karst_i_alloc_large(bytes);
   if (!fwd) return;
   karst_route_tabulate(ctx, g, &P->routes[s], fwd, fwd + g->n_arcs);
   P->arc_costs[s] = fwd;

@@ -43,10 +43,10 @@ static inline void fx_graph_from_edges(karst_graph_t *g, karst_int_t n, const do
   for (karst_int_t e = 0; e < m; e++) {
     karst_int_t a = g->offsets[u[e]] + fill[u[e]]++;
     g->adj[a] = v[e];
-    g->cost[a] = cost[e];
+    g->cost[a] = karst_arc_cost_round(cost[e]);
     karst_int_t b = g->offsets[v[e]] + fill[v[e]]++;
     g->adj[b] = u[e];
-    g->cost[b] = cost[e];
+    g->cost[b] = karst_arc_cost_round(cost[e]);
   }
   free(fill);
 }

@@ -46,14 +46,14 @@ static void test_counts_of_a_box(void **state) {
   assert_close(b.edges, 12142.342515331879 * 40);
   assert_close(b.searches, 2);
   assert_close(b.amplification_points, 0);
-  assert_close(b.bytes, 96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 24 + 40 + 40 * 32));
-  /* the edges drive it (40 x (24 + 32) bytes per sample against 512 + 40): sampling.k, which the
+  assert_close(b.bytes, 96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 16 + 40 + 40 * 16));
+  /* the edges drive it (40 x (16 + 16) bytes per sample against 512 + 40): sampling.k, which the
    * file leaves to its default (position 0, reported as 1:1) */
   assert_string_equal(b.driver, "sampling.k");
   /* 4 threads: four A* states, but only as many as there are searches (2) */
   karst_budget_estimate(&sc, 4, &b);
   assert_close(b.bytes,
-               96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 24 + 2 * 40 + 40 * 32));
+               96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 16 + 2 * 40 + 40 * 16));
   /* max_samples caps the samples (sampling refuses more) and then drives the estimate when the
    * file gives it (a key the file gives is named before a defaulted one, here sampling.k) */
   sc.sampling.max_samples = 1000;
@@ -80,7 +80,7 @@ static void test_check_refuses(void **state) {
   /* 1 MiB: refused with the file, the estimate and the limit */
   assert_int_equal(karst_budget_check(&ctx, &sc, 1, 1024.0 * 1024, NULL), KARST_ERANGE);
   assert_non_null(strstr(ctx.errmsg, MINIMAL ":1:1: sampling.k: the run needs an "
-                                             "estimated 128 MiB of memory"));
+                                             "estimated 117 MiB of memory"));
   assert_non_null(strstr(ctx.errmsg, "more than the limit of 1 MiB"));
   /* a domain whose volume overflows, and more steps than any hierarchy */
   sc.domain_max[0] = sc.domain_max[1] = 1e300;

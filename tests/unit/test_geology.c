@@ -89,7 +89,8 @@ static void test_dispersed_fracture_term(void **state) {
   assert_close(T_fracture_term(&sc, x), 2 * c, 1e-12);
   assert_close(T_fracture_term(&sc, y), 2 * (1 - c) / 2, 1e-12);
   /* The lower bound: λmin(w T) = w (1 − c)/2 (the transverse eigenvalue), plus w0. */
-  assert_close(karst_cost_lower_bound_per_metre(&sc), (1 + 2 * (1 - c) / 2) * (1 - 1e-9), 1e-12);
+  assert_close(karst_cost_lower_bound_per_metre(&sc),
+               (1 + 2 * (1 - c) / 2) * (1 - KARST_COST_LB_MARGIN), 1e-12);
   karst_scenario_destroy(&sc);
 }
 
@@ -207,7 +208,7 @@ static void test_fault_terms(void **state) {
   double L = sqrt(116.0), feff = 0.2 + 0.8 * 16 / 116.0;
   assert_close(T_cost_edge(&sc, e, f), L * (1 - 0.5 * (1 - feff)), 1e-12);
   /* Lower bound: 1 × 0.2 (the smallest factor). */
-  assert_close(karst_cost_lower_bound_per_metre(&sc), 0.2 * (1 - 1e-9), 1e-15);
+  assert_close(karst_cost_lower_bound_per_metre(&sc), 0.2 * (1 - KARST_COST_LB_MARGIN), 1e-15);
   /* Barrier disc of radius 20 about (50, 50, 50): crossing at y = 50 adds 100; at y = 80 (30 m
    * from the centre, beyond the disc) nothing. */
   F->barrier = 1, F->radius = 20, F->crossing_cost = 100;
@@ -328,8 +329,8 @@ static void test_routed_astar_matches_dijkstra(void **state) {
   const karst_route_t *routes[1] = {&route};
   /* The tabulated route (karst_route_tabulate, two threads): every arc's value is the formula's,
    * bit for bit, and every search below must give bit-identical results with it. */
-  double *fwd = malloc(sizeof *fwd * (size_t)g.n_arcs),
-         *bwd = malloc(sizeof *bwd * (size_t)g.n_arcs);
+  karst_arc_cost_t *fwd = malloc(sizeof *fwd * (size_t)g.n_arcs),
+                   *bwd = malloc(sizeof *bwd * (size_t)g.n_arcs);
   karst_ctx_t ctx2;
   karst_ctx_init(&ctx2);
   ctx2.nthreads = 2;

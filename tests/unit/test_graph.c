@@ -123,10 +123,13 @@ static void test_knn_exact(void **state) {
   assert_int_equal(g1.n_arcs, g2.n_arcs);
   assert_memory_equal(g1.offsets, g2.offsets, sizeof(karst_int_t) * (size_t)(g1.n + 1));
   assert_memory_equal(g1.adj, g2.adj, sizeof *g1.adj * (size_t)g1.n_arcs);
-  assert_memory_equal(g1.cost, g2.cost, sizeof(double) * (size_t)g1.n_arcs);
+  assert_memory_equal(g1.cost, g2.cost, sizeof *g1.cost * (size_t)g1.n_arcs);
   for (karst_int_t v = 0; v < g1.n; v += 97)
-    for (karst_int_t a = g1.offsets[v]; a < g1.offsets[v + 1]; a++)
-      assert_close(g1.cost[a], sqrt(d2(s.xyz + 3 * v, s.xyz + 3 * g1.adj[a])), 1e-12);
+    for (karst_int_t a = g1.offsets[v]; a < g1.offsets[v + 1]; a++) {
+      /* the stored cost is the nearest float of the length: within 2^-24 relative */
+      double len = sqrt(d2(s.xyz + 3 * v, s.xyz + 3 * g1.adj[a]));
+      assert_close(g1.cost[a], len, 0x1p-24 * len + 1e-12);
+    }
   assert_int_equal(karst_graph_edge_count(&g1), g1.n_arcs / 2);
   karst_graph_destroy(&g1), karst_graph_destroy(&g2);
   karst_samples_destroy(&s);
@@ -364,14 +367,15 @@ static void test_costs_all_terms(void **state) {
   for (int t = 1; t < 3; t++) {
     assert_int_equal(g[0].n_arcs, g[t].n_arcs);
     assert_memory_equal(g[0].adj, g[t].adj, sizeof *g[0].adj * (size_t)g[0].n_arcs);
-    assert_memory_equal(g[0].cost, g[t].cost, sizeof(double) * (size_t)g[0].n_arcs);
+    assert_memory_equal(g[0].cost, g[t].cost, sizeof *g[0].cost * (size_t)g[0].n_arcs);
   }
   for (karst_int_t v = 0; v < g[0].n; v++)
     for (karst_int_t a = g[0].offsets[v]; a < g[0].offsets[v + 1]; a++) {
       karst_int_t w = g[0].adj[a];
       const double *p = s.xyz + 3 * v, *q = s.xyz + 3 * w;
-      /* computed once, from the smaller index to the larger */
-      assert_true(g[0].cost[a] == (v < w ? T_cost_edge(&sc, p, q) : T_cost_edge(&sc, q, p)));
+      /* computed once, from the smaller index to the larger, and stored as its nearest float */
+      assert_true(g[0].cost[a] ==
+                  karst_arc_cost_round(v < w ? T_cost_edge(&sc, p, q) : T_cost_edge(&sc, q, p)));
       if (v % 37 != 0) continue;
       double d[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, sum = 0;
       const int m = 4000;

@@ -21,9 +21,9 @@ static double random_cost(const double *a, const double *b, void *user) {
   return f * fx_euclid_cost(a, b, NULL);
 }
 
-/* Check that p is a walk on g from s to t whose arc costs add up to p->cost. */
-static void assert_valid_path(const karst_graph_t *g, const karst_path_t *p, karst_int_t s,
-                              karst_int_t t) {
+/* Check that p is a walk on g from s to t whose arc costs add up to p->cost (within @p rel). */
+static void assert_valid_path_rel(const karst_graph_t *g, const karst_path_t *p, karst_int_t s,
+                                  karst_int_t t, double rel) {
   assert_true(p->n >= 1);
   assert_int_equal(p->v[0], s);
   assert_int_equal(p->v[p->n - 1], t);
@@ -35,7 +35,113 @@ static void assert_valid_path(const karst_graph_t *g, const karst_path_t *p, kar
     assert_true(best < INFINITY); /* consecutive vertices are joined by a usable edge */
     sum += best;
   }
-  assert_rel(sum, p->cost, 1e-12);
+  assert_rel(sum, p->cost, rel);
+}
+
+static void assert_valid_path(const karst_graph_t *g, const karst_path_t *p, karst_int_t s,
+                              karst_int_t t) {
+  assert_valid_path_rel(g, p, s, t, 1e-12);
+}
+
+/* A cost whose factor spans six decades across the domain (1e-3 to 1e3 per metre) and that is
+ * symmetric in its ends (the factor is taken at the midpoint): the double the fixture rounds to
+ * the stored float, recomputed here in double for the reference. */
+static double wide_cost(const double *a, const double *b, void *user) {
+  (void)user;
+  double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+  double f = pow(10.0, 3.0 * sin(0.07 * m[0]) * cos(0.05 * m[1]) + 0.3 * sin(0.3 * m[2]));
+  return f * fx_euclid_cost(a, b, NULL);
+}
+
+/* Reference: Dijkstra in double on the exact costs (wide_cost of every arc), by the O(n^2)
+ * textbook scan, independent of the library's heap and its float costs. */
+static void exact_dijkstra(const karst_graph_t *g, karst_int_t src, double *d, karst_int_t *pred) {
+  unsigned char *done = calloc((size_t)g->n, 1);
+  for (karst_int_t v = 0; v < g->n; v++)
+    d[v] = INFINITY, pred[v] = -1;
+  d[src] = 0;
+  for (;;) {
+    karst_int_t v = -1;
+    for (karst_int_t w = 0; w < g->n; w++)
+      if (!done[w] && d[w] < INFINITY && (v < 0 || d[w] < d[v])) v = w;
+    if (v < 0) break;
+    done[v] = 1;
+    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
+      karst_int_t w = g->adj[a];
+      double nd = d[v] + wide_cost(g->xyz + 3 * v, g->xyz + 3 * w, NULL);
+      if (nd < d[w]) d[w] = nd, pred[w] = v;
+    }
+  }
+  free(done);
+}
+
+/* The error bound of the single-precision costs (include/karst/graph.h), u = 2^-24: on a
+ * 3000-vertex graph whose costs span six decades, from three sources, (1) every least cost the
+ * library's Dijkstra finds on the stored floats is within (1 ± u) of the exact (double) least cost,
+ * and (2) the path A* returns costs, in exact costs, at most (1 + u) / (1 - u) times the exact
+ * least cost. Reference: exact_dijkstra above. The test fails with half-precision costs (u =
+ * 2^-11) and catches a heuristic made inadmissible by the rounding (KARST_COST_LB_MARGIN). */
+static void test_single_precision_cost_bound(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_rng_t rng;
+  karst_rng_init(&rng, 2026, 12);
+  const double o[3] = {0, 0, 0};
+  double *xyz = fx_jittered_grid(20, 15, 10, 4.0, o, 0.35, &rng);
+  const karst_int_t n = 20 * 15 * 10;
+  karst_graph_t g;
+  fx_knn_graph(&g, n, xyz, 10, wide_cost, NULL);
+  const double u = 0x1p-24, slack = 1e-13; /* slack: the double sums, < 1e-13 relative here */
+  double *d = malloc((size_t)n * sizeof *d);
+  karst_int_t *pred = malloc((size_t)n * sizeof *pred);
+  karst_search_t *s = NULL;
+  assert_int_equal(karst_search_create(&ctx, &g, &s), KARST_SUCCESS);
+  karst_path_t p;
+  karst_path_init(&p);
+  const karst_int_t sources[3] = {0, n / 2 + 7, n - 1};
+  double worst_d = 0, worst_p = 0;
+  int n_differ = 0;
+  for (int i = 0; i < 3; i++) {
+    karst_int_t src = sources[i];
+    exact_dijkstra(&g, src, d, pred);
+    assert_int_equal(karst_paths_dijkstra(&ctx, s, 1, &src, NULL, NULL, 0, NULL), KARST_SUCCESS);
+    for (karst_int_t v = 0; v < n; v++) {
+      double df = karst_search_dist(s, v);
+      assert_true(d[v] < INFINITY);
+      assert_true(df >= (1 - u - slack) * d[v] && df <= (1 + u + slack) * d[v]);
+      if (d[v] > 0) worst_d = fmax(worst_d, fabs(df - d[v]) / d[v]);
+    }
+    for (karst_int_t t = 1; t < n; t += 97) {
+      if (t == src) continue;
+      /* wide_cost's factor is at least 10^-3.3 per metre; less the library's margin for the
+       * rounding of the stored floats, as karst_cost_lower_bound_per_metre does */
+      assert_int_equal(
+          karst_paths_astar(&ctx, s, src, t, pow(10.0, -3.3) * (1 - KARST_COST_LB_MARGIN), &p),
+          KARST_SUCCESS);
+      double exact = 0;
+      for (karst_int_t j = 1; j < p.n; j++)
+        exact += wide_cost(xyz + 3 * p.v[j - 1], xyz + 3 * p.v[j], NULL);
+      assert_true(exact >= d[t] * (1 - slack));
+      assert_true(exact <= d[t] * ((1 + u) / (1 - u) + slack));
+      worst_p = fmax(worst_p, exact / d[t] - 1);
+      karst_int_t len = 0;
+      for (karst_int_t w = t; w >= 0; w = pred[w])
+        len++;
+      n_differ += len != p.n;
+    }
+  }
+  print_message("single-precision costs: least costs within %.3g relative (bound 2^-24 = %.3g); "
+                "A* paths at most %.3g above the least cost (bound %.3g); %d of the paths differ "
+                "in length from the exact ones\n",
+                worst_d, u, worst_p, (1 + u) / (1 - u) - 1, n_differ);
+  assert_true(worst_d > 0); /* the rounding is seen: the test measures something */
+  karst_path_destroy(&p);
+  karst_search_free(s);
+  fx_graph_free(&g);
+  free(d);
+  free(pred);
+  free(xyz);
 }
 
 /* A* (with the admissible bound 1 per metre) equals Dijkstra on 40 random graphs. */
@@ -352,8 +458,8 @@ static void test_fracture_min_axes(void **state) {
   }
   /* Lower bounds by hand: sum: w0 + λmin(10 e_x e_xᵀ + 10 e_y e_yᵀ) = 1 + 0 (vertical d);
    * min: w0 + 0. */
-  assert_close(lb[0], 1.0, 1e-8);
-  assert_close(lb[1], 1.0, 1e-8);
+  assert_close(lb[0], 1.0 * (1 - KARST_COST_LB_MARGIN), 1e-8);
+  assert_close(lb[1], 1.0 * (1 - KARST_COST_LB_MARGIN), 1e-8);
   assert_true(frac[1] > 0.9); /* staircase */
   assert_true(frac[0] < 0.5); /* diagonal */
   sc.fractures = NULL;
@@ -365,11 +471,11 @@ static void test_fracture_min_axes(void **state) {
 /* Copy of g whose arcs flagged in @p flag cost r times as much (the graph karst_paths_astar_reuse
  * searches implicitly). */
 static void discounted_copy(const karst_graph_t *g, const unsigned char *flag, double r,
-                            karst_graph_t *out, double **cost) {
+                            karst_graph_t *out, karst_arc_cost_t **cost) {
   *out = *g;
   *cost = malloc((size_t)(g->n_arcs + 1) * sizeof **cost);
   for (karst_int_t a = 0; a < g->n_arcs; a++)
-    (*cost)[a] = flag[a] ? r * g->cost[a] : g->cost[a];
+    (*cost)[a] = flag[a] ? karst_arc_cost_round(r * g->cost[a]) : g->cost[a];
   out->cost = *cost;
 }
 
@@ -421,7 +527,7 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
       int ia = (int)karst_rng_below(&rng, K - 1);
       karst_int_t t = keys[ia], src = (karst_int_t)karst_rng_below(&rng, n);
       karst_graph_t gd;
-      double *cd;
+      karst_arc_cost_t *cd;
       discounted_copy(&g, flag, r, &gd, &cd);
       assert_int_equal(karst_search_create(&ctx, &gd, &s2), KARST_SUCCESS);
       assert_int_equal(karst_paths_dijkstra(&ctx, s2, 1, &src, NULL, NULL, 0, NULL), KARST_SUCCESS);
@@ -435,19 +541,22 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
         assert_int_equal(e, KARST_EUNREACHABLE);
       } else {
         assert_int_equal(e, KARST_SUCCESS);
-        assert_rel(p.cost, dref, 1e-12);
-        assert_valid_path(&gd, &p, src, t);
+        /* The search discounts in double, the copy stores r c as a float: they agree within the
+         * single-precision bound of include/karst/graph.h, (1 + u) / (1 - u) - 1, u = 2^-24. */
+        const double tol = 2 * 0x1p-24 / (1 - 0x1p-24) + 1e-12;
+        assert_rel(p.cost, dref, tol);
+        assert_valid_path_rel(&gd, &p, src, t, tol); /* gd holds r c rounded, p summed r c */
         assert_int_equal(karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, NULL, &full, &q),
                          KARST_SUCCESS);
-        assert_rel(q.cost, dref, 1e-12);
+        assert_rel(q.cost, dref, tol);
         assert_int_equal(
             karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, bound + (size_t)ia * n, &no_net, &q),
             KARST_SUCCESS);
-        assert_rel(q.cost, dref, 1e-12);
+        assert_rel(q.cost, dref, tol);
         assert_int_equal(
             karst_paths_astar_reuse(&ctx, s1, src, t, 1.0, bound + (size_t)ia * n, &capped, &q),
             KARST_SUCCESS);
-        assert_rel(q.cost, dref, 1e-12);
+        assert_rel(q.cost, dref, tol);
         /* The path joins the network: flag its arcs, lower the distances. */
         for (karst_int_t i = 1; i < p.n; i++)
           for (karst_int_t a = 0; a < g.n_arcs; a++) {
@@ -600,6 +709,7 @@ static void test_horizon_corridor(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_astar_equals_dijkstra),
+      cmocka_unit_test(test_single_precision_cost_bound),
       cmocka_unit_test(test_hand_graph),
       cmocka_unit_test(test_empty),
       cmocka_unit_test(test_keypoint_distances),
