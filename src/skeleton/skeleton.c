@@ -370,6 +370,23 @@ static karst_error_t search_pair(karst_ctx_t *ctx, karst_search_t *s, const lay_
 /* Pairs searched ahead of the commit point, per thread. */
 #define SPEC_WINDOW_PER_THREAD 4
 
+/*
+ * Speculation pays only while most commits leave the network unchanged: a
+ * search running beside the one being committed slows it (they share the
+ * memory bandwidth and the last-level cache), and is thrown away when the
+ * commit adds an edge and the search read any of it. Measured on the 1.5 M
+ * sample block of bench_generate (50 pairs, 40 of which add edges): skeleton
+ * 4.3-4.5 s on 1 thread, 5.2-5.5 s on 2 with speculation throughout (the
+ * commit's own search up to 1.6x slower beside another). So the threads search
+ * ahead only while the recent share of commits that changed the network (an
+ * exponential average with weight SPEC_CHANGE_WEIGHT on the newest commit) is
+ * at most SPEC_MAX_CHANGE_SHARE; otherwise only the next pair to commit is
+ * searched. This decides only which searches run when, never a result: the
+ * skeleton stays the same for any thread count.
+ */
+#define SPEC_MAX_CHANGE_SHARE 0.5
+#define SPEC_CHANGE_WEIGHT 0.25
+
 typedef struct {
   karst_path_t path;
   karst_error_t err;
@@ -401,7 +418,9 @@ typedef struct {
   uint32_t *mark; /* per vertex: the change (mark_id) that last altered what it reads */
   uint32_t mark_id;
   karst_int_t n_kept_results; /* speculative results kept across a network change (statistics) */
-  atomic_int cancel; /* read by the searches without the lock */
+  double change_share;        /* recent share of commits that changed the network */
+  karst_int_t n_throttled;    /* times a thread waited instead of searching ahead (statistics) */
+  atomic_int cancel;          /* read by the searches without the lock */
 } spec_t;
 
 static int spec_cancelled(void *arg) {
@@ -429,7 +448,9 @@ static void spec_commit_one(spec_t *sp, int tid) {
   sp->kept++;
   sp->commit++;
   karst_progress(sp->ctx, "skeleton", (double)sp->commit, (double)sp->n_pairs);
-  if (sp->sk->net.n_edges == e0) return; /* nothing new: every speculative search stays valid */
+  const int grew = sp->sk->net.n_edges != e0;
+  sp->change_share += SPEC_CHANGE_WEIGHT * ((double)grew - sp->change_share);
+  if (!grew) return; /* nothing new: every speculative search stays valid */
   /* The network changed: stop the searches under way and wait for them to leave. */
   sp->epoch++;
   sp->mutating = 1;
@@ -484,6 +505,13 @@ static void spec_worker(void *arg, int tid, int nthreads) {
   while (!sp->stop && sp->commit < sp->n_pairs) {
     if (sp->next < sp->commit) sp->next = sp->commit; /* committed from a kept slot meanwhile */
     if (sp->mutating || sp->next >= sp->n_pairs || sp->next >= sp->commit + sp->window) {
+      pthread_cond_wait(&sp->cv, &sp->mu);
+      continue;
+    }
+    if (sp->next > sp->commit && sp->change_share > SPEC_MAX_CHANGE_SHARE &&
+        !(sp->slot[sp->next % sp->window].ready &&
+          sp->slot[sp->next % sp->window].pair == sp->next)) {
+      sp->n_throttled++; /* searching ahead would most likely be wasted: wait for the commit */
       pthread_cond_wait(&sp->cv, &sp->mu);
       continue;
     }
@@ -577,8 +605,9 @@ static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const lay_t *L, int T,
   pthread_mutex_destroy(&sp.mu);
   err = sp.err;
   karst_log(ctx, KARST_LOG_DEBUG,
-            "skeleton: %lld pairs on %d threads, %lld speculative results kept across a change",
-            (long long)n_pairs, T, (long long)sp.n_kept_results);
+            "skeleton: %lld pairs on %d threads, %lld speculative results kept across a change, "
+            "%lld waits instead of searching ahead",
+            (long long)n_pairs, T, (long long)sp.n_kept_results, (long long)sp.n_throttled);
 cleanup:
   *kept = sp.kept;
   if (sp.ws)
