@@ -184,6 +184,9 @@ static void large_scenario(karst_scenario_t *sc, double samples) {
   sc->sampling.fill_radius = 5.2;
   sc->sampling.feature_radius = 5.2;
   sc->sampling.k = 100;
+  /* Room for the block's samples beyond the default cap (5 M) when a larger one is asked for. */
+  if (1.3 * samples > (double)sc->sampling.max_samples)
+    sc->sampling.max_samples = (karst_int_t)(1.3 * samples);
   sc->gamma = 2.0;
   sc->tortuosity = 0.2;
   sc->amplification.steps = 1;
