@@ -419,7 +419,7 @@ typedef struct {
   uint32_t mark_id;
   karst_int_t n_kept_results; /* speculative results kept across a network change (statistics) */
   double change_share;        /* recent share of commits that changed the network */
-  karst_int_t n_throttled;    /* times a thread waited instead of searching ahead (statistics) */
+  karst_int_t n_quiet;        /* commits made while searching ahead was off (statistics) */
   atomic_int cancel;          /* read by the searches without the lock */
 } spec_t;
 
@@ -449,6 +449,7 @@ static void spec_commit_one(spec_t *sp, int tid) {
   sp->commit++;
   karst_progress(sp->ctx, "skeleton", (double)sp->commit, (double)sp->n_pairs);
   const int grew = sp->sk->net.n_edges != e0;
+  sp->n_quiet += sp->change_share > SPEC_MAX_CHANGE_SHARE;
   sp->change_share += SPEC_CHANGE_WEIGHT * ((double)grew - sp->change_share);
   if (!grew) return; /* nothing new: every speculative search stays valid */
   /* The network changed: stop the searches under way and wait for them to leave. */
@@ -511,7 +512,7 @@ static void spec_worker(void *arg, int tid, int nthreads) {
     if (sp->next > sp->commit && sp->change_share > SPEC_MAX_CHANGE_SHARE &&
         !(sp->slot[sp->next % sp->window].ready &&
           sp->slot[sp->next % sp->window].pair == sp->next)) {
-      sp->n_throttled++; /* searching ahead would most likely be wasted: wait for the commit */
+      /* searching ahead would most likely be wasted: wait for the commit */
       pthread_cond_wait(&sp->cv, &sp->mu);
       continue;
     }
@@ -606,8 +607,8 @@ static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const lay_t *L, int T,
   err = sp.err;
   karst_log(ctx, KARST_LOG_DEBUG,
             "skeleton: %lld pairs on %d threads, %lld speculative results kept across a change, "
-            "%lld waits instead of searching ahead",
-            (long long)n_pairs, T, (long long)sp.n_kept_results, (long long)sp.n_throttled);
+            "%lld commits with no search ahead",
+            (long long)n_pairs, T, (long long)sp.n_kept_results, (long long)sp.n_quiet);
 cleanup:
   *kept = sp.kept;
   if (sp.ws)
