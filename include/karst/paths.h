@@ -130,7 +130,10 @@ typedef struct karst_reuse {
   const double *dist_to_net;   /**< n lower bounds of the least original cost to the nearest network
                                     vertex that change by at most the arc cost along an arc: the
                                     exact costs (INFINITY while the network is empty), or those
-                                    capped at any constant; NULL: taken as 0 (always safe) */
+                                    capped at any constant; NULL: taken as 0 (always safe).
+                                    Being lower bounds, they are 0 at network vertices: the
+                                    search reads the tags of a vertex's arcs only where the
+                                    bound is not positive */
   int (*cancelled)(void *arg); /**< polled every 256 settled vertices: non-zero abandons the search
                                     with KARST_EINTERRUPTED; NULL: never */
   void *cancel_arg;            /**< passed to @c cancelled */

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory_internal.h"
 #include "amplification/amplification_internal.h"
 #include "karst/paths.h"
 #include "karst/routing.h"
@@ -371,8 +372,8 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   if (am->steps == 0 || am->points == 0 || sk->net.n_nodes == 0) goto cleanup;
   if ((err = karst_search_create(ctx, g, &s))) goto cleanup;
   size_t n = (size_t)(g->n > 0 ? g->n : 1);
-  in_net = calloc(n, 1);
-  blocked = calloc(n, 1);
+  in_net = karst_i_calloc_large(n, 1);
+  blocked = karst_i_calloc_large(n, 1);
   double largest = 0;
   karst_amplification_points_total(am, INFINITY, &largest);
   size_t max_pts = largest > 1 ? (size_t)largest : 1;

@@ -1,6 +1,8 @@
 #include "core/memory_internal.h"
 
+#include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
@@ -15,5 +17,14 @@ void *karst_i_alloc_large(size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
   if (p) (void)madvise(p, rounded, MADV_HUGEPAGE);
 #endif
+  return p;
+}
+
+void *karst_i_calloc_large(size_t count, size_t size) {
+  if (size > 0 && count > SIZE_MAX / size) return NULL;
+  size_t bytes = count * size;
+  if (bytes < 2 * KARST_I_HUGE_PAGE) return calloc(count > 0 ? count : 1, size > 0 ? size : 1);
+  void *p = karst_i_alloc_large(bytes);
+  if (p) memset(p, 0, bytes);
   return p;
 }

@@ -16,4 +16,11 @@
  */
 void *karst_i_alloc_large(size_t bytes);
 
+/**
+ * Like calloc(count, size) (release with free()), with the page advice of
+ * karst_i_alloc_large. Returns NULL when out of memory or when count × size
+ * overflows.
+ */
+void *karst_i_calloc_large(size_t count, size_t size);
+
 #endif

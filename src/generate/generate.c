@@ -8,6 +8,7 @@
 #include <sys/resource.h>
 #include <time.h>
 
+#include "core/memory_internal.h"
 #include "generate/generate_internal.h"
 #include "karst/amplification.h"
 #include "karst/classification.h"
@@ -57,9 +58,9 @@ static karst_node_kind_t key_kind(karst_keypoint_type_t t) {
  */
 static int count_pieces(const karst_graph_t *g, karst_int_t n_keys, karst_int_t *pieces,
                         karst_int_t *key_pieces) {
-  karst_int_t *comp = malloc(sizeof *comp * (size_t)(g->n > 0 ? g->n : 1));
-  karst_int_t *queue = malloc(sizeof *queue * (size_t)(g->n > 0 ? g->n : 1));
-  unsigned char *seen = calloc((size_t)(g->n > 0 ? g->n : 1), 1);
+  karst_int_t *comp = karst_i_alloc_large(sizeof *comp * (size_t)(g->n > 0 ? g->n : 1));
+  karst_int_t *queue = karst_i_alloc_large(sizeof *queue * (size_t)(g->n > 0 ? g->n : 1));
+  unsigned char *seen = karst_i_calloc_large((size_t)(g->n > 0 ? g->n : 1), 1);
   if (!comp || !queue || !seen) {
     free(comp), free(queue), free(seen);
     return -1;

@@ -366,7 +366,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
   if ((err = karst_i_cost_model_init(ctx, &model, geo)) != KARST_SUCCESS) return err;
   g.n = n;
   g.xyz = samples->xyz;
-  g.offsets = calloc((size_t)n + 1, sizeof(karst_int_t));
+  g.offsets = karst_i_calloc_large((size_t)n + 1, sizeof(karst_int_t));
   if (!g.offsets) goto nomem;
   int k = sc->sampling.k < n - 1 ? sc->sampling.k : (int)(n > 0 ? n - 1 : 0);
   if (k > 0) {

@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory_internal.h"
 #include "core/parallel_internal.h"
 #include "graph/graph_internal.h"
 
@@ -117,7 +118,7 @@ static karst_error_t grid_build(karst_ctx_t *ctx, grid_t *g, const double *xyz, 
       g->ncells *= g->dims[a];
     }
     free(g->start);
-    g->start = calloc((size_t)g->ncells + 1, sizeof(karst_int_t));
+    g->start = karst_i_calloc_large((size_t)g->ncells + 1, sizeof(karst_int_t));
     if (!g->start) goto nomem;
     for (karst_int_t i = 0; i < n; i++) {
       const double *p = xyz + 3 * i;
@@ -135,8 +136,8 @@ static karst_error_t grid_build(karst_ctx_t *ctx, grid_t *g, const double *xyz, 
   }
   for (karst_int_t c = 0; c < g->ncells; c++)
     g->start[c + 1] += g->start[c];
-  g->sxyz = malloc(sizeof(double) * 3 * (size_t)n);
-  g->sidx = malloc(sizeof(int32_t) * (size_t)n);
+  g->sxyz = karst_i_alloc_large(sizeof(double) * 3 * (size_t)n);
+  g->sidx = karst_i_alloc_large(sizeof(int32_t) * (size_t)n);
   if (!g->sxyz || !g->sidx) goto nomem;
   for (int a = 0; a < 3; a++) {
     size_t d = (size_t)g->dims[a];

@@ -612,6 +612,10 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
                            reuse ? reuse->factor : NAN);
   const double r = reuse->factor, rlb = g->xyz ? r * lb_per_metre : 0.0;
   const unsigned char *flag = reuse->reused, *closed = reuse->closed, tag = reuse->tag;
+  /* A tagged arc joins two network vertices, whose network distance is 0 (a lower bound of 0):
+   * the tags of a vertex's arcs are read only when that distance is not positive, so a search
+   * reads the tags (one byte per arc, not backed by large pages) only along the network. */
+  const double *dn = reuse->dist_to_net;
   const karst_route_t *route = reuse->route;
   const karst_int_t *restrict off = g->offsets;
   const int32_t *restrict adj = g->adj;
@@ -640,12 +644,13 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
     }
     if (v == target) break;
     if (s->hn > 0) prefetch_arcs(off, adj, cost, s->heap[0].v);
+    const unsigned char *vflag = flag && !(dn && dn[v] > 0.0) ? flag : NULL;
     for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
       karst_int_t w = adj[a];
       double c = cost[a];
       if (!(c < INFINITY) || (closed && closed[w] && w != target)) continue;
       if (route) c = route_cost(route, c, v, w);
-      if (flag && flag[a] && (!tag || flag[a] == tag)) c *= r;
+      if (vflag && vflag[a] && (!tag || vflag[a] == tag)) c *= r;
       double nd = gv + c;
       node_t *nw = &node[w];
       if (nw->stamp != s->cur) { /* first reached: g was ∞ */
@@ -740,7 +745,7 @@ static void *rows_worker(void *arg) {
   t->err = karst_search_create(&t->ctx, t->g, &s);
   if (t->err) goto cleanup;
   if (t->method == KARST_PATHS_DIJKSTRA_MULTI) {
-    mask = calloc((size_t)(t->g->n > 0 ? t->g->n : 1), 1);
+    mask = karst_i_calloc_large((size_t)(t->g->n > 0 ? t->g->n : 1), 1);
     if (!mask) {
       t->err = karst_set_error(&t->ctx, KARST_ENOMEM, "key-point distances: out of memory");
       goto cleanup;
@@ -1025,7 +1030,7 @@ static void *trows_worker(void *arg) {
   const karst_graph_t *g = t->g;
   t->err = karst_search_create(&t->ctx, g, &s);
   if (t->err) goto cleanup;
-  mask = calloc((size_t)(g->n > 0 ? g->n : 1), 1);
+  mask = karst_i_calloc_large((size_t)(g->n > 0 ? g->n : 1), 1);
   if (!mask) {
     t->err = karst_set_error(&t->ctx, KARST_ENOMEM, "target rows: out of memory");
     goto cleanup;

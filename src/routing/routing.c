@@ -160,7 +160,7 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
   P.dz = karst_i_alloc_large((size_t)S * 2 * (size_t)n * sizeof *P.dz);
   P.routes = calloc((size_t)S, sizeof *P.routes);
   P.arc_costs = calloc((size_t)S, sizeof *P.arc_costs);
-  P.closed = calloc((size_t)n, 1);
+  P.closed = karst_i_calloc_large((size_t)n, 1);
   P.key_spring = malloc((size_t)K * sizeof *P.key_spring);
   P.targets = malloc((size_t)K * sizeof *P.targets);
   srcs = malloc((size_t)K * sizeof *srcs);

@@ -23,6 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory_internal.h"
 #include "core/parallel_internal.h"
 #include "geology/geology_internal.h"
 #include "karst/sampling.h"
@@ -845,12 +846,15 @@ static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc,
   karst_int_t n = s->n;
   uint64_t *key = malloc(sizeof(uint64_t) * 2 * (size_t)n + 1);
   int32_t *idx = malloc(sizeof(int32_t) * 2 * (size_t)n + 1);
-  double *xyz = malloc(sizeof(double) * 3 * (size_t)n + 1);
+  /* The ordered coordinates go to a new array of large pages: the searches read them at random
+   * (the A* heuristic), and the grown array they come from is not. */
+  double *xyz = karst_i_alloc_large(sizeof(double) * 3 * (size_t)(n > 0 ? n : 1));
   if (!key || !idx || !xyz) {
     free(key), free(idx), free(xyz);
     return karst_set_error(ctx, KARST_ENOMEM, "no memory to order %lld samples", (long long)n);
   }
   const double scale = 2097151.0; /* 2^21 - 1 cells per axis */
+  memcpy(xyz, s->xyz, sizeof(double) * 3 * (size_t)s->n_key_points);
   for (karst_int_t b = s->n_key_points; b < n;) {
     karst_int_t e = b;
     while (e < n && s->source[e] == s->source[b])
@@ -867,11 +871,15 @@ static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc,
     }
     radix_sort(key, idx, key + n, idx + n, m);
     for (karst_int_t i = 0; i < m; i++)
-      memcpy(xyz + 3 * i, s->xyz + 3 * (karst_int_t)idx[i], 3 * sizeof(double));
-    memcpy(s->xyz + 3 * b, xyz, sizeof(double) * 3 * (size_t)m);
+      memcpy(xyz + 3 * (b + i), s->xyz + 3 * (karst_int_t)idx[i], 3 * sizeof(double));
     b = e;
   }
-  free(key), free(idx), free(xyz);
+  free(key), free(idx), free(s->xyz);
+  s->xyz = xyz;
+  /* The capacity is now that of the new array (later additions grow it again). */
+  unsigned char *so = realloc(s->source, (size_t)(n > 0 ? n : 1));
+  if (so) s->source = so;
+  s->cap = n > 0 ? n : 1;
   return KARST_SUCCESS;
 }
 

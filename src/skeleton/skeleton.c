@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/memory_internal.h"
 #include "core/parallel_internal.h"
 #include "karst/routing.h"
 
@@ -20,7 +21,7 @@ karst_error_t karst_skeleton_init(karst_ctx_t *ctx, karst_skeleton_t *sk, const 
   memset(sk, 0, sizeof *sk);
   karst_network_init(&sk->net);
   sk->n_graph = g->n;
-  sk->node_of_vertex = malloc((size_t)(g->n > 0 ? g->n : 1) * sizeof *sk->node_of_vertex);
+  sk->node_of_vertex = karst_i_alloc_large((size_t)(g->n > 0 ? g->n : 1) * sizeof *sk->node_of_vertex);
   sk->edge_set_cap = 1024;
   sk->edge_keys = calloc(sk->edge_set_cap, sizeof *sk->edge_keys);
   double *d;
@@ -587,7 +588,7 @@ static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const lay_t *L, int T,
     if ((err = karst_search_create(ctx, L->g, &sp.ws[t])) ||
         (err = karst_search_record_trail(ctx, sp.ws[t])))
       goto cleanup;
-  sp.mark = calloc((size_t)(L->g->n > 0 ? L->g->n : 1), sizeof *sp.mark);
+  sp.mark = karst_i_calloc_large((size_t)(L->g->n > 0 ? L->g->n : 1), sizeof *sp.mark);
   if (!sp.mark) {
     err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
     goto cleanup;
@@ -637,7 +638,7 @@ static karst_error_t lay_pairs(karst_ctx_t *ctx, lay_t *L, const pair_t *pairs, 
   if (sharing) {
     const karst_graph_t *g = L->g;
     L->flag = calloc((size_t)(g->n_arcs > 0 ? g->n_arcs : 1), 1);
-    L->to_net = malloc((size_t)(g->n > 0 ? g->n : 1) * sizeof *L->to_net);
+    L->to_net = karst_i_alloc_large((size_t)(g->n > 0 ? g->n : 1) * sizeof *L->to_net);
     if (!L->flag || !L->to_net) {
       err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory for path sharing");
       goto cleanup;
