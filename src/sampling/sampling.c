@@ -151,12 +151,15 @@ typedef struct sampler {
   /* dense fill grid with a border of 2 empty cells on every side, so that
    * neighbours are found by adding a precomputed linear offset */
   double cc;
+  /* per axis a and fill cell index i: corner[a][i] = lo[a] + i cc (i <= cd[a]), and the
+   * cell's extent clipped to the box, [clo, chi] = [max(lo, corner[i]), min(hi, corner[i + 1])]:
+   * the values cell_box would compute, read from a table by the fill's darts */
+  double *corner[3], *clo[3], *chi[3];
   int64_t cd[3], pd[3]; /* cells per axis, without and with the border */
   int32_t *fill;        /* per cell: -1 empty, else the sample's index in its tile's list */
   unsigned char *near;  /* 1 if a feature sample lies within rm of the cell */
   int n_off;
   int64_t delta[125]; /* linear offsets of the cells that can hold a conflicting fill sample */
-  int off[125][3];    /* the same as (di, dj, dk) */
   const char *stage;  /* for messages */
   int excluding;      /* the geology has exclusion zones or insoluble strata */
 } sampler_t;
@@ -388,7 +391,7 @@ static inline double dmin(double a, double b) {
 
 /* The part of cell (i, j, k) of a grid within [zlo, zhi] and the box, where
  * its darts fall; 0 when empty. */
-static int cell_box(const sampler_t *S, const double origin[3], double cell, const int64_t c[3],
+static inline __attribute__((always_inline)) int cell_box(const sampler_t *S, const double origin[3], double cell, const int64_t c[3],
                     double zlo, double zhi, double lo[3], double hi[3]) {
   for (int a = 0; a < 3; a++) {
     lo[a] = dmax(S->lo[a], origin[a] + c[a] * cell);
@@ -397,16 +400,6 @@ static int cell_box(const sampler_t *S, const double origin[3], double cell, con
   lo[2] = dmax(lo[2], zlo), hi[2] = dmin(hi[2], zhi);
   for (int a = 0; a < 3; a++)
     if (lo[a] > hi[a]) return 0;
-  return 1;
-}
-
-/* Uniform point in cell (i, j, k) of a grid, clipped to [zlo, zhi] and to the box. */
-static int dart_in_cell(const sampler_t *S, karst_rng_t *rng, const double origin[3], double cell,
-                        const int64_t c[3], double zlo, double zhi, double p[3]) {
-  double lo[3], hi[3];
-  if (!cell_box(S, origin, cell, c, zlo, zhi, lo, hi)) return 0;
-  for (int a = 0; a < 3; a++)
-    p[a] = karst_rng_uniform_range(rng, lo[a], hi[a]);
   return 1;
 }
 
@@ -572,15 +565,14 @@ cleanup:
  * appended in tile order at the end. */
 typedef struct tile {
   size_t first, n; /* its remaining cells: fill_cells[first .. first + n) */
-  double *xyz;     /* its samples */
-  int32_t ns, cap;
-  int failed;
+  int32_t ns;      /* its samples, in slots first + [0, ns) of the job's xyz */
 } tile_t;
 
 typedef struct fill_job {
   sampler_t *S;
   tile_t *tiles;
-  double **txyz;        /* tiles[t].xyz, in a compact array for the conflict lookups */
+  double *xyz; /* the samples: tile t's in slots tiles[t].first + [0, tiles[t].ns) (at most one
+                 per cell), so that a cell's index in the fill grid names the slot */
   int64_t *cells;       /* bordered cell ids of all tiles, grouped by tile */
   int64_t nt[3];        /* tiles per axis */
   const int64_t *group; /* the tiles to process now */
@@ -590,44 +582,47 @@ typedef struct fill_job {
   int interrupted;
 } fill_job_t;
 
-static const double *fill_sample(const fill_job_t *J, const int64_t c[3], int32_t e) {
-  int64_t t = c[0] / FILL_TILE + J->nt[0] * (c[1] / FILL_TILE + J->nt[1] * (c[2] / FILL_TILE));
-  return J->txyz[t] + 3 * (int64_t)e;
-}
-
 /* Conflict of a fill dart p in cell c (bordered id `id`): NULL and *feat = 0
  * when p is free; else the conflicting fill sample, or NULL and *feat = 1
  * for a feature sample. */
-static const double *fill_conflict(const fill_job_t *J, const double p[3], const int64_t c[3],
-                                   int64_t id, int *feat) {
+static const double *fill_conflict(const fill_job_t *J, const double p[3], int64_t id,
+                                   int *feat) {
   const sampler_t *S = J->S;
   double r2 = S->rc * S->rc;
   *feat = 0;
-  for (int o = 0; o < S->n_off; o++) {
-    int32_t e = S->fill[id + S->delta[o]];
-    if (e < 0) continue;
-    int64_t nc[3] = {c[0] + S->off[o][0], c[1] + S->off[o][1], c[2] + S->off[o][2]};
-    const double *q = fill_sample(J, nc, e);
-    double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
-    if (dx * dx + dy * dy + dz * dz < r2) return q;
+  const int32_t *restrict f = S->fill + id;
+  const int64_t *restrict d = S->delta;
+  /* In the offsets' order, four cells at a time: most are empty (-1), and four empty cells
+   * AND to a negative number. n_off = 116 is a multiple of 4. */
+  for (int o = 0; o < S->n_off; o += 4) {
+    int32_t e4[4] = {f[d[o]], f[d[o + 1]], f[d[o + 2]], f[d[o + 3]]};
+    if ((e4[0] & e4[1] & e4[2] & e4[3]) < 0) continue;
+    for (int i = 0; i < 4; i++) {
+      if (e4[i] < 0) continue;
+      const double *q = J->xyz + 3 * (int64_t)e4[i];
+      double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+      if (dx * dx + dy * dy + dz * dz < r2) return q;
+    }
   }
   *feat = S->near[id] && cgrid_conflict(&S->feat, p, S->rm) != NULL;
   return NULL;
 }
 
 /* Whether the ball of radius rc around q covers cell c entirely (every
- * corner strictly inside; the ball is convex): no later dart can succeed. */
+ * corner strictly inside; the ball is convex): no later dart can succeed.
+ * Only the farthest corner is tested: per axis the larger square of the two
+ * corner offsets, the same floating-point values as for every corner, and
+ * rounded sums are monotonic, so its squared distance is the largest of the
+ * eight as computed corner by corner. */
 static int cell_covered(const sampler_t *S, const int64_t c[3], const double q[3]) {
-  double r2 = S->rc * S->rc;
-  for (int m = 0; m < 8; m++) {
-    double d2 = 0;
-    for (int a = 0; a < 3; a++) {
-      double x = S->lo[a] + (double)(c[a] + ((m >> a) & 1)) * S->cc - q[a];
-      d2 += x * x;
-    }
-    if (!(d2 < r2)) return 0;
+  double d2 = 0;
+  for (int a = 0; a < 3; a++) {
+    double x0 = S->corner[a][c[a]] - q[a];
+    double x1 = S->corner[a][c[a] + 1] - q[a];
+    double s0 = x0 * x0, s1 = x1 * x1;
+    d2 += s0 > s1 ? s0 : s1;
   }
-  return 1;
+  return d2 < S->rc * S->rc;
 }
 
 static int cmp_off(const void *a, const void *b) {
@@ -651,9 +646,15 @@ static void fill_tile_pass(fill_job_t *J, int64_t t) {
   size_t w = 0;
   for (size_t q = 0; q < T->n; q++) {
     int64_t id = cells[q];
-    int64_t c[3] = {id % S->pd[0] - 2, id / S->pd[0] % S->pd[1] - 2, id / S->pd[0] / S->pd[1] - 2};
+    /* ids and dimensions are below 2^31 (MAX_GRID_CELLS): 32-bit divisions */
+    uint32_t u = (uint32_t)id, p0 = (uint32_t)S->pd[0], p1 = (uint32_t)S->pd[1], jk = u / p0;
+    int64_t c[3] = {(int64_t)(u - jk * p0) - 2, (int64_t)(jk % p1) - 2, (int64_t)(jk / p1) - 2};
     double p[3];
-    if (!dart_in_cell(S, &rng, S->lo, S->cc, c, -INFINITY, INFINITY, p)) continue;
+    if (S->clo[0][c[0]] > S->chi[0][c[0]] || S->clo[1][c[1]] > S->chi[1][c[1]] ||
+        S->clo[2][c[2]] > S->chi[2][c[2]])
+      continue; /* as for cell_box: an empty box takes no dart */
+    for (int a = 0; a < 3; a++)
+      p[a] = karst_rng_uniform_range(&rng, S->clo[a][c[a]], S->chi[a][c[a]]);
     if (!(p[2] < karst_i_surf_z(&S->geo->terrain, p[0], p[1]))) {
       cells[w++] = id;
       continue;
@@ -663,23 +664,15 @@ static void fill_tile_pass(fill_job_t *J, int64_t t) {
       continue;
     }
     int feat;
-    const double *e = fill_conflict(J, p, c, id, &feat);
+    const double *e = fill_conflict(J, p, id, &feat);
     if (e && cell_covered(S, c, e)) continue; /* never again */
     if (e || feat) {
       cells[w++] = id;
       continue;
     }
-    if (T->ns == T->cap) {
-      int32_t nc = T->cap ? 2 * T->cap : 16;
-      double *x = realloc(T->xyz, sizeof(double) * 3 * (size_t)nc);
-      if (!x) {
-        T->failed = 1;
-        return;
-      }
-      T->xyz = x, T->cap = nc, J->txyz[t] = x;
-    }
-    memcpy(T->xyz + 3 * T->ns, p, sizeof p);
-    S->fill[id] = T->ns++;
+    int32_t slot = (int32_t)T->first + T->ns++;
+    memcpy(J->xyz + 3 * (int64_t)slot, p, sizeof p);
+    S->fill[id] = slot;
   }
   T->n = w; /* keep the cells that may still take a sample, in the same order */
 }
@@ -710,10 +703,9 @@ static karst_error_t sample_fill(sampler_t *S) {
     J.nt[a] = (S->cd[a] + FILL_TILE - 1) / FILL_TILE;
   size_t ntiles = (size_t)(J.nt[0] * J.nt[1] * J.nt[2]);
   J.tiles = calloc(ntiles, sizeof(tile_t));
-  J.txyz = calloc(ntiles, sizeof(double *));
   group = malloc(sizeof(int64_t) * ntiles);
   gstart = malloc(sizeof(size_t) * 9);
-  if (!ktop || !J.tiles || !J.txyz || !group || !gstart) goto nomem;
+  if (!ktop || !J.tiles || !group || !gstart) goto nomem;
   double total = 0;
   for (int64_t j = 0; j < S->cd[1]; j++)
     for (int64_t i = 0; i < S->cd[0]; i++) {
@@ -738,7 +730,8 @@ static karst_error_t sample_fill(sampler_t *S) {
     goto cleanup;
   }
   J.cells = malloc(sizeof(int64_t) * ((size_t)total + 1));
-  if (!J.cells) goto nomem;
+  J.xyz = malloc(sizeof(double) * 3 * ((size_t)total + 1)); /* only the used slots are touched */
+  if (!J.cells || !J.xyz) goto nomem;
   /* Cell lists by tile; tiles grouped by colour (in tile order within one). */
   size_t nc = 0, ng = 0;
   for (int col = 0; col < 8; col++) {
@@ -774,9 +767,6 @@ static karst_error_t sample_fill(sampler_t *S) {
         goto cleanup;
       }
       double placed = (double)S->s->n;
-      for (size_t i = 0; i < J.n_group; i++) {
-        if (J.tiles[J.group[i]].failed) goto nomem;
-      }
       for (size_t t = 0; t < ntiles; t++)
         placed += J.tiles[t].ns;
       if (placed > (double)S->sc->sampling.max_samples) {
@@ -787,17 +777,15 @@ static karst_error_t sample_fill(sampler_t *S) {
   }
   for (size_t t = 0; t < ntiles; t++)
     for (int32_t e = 0; e < J.tiles[t].ns; e++)
-      if ((err = add_sample(S, J.tiles[t].xyz + 3 * e, KARST_SAMPLE_FILL)) != KARST_SUCCESS)
+      if ((err = add_sample(S, J.xyz + 3 * ((int64_t)J.tiles[t].first + e), KARST_SAMPLE_FILL)) !=
+          KARST_SUCCESS)
         goto cleanup;
   goto cleanup;
 nomem:
   err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
 cleanup:
-  if (J.tiles)
-    for (size_t t = 0; t < ntiles; t++)
-      free(J.tiles[t].xyz);
   free(J.tiles);
-  free(J.txyz);
+  free(J.xyz);
   free(J.cells);
   free(group);
   free(gstart);
@@ -1035,6 +1023,22 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
     goto cleanup;
   }
   memset(S.fill, 0xff, sizeof(int32_t) * nfill);
+  for (int a = 0; a < 3; a++) {
+    size_t m = (size_t)S.cd[a] + 1;
+    S.corner[a] = malloc(3 * m * sizeof(double));
+    if (!S.corner[a]) {
+      err = karst_set_error(ctx, KARST_ENOMEM, "no memory for a sampling grid of %.0f cells",
+                            ncells_fill);
+      goto cleanup;
+    }
+    S.clo[a] = S.corner[a] + m, S.chi[a] = S.corner[a] + 2 * m;
+    for (int64_t i = 0; i <= S.cd[a]; i++) /* the expressions of cell_box and cell_covered */
+      S.corner[a][i] = S.lo[a] + (double)i * S.cc;
+    for (int64_t i = 0; i < S.cd[a]; i++) {
+      S.clo[a][i] = dmax(S.lo[a], S.lo[a] + (double)i * S.cc);
+      S.chi[a][i] = dmin(S.hi[a], S.lo[a] + (double)(i + 1) * S.cc);
+    }
+  }
   /* Offsets (di, dj, dk) in [-2, 2]^3 whose cells come closer than r_c to
    * the centre cell: the gap along an axis is (|d| − 1)+ cells, so at most
    * two coordinates may be ±2. Nearest first: conflicts are found sooner. */
@@ -1047,9 +1051,12 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
         off[S.n_off][0] = i, off[S.n_off][1] = j, off[S.n_off][2] = k, S.n_off++;
       }
   qsort(off, (size_t)S.n_off, sizeof off[0], cmp_off);
+  if (S.n_off % 4 != 0) { /* fill_conflict reads the offsets four at a time */
+    err = karst_set_error(ctx, KARST_EINVAL, "sampling: %d neighbour offsets", S.n_off);
+    goto cleanup;
+  }
   for (int o = 0; o < S.n_off; o++) {
     S.delta[o] = off[o][0] + S.pd[0] * (off[o][1] + S.pd[1] * off[o][2]);
-    memcpy(S.off[o], off[o], sizeof off[o]);
   }
 
   S.stage = "key point";
@@ -1114,5 +1121,7 @@ cleanup:
   cgrid_destroy(&S.feat);
   free(S.fill);
   free(S.near);
+  for (int a = 0; a < 3; a++)
+    free(S.corner[a]);
   return err;
 }
