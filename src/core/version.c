@@ -68,8 +68,9 @@ int karst_versions(karst_component_t out[KARST_COMPONENTS_MAX]) {
   /* GDAL is loaded only by the GeoPackage export (src/export/gdal_api_internal.h): the version
    * karst was built against, which the soname it loads pins. */
   put(out, &n, "GDAL", GDAL_RELEASE_NAME);
-  PJ_INFO pj = proj_info();
-  snprintf(buf, sizeof buf, "%d.%d.%d", pj.major, pj.minor, pj.patch);
+  /* PROJ too is loaded on first use (src/crs/proj_api_internal.h): the version karst was built
+   * against, which the soname it loads pins. */
+  snprintf(buf, sizeof buf, "%d.%d.%d", PROJ_VERSION_MAJOR, PROJ_VERSION_MINOR, PROJ_VERSION_PATCH);
   put(out, &n, "PROJ", buf);
 #if KARST_HAVE_MPI && defined(OMPI_MAJOR_VERSION)
   snprintf(buf, sizeof buf, "Open MPI %d.%d.%d (MPI %d.%d)", OMPI_MAJOR_VERSION, OMPI_MINOR_VERSION,

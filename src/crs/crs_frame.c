@@ -5,12 +5,12 @@
  * (network access disabled, so a run never depends on what a grid server would send). */
 #include <ctype.h>
 #include <math.h>
-#include <proj.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
+#include "crs/proj_api_internal.h"
 #include "crs_internal.h"
 #include "karst/crs.h"
 
@@ -34,17 +34,17 @@ struct karst_crs {
 /* A PROJ context of our own per operation: no shared state between threads, no network, no log
  * on stderr (errors come back through proj_context_errno). */
 static PJ_CONTEXT *new_context(void) {
-  PJ_CONTEXT *p = proj_context_create();
+  PJ_CONTEXT *p = karst_i_proj.proj_context_create();
   if (p) {
-    proj_context_set_enable_network(p, 0);
-    proj_log_level(p, PJ_LOG_NONE);
+    karst_i_proj.proj_context_set_enable_network(p, 0);
+    karst_i_proj.proj_log_level(p, PJ_LOG_NONE);
   }
   return p;
 }
 
 static const char *proj_reason(PJ_CONTEXT *p) {
-  int e = proj_context_errno(p);
-  const char *s = e ? proj_context_errno_string(p, e) : NULL;
+  int e = karst_i_proj.proj_context_errno(p);
+  const char *s = e ? karst_i_proj.proj_context_errno_string(p, e) : NULL;
   return s ? s : "PROJ gave no reason";
 }
 
@@ -108,8 +108,9 @@ static void set_utm(karst_crs_t *c, int zone, int northp) {
 
 /* The horizontal part of @p crs (the first member of a compound CRS), or a clone of it. */
 static PJ *horizontal(PJ_CONTEXT *p, PJ *crs) {
-  if (proj_get_type(crs) == PJ_TYPE_COMPOUND_CRS) return proj_crs_get_sub_crs(p, crs, 0);
-  return proj_clone(p, crs);
+  if (karst_i_proj.proj_get_type(crs) == PJ_TYPE_COMPOUND_CRS)
+    return karst_i_proj.proj_crs_get_sub_crs(p, crs, 0);
+  return karst_i_proj.proj_clone(p, crs);
 }
 
 /**
@@ -187,34 +188,40 @@ karst_error_t karst_crs_create(karst_ctx_t *ctx, const char *text, karst_crs_t *
     } else {
       snprintf(c->def, sizeof c->def, "%s", c->text);
     }
+    karst_error_t lerr = karst_i_proj_load(ctx);
+    if (lerr != KARST_SUCCESS) {
+      free(c);
+      return lerr;
+    }
     PJ_CONTEXT *p = new_context();
     if (!p) {
       free(c);
       return karst_set_error(ctx, KARST_EEXTERNAL, "PROJ: cannot create a context");
     }
-    PJ *crs = proj_create(p, c->def);
+    PJ *crs = karst_i_proj.proj_create(p, c->def);
     karst_error_t err = KARST_SUCCESS;
-    if (!crs || !proj_is_crs(crs)) {
+    if (!crs || !karst_i_proj.proj_is_crs(crs)) {
       err = karst_set_error(ctx, KARST_EINVAL,
                             "coordinate system '%s' is not understood: %s (give a UTM zone such "
                             "as 'UTM 30N', an EPSG code such as 'EPSG:27700', or a PROJ string)",
                             c->text,
                             crs ? "it is not a coordinate reference system" : proj_reason(p));
     } else {
-      const char *auth = proj_get_id_auth_name(crs, 0), *cd = proj_get_id_code(crs, 0);
+      const char *auth = karst_i_proj.proj_get_id_auth_name(crs, 0),
+                 *cd = karst_i_proj.proj_get_id_code(crs, 0);
       if (auth && cd && !c->dx && !c->dy) snprintf(c->id, sizeof c->id, "%s:%s", auth, cd);
       PJ *h = horizontal(p, crs);
-      PJ_TYPE t = h ? proj_get_type(h) : PJ_TYPE_UNKNOWN;
+      PJ_TYPE t = h ? karst_i_proj.proj_get_type(h) : PJ_TYPE_UNKNOWN;
       c->geographic = t == PJ_TYPE_GEOGRAPHIC_2D_CRS || t == PJ_TYPE_GEOGRAPHIC_3D_CRS;
       if (!h || (!c->geographic && t != PJ_TYPE_PROJECTED_CRS))
         err = karst_set_error(ctx, KARST_EUNSUPPORTED,
                               "coordinate system '%s' is neither projected nor geographic "
                               "(a geocentric or engineering CRS cannot hold a scenario)",
                               c->text);
-      proj_destroy(h);
+      karst_i_proj.proj_destroy(h);
     }
-    proj_destroy(crs);
-    proj_context_destroy(p);
+    karst_i_proj.proj_destroy(crs);
+    karst_i_proj.proj_context_destroy(p);
     if (err) {
       free(c);
       return err;
@@ -243,13 +250,15 @@ int karst_crs_is_geographic(const karst_crs_t *c) {
 /* WKT2:2019 or the PROJ string of @p c, copied. */
 static karst_error_t export_as(karst_ctx_t *ctx, const karst_crs_t *c, int wkt, char **out) {
   *out = NULL;
+  karst_error_t lerr = karst_i_proj_load(ctx);
+  if (lerr != KARST_SUCCESS) return lerr;
   PJ_CONTEXT *p = new_context();
   if (!p) return karst_set_error(ctx, KARST_EEXTERNAL, "PROJ: cannot create a context");
-  PJ *crs = proj_create(p, c->def);
+  PJ *crs = karst_i_proj.proj_create(p, c->def);
   const char *s = NULL;
   if (crs)
-    s = wkt ? proj_as_wkt(p, crs, PJ_WKT2_2019, NULL)
-            : proj_as_proj_string(p, crs, PJ_PROJ_5, NULL);
+    s = wkt ? karst_i_proj.proj_as_wkt(p, crs, PJ_WKT2_2019, NULL)
+            : karst_i_proj.proj_as_proj_string(p, crs, PJ_PROJ_5, NULL);
   karst_error_t err = KARST_SUCCESS;
   if (!s)
     err = karst_set_error(ctx, KARST_EEXTERNAL,
@@ -257,8 +266,8 @@ static karst_error_t export_as(karst_ctx_t *ctx, const karst_crs_t *c, int wkt, 
                           wkt ? "WKT" : "a PROJ string", proj_reason(p));
   else if (!(*out = strdup(s)))
     err = karst_set_error(ctx, KARST_ENOMEM, "out of memory");
-  proj_destroy(crs);
-  proj_context_destroy(p);
+  karst_i_proj.proj_destroy(crs);
+  karst_i_proj.proj_context_destroy(p);
   return err;
 }
 
@@ -298,15 +307,15 @@ static karst_error_t geo_from_lonlat(karst_ctx_t *ctx, const karst_crs_t *c, dou
 /* A PROJ operation from the horizontal part of @p src to that of @p dst, axes in
  * easting/northing and longitude/latitude order. */
 static PJ *proj_operation(PJ_CONTEXT *p, const karst_crs_t *src, const karst_crs_t *dst) {
-  PJ *a = proj_create(p, src->def), *b = proj_create(p, dst->def);
+  PJ *a = karst_i_proj.proj_create(p, src->def), *b = karst_i_proj.proj_create(p, dst->def);
   PJ *ha = a ? horizontal(p, a) : NULL, *hb = b ? horizontal(p, b) : NULL;
-  PJ *op = ha && hb ? proj_create_crs_to_crs_from_pj(p, ha, hb, NULL, NULL) : NULL;
-  PJ *norm = op ? proj_normalize_for_visualization(p, op) : NULL;
-  proj_destroy(op);
-  proj_destroy(ha);
-  proj_destroy(hb);
-  proj_destroy(a);
-  proj_destroy(b);
+  PJ *op = ha && hb ? karst_i_proj.proj_create_crs_to_crs_from_pj(p, ha, hb, NULL, NULL) : NULL;
+  PJ *norm = op ? karst_i_proj.proj_normalize_for_visualization(p, op) : NULL;
+  karst_i_proj.proj_destroy(op);
+  karst_i_proj.proj_destroy(ha);
+  karst_i_proj.proj_destroy(hb);
+  karst_i_proj.proj_destroy(a);
+  karst_i_proj.proj_destroy(b);
   return norm;
 }
 
@@ -347,6 +356,8 @@ karst_error_t karst_crs_transform(karst_ctx_t *ctx, const karst_crs_t *src, cons
     }
     return err;
   }
+  karst_error_t lerr = karst_i_proj_load(ctx);
+  if (lerr != KARST_SUCCESS) return lerr;
   PJ_CONTEXT *p = new_context();
   if (!p) return karst_set_error(ctx, KARST_EEXTERNAL, "PROJ: cannot create a context");
   PJ *op = proj_operation(p, src, dst);
@@ -354,15 +365,15 @@ karst_error_t karst_crs_transform(karst_ctx_t *ctx, const karst_crs_t *src, cons
     err = karst_set_error(ctx, KARST_EEXTERNAL,
                           "PROJ finds no conversion from '%s' to '%s' with the data installed: %s",
                           src->text, dst->text, proj_reason(p));
-    proj_context_destroy(p);
+    karst_i_proj.proj_context_destroy(p);
     return err;
   }
   for (karst_int_t i = 0; i < n && !err; i++) {
     /* The height goes in too, as cs2cs passes it: a Helmert datum shift acts on geocentric
      * coordinates, so the horizontal result moves by millimetres per 100 m of height. */
-    PJ_COORD in = proj_coord(xyz[3 * i] + src->dx, xyz[3 * i + 1] + src->dy,
-                             isfinite(xyz[3 * i + 2]) ? xyz[3 * i + 2] : 0, HUGE_VAL);
-    PJ_COORD o = proj_trans(op, PJ_FWD, in);
+    PJ_COORD in = karst_i_proj.proj_coord(xyz[3 * i] + src->dx, xyz[3 * i + 1] + src->dy,
+                                          isfinite(xyz[3 * i + 2]) ? xyz[3 * i + 2] : 0, HUGE_VAL);
+    PJ_COORD o = karst_i_proj.proj_trans(op, PJ_FWD, in);
     if (!isfinite(o.xy.x) || !isfinite(o.xy.y) || o.xy.x == HUGE_VAL)
       err = karst_set_error(ctx, KARST_ERANGE,
                             "point (%.3f, %.3f) of '%s' cannot be converted to '%s': %s",
@@ -370,8 +381,8 @@ karst_error_t karst_crs_transform(karst_ctx_t *ctx, const karst_crs_t *src, cons
     else
       xyz[3 * i] = o.xy.x - dst->dx, xyz[3 * i + 1] = o.xy.y - dst->dy;
   }
-  proj_destroy(op);
-  proj_context_destroy(p);
+  karst_i_proj.proj_destroy(op);
+  karst_i_proj.proj_context_destroy(p);
   return err;
 }
 
@@ -441,6 +452,8 @@ karst_error_t karst_crs_describe(karst_ctx_t *ctx, const karst_crs_t *src, const
     *accuracy = 0;
     return KARST_SUCCESS;
   }
+  karst_error_t lerr = karst_i_proj_load(ctx);
+  if (lerr != KARST_SUCCESS) return lerr;
   PJ_CONTEXT *p = new_context();
   if (!p) return karst_set_error(ctx, KARST_EEXTERNAL, "PROJ: cannot create a context");
   PJ *op = proj_operation(p, src, dst);
@@ -449,15 +462,17 @@ karst_error_t karst_crs_describe(karst_ctx_t *ctx, const karst_crs_t *src, const
     err = karst_set_error(ctx, KARST_EEXTERNAL, "PROJ finds no conversion from '%s' to '%s': %s",
                           src->text, dst->text, proj_reason(p));
   } else {
-    PJ_COORD o = proj_trans(op, PJ_FWD, proj_coord(x + src->dx, y + src->dy, 0, HUGE_VAL));
-    PJ *used = o.xy.x != HUGE_VAL ? proj_trans_get_last_used_operation(op) : NULL;
-    const char *name = proj_get_name(used ? used : op);
-    snprintf(what, size, "PROJ %s: %s", proj_info().release, name ? name : "unnamed operation");
-    *accuracy = proj_coordoperation_get_accuracy(p, used ? used : op);
-    proj_destroy(used);
+    PJ_COORD o = karst_i_proj.proj_trans(
+        op, PJ_FWD, karst_i_proj.proj_coord(x + src->dx, y + src->dy, 0, HUGE_VAL));
+    PJ *used = o.xy.x != HUGE_VAL ? karst_i_proj.proj_trans_get_last_used_operation(op) : NULL;
+    const char *name = karst_i_proj.proj_get_name(used ? used : op);
+    snprintf(what, size, "PROJ %s: %s", karst_i_proj.proj_info().release,
+             name ? name : "unnamed operation");
+    *accuracy = karst_i_proj.proj_coordoperation_get_accuracy(p, used ? used : op);
+    karst_i_proj.proj_destroy(used);
   }
-  proj_destroy(op);
-  proj_context_destroy(p);
+  karst_i_proj.proj_destroy(op);
+  karst_i_proj.proj_context_destroy(p);
   return err;
 }
 

@@ -391,8 +391,10 @@ static inline double dmin(double a, double b) {
 
 /* The part of cell (i, j, k) of a grid within [zlo, zhi] and the box, where
  * its darts fall; 0 when empty. */
-static inline __attribute__((always_inline)) int cell_box(const sampler_t *S, const double origin[3], double cell, const int64_t c[3],
-                    double zlo, double zhi, double lo[3], double hi[3]) {
+static inline __attribute__((always_inline)) int cell_box(const sampler_t *S,
+                                                          const double origin[3], double cell,
+                                                          const int64_t c[3], double zlo,
+                                                          double zhi, double lo[3], double hi[3]) {
   for (int a = 0; a < 3; a++) {
     lo[a] = dmax(S->lo[a], origin[a] + c[a] * cell);
     hi[a] = dmin(S->hi[a], origin[a] + (c[a] + 1) * cell);
@@ -571,10 +573,10 @@ typedef struct tile {
 typedef struct fill_job {
   sampler_t *S;
   tile_t *tiles;
-  double *xyz; /* the samples: tile t's in slots tiles[t].first + [0, tiles[t].ns) (at most one
-                 per cell), so that a cell's index in the fill grid names the slot */
-  int64_t *cells;       /* bordered cell ids of all tiles, grouped by tile */
-  int64_t nt[3];        /* tiles per axis */
+  double *xyz;    /* the samples: tile t's in slots tiles[t].first + [0, tiles[t].ns) (at most one
+                    per cell), so that a cell's index in the fill grid names the slot */
+  int64_t *cells; /* bordered cell ids of all tiles, grouped by tile */
+  int64_t nt[3];  /* tiles per axis */
   const int64_t *group; /* the tiles to process now */
   size_t n_group;
   uint64_t seed;
@@ -585,8 +587,7 @@ typedef struct fill_job {
 /* Conflict of a fill dart p in cell c (bordered id `id`): NULL and *feat = 0
  * when p is free; else the conflicting fill sample, or NULL and *feat = 1
  * for a feature sample. */
-static const double *fill_conflict(const fill_job_t *J, const double p[3], int64_t id,
-                                   int *feat) {
+static const double *fill_conflict(const fill_job_t *J, const double p[3], int64_t id, int *feat) {
   const sampler_t *S = J->S;
   double r2 = S->rc * S->rc;
   *feat = 0;
