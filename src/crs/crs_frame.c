@@ -31,15 +31,18 @@ struct karst_crs {
   int geographic;                    /* coordinates are longitude, latitude in degrees */
 };
 
-/* A PROJ context of our own per operation: no shared state between threads, no network, no log
- * on stderr (errors come back through proj_context_errno). */
-static PJ_CONTEXT *new_context(void) {
+/* A PROJ context of our own per operation (PROJ loaded on first use): no shared state between
+ * threads, no network, no log on stderr (errors come back through proj_context_errno). */
+static karst_error_t new_context(karst_ctx_t *ctx, PJ_CONTEXT **out) {
+  *out = NULL;
+  karst_error_t err = karst_i_proj_load(ctx);
+  if (err != KARST_SUCCESS) return err;
   PJ_CONTEXT *p = karst_i_proj.proj_context_create();
-  if (p) {
-    karst_i_proj.proj_context_set_enable_network(p, 0);
-    karst_i_proj.proj_log_level(p, PJ_LOG_NONE);
-  }
-  return p;
+  if (!p) return karst_set_error(ctx, KARST_EEXTERNAL, "PROJ: cannot create a context");
+  karst_i_proj.proj_context_set_enable_network(p, 0);
+  karst_i_proj.proj_log_level(p, PJ_LOG_NONE);
+  *out = p;
+  return KARST_SUCCESS;
 }
 
 static const char *proj_reason(PJ_CONTEXT *p) {
@@ -188,15 +191,11 @@ karst_error_t karst_crs_create(karst_ctx_t *ctx, const char *text, karst_crs_t *
     } else {
       snprintf(c->def, sizeof c->def, "%s", c->text);
     }
-    karst_error_t lerr = karst_i_proj_load(ctx);
-    if (lerr != KARST_SUCCESS) {
+    PJ_CONTEXT *p;
+    karst_error_t perr = new_context(ctx, &p);
+    if (perr != KARST_SUCCESS) {
       free(c);
-      return lerr;
-    }
-    PJ_CONTEXT *p = new_context();
-    if (!p) {
-      free(c);
-      return karst_set_error(ctx, KARST_EEXTERNAL, "PROJ: cannot create a context");
+      return perr;
     }
     PJ *crs = karst_i_proj.proj_create(p, c->def);
     karst_error_t err = KARST_SUCCESS;
@@ -250,10 +249,9 @@ int karst_crs_is_geographic(const karst_crs_t *c) {
 /* WKT2:2019 or the PROJ string of @p c, copied. */
 static karst_error_t export_as(karst_ctx_t *ctx, const karst_crs_t *c, int wkt, char **out) {
   *out = NULL;
-  karst_error_t lerr = karst_i_proj_load(ctx);
-  if (lerr != KARST_SUCCESS) return lerr;
-  PJ_CONTEXT *p = new_context();
-  if (!p) return karst_set_error(ctx, KARST_EEXTERNAL, "PROJ: cannot create a context");
+  PJ_CONTEXT *p;
+  karst_error_t perr = new_context(ctx, &p);
+  if (perr != KARST_SUCCESS) return perr;
   PJ *crs = karst_i_proj.proj_create(p, c->def);
   const char *s = NULL;
   if (crs)
@@ -356,10 +354,9 @@ karst_error_t karst_crs_transform(karst_ctx_t *ctx, const karst_crs_t *src, cons
     }
     return err;
   }
-  karst_error_t lerr = karst_i_proj_load(ctx);
-  if (lerr != KARST_SUCCESS) return lerr;
-  PJ_CONTEXT *p = new_context();
-  if (!p) return karst_set_error(ctx, KARST_EEXTERNAL, "PROJ: cannot create a context");
+  PJ_CONTEXT *p;
+  karst_error_t perr = new_context(ctx, &p);
+  if (perr != KARST_SUCCESS) return perr;
   PJ *op = proj_operation(p, src, dst);
   if (!op) {
     err = karst_set_error(ctx, KARST_EEXTERNAL,
@@ -452,10 +449,9 @@ karst_error_t karst_crs_describe(karst_ctx_t *ctx, const karst_crs_t *src, const
     *accuracy = 0;
     return KARST_SUCCESS;
   }
-  karst_error_t lerr = karst_i_proj_load(ctx);
-  if (lerr != KARST_SUCCESS) return lerr;
-  PJ_CONTEXT *p = new_context();
-  if (!p) return karst_set_error(ctx, KARST_EEXTERNAL, "PROJ: cannot create a context");
+  PJ_CONTEXT *p;
+  karst_error_t perr = new_context(ctx, &p);
+  if (perr != KARST_SUCCESS) return perr;
   PJ *op = proj_operation(p, src, dst);
   karst_error_t err = KARST_SUCCESS;
   if (!op) {

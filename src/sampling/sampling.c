@@ -18,6 +18,7 @@
  * fill samples keep sampling.fill_radius r_c from one another and
  * min(r_f, r_c) from feature samples, and live in a dense grid over the box.
  */
+#include <assert.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -31,6 +32,10 @@
 /* Largest background grid (cells) that may be allocated: 2^31 (8 GiB of
  * indices) is far beyond what max_samples allows; it only guards overflow. */
 #define MAX_GRID_CELLS ((double)INT32_MAX)
+
+/* Cells of the 5 x 5 x 5 block around a fill cell that come closer than the fill radius to it:
+ * all but the centre and the 8 corners (see karst_sampling_run). */
+#define FILL_OFFSETS 116
 
 /* ------------------------------------------------------------------------ */
 /* Column grid of feature samples                                            */
@@ -156,12 +161,13 @@ typedef struct sampler {
    * the values cell_box would compute, read from a table by the fill's darts */
   double *corner[3], *clo[3], *chi[3];
   int64_t cd[3], pd[3]; /* cells per axis, without and with the border */
-  int32_t *fill;        /* per cell: -1 empty, else the sample's index in its tile's list */
+  int32_t *fill;        /* per cell: -1 empty, else its sample's slot in the fill's array */
   unsigned char *near;  /* 1 if a feature sample lies within rm of the cell */
   int n_off;
-  int64_t delta[125]; /* linear offsets of the cells that can hold a conflicting fill sample */
-  const char *stage;  /* for messages */
-  int excluding;      /* the geology has exclusion zones or insoluble strata */
+  int64_t
+      delta[FILL_OFFSETS]; /* linear offsets of the cells that can hold a conflicting fill sample */
+  const char *stage;       /* for messages */
+  int excluding;           /* the geology has exclusion zones or insoluble strata */
 } sampler_t;
 
 /* Linear index of fill cell (i, j, k) in the bordered grid. */
@@ -594,8 +600,9 @@ static const double *fill_conflict(const fill_job_t *J, const double p[3], int64
   const int32_t *restrict f = S->fill + id;
   const int64_t *restrict d = S->delta;
   /* In the offsets' order, four cells at a time: most are empty (-1), and four empty cells
-   * AND to a negative number. n_off = 116 is a multiple of 4. */
-  for (int o = 0; o < S->n_off; o += 4) {
+   * AND to a negative number. */
+  _Static_assert(FILL_OFFSETS % 4 == 0, "fill_conflict reads the offsets four at a time");
+  for (int o = 0; o < FILL_OFFSETS; o += 4) {
     int32_t e4[4] = {f[d[o]], f[d[o + 1]], f[d[o + 2]], f[d[o + 3]]};
     if ((e4[0] & e4[1] & e4[2] & e4[3]) < 0) continue;
     for (int i = 0; i < 4; i++) {
@@ -1035,10 +1042,8 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
     S.clo[a] = S.corner[a] + m, S.chi[a] = S.corner[a] + 2 * m;
     for (int64_t i = 0; i <= S.cd[a]; i++) /* the expressions of cell_box and cell_covered */
       S.corner[a][i] = S.lo[a] + (double)i * S.cc;
-    for (int64_t i = 0; i < S.cd[a]; i++) {
-      S.clo[a][i] = dmax(S.lo[a], S.lo[a] + (double)i * S.cc);
-      S.chi[a][i] = dmin(S.hi[a], S.lo[a] + (double)(i + 1) * S.cc);
-    }
+    for (int64_t i = 0; i < S.cd[a]; i++)
+      S.clo[a][i] = dmax(S.lo[a], S.corner[a][i]), S.chi[a][i] = dmin(S.hi[a], S.corner[a][i + 1]);
   }
   /* Offsets (di, dj, dk) in [-2, 2]^3 whose cells come closer than r_c to
    * the centre cell: the gap along an axis is (|d| − 1)+ cells, so at most
@@ -1051,11 +1056,8 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
         if (gap == 3 || (i == 0 && j == 0 && k == 0)) continue;
         off[S.n_off][0] = i, off[S.n_off][1] = j, off[S.n_off][2] = k, S.n_off++;
       }
+  assert(S.n_off == FILL_OFFSETS);
   qsort(off, (size_t)S.n_off, sizeof off[0], cmp_off);
-  if (S.n_off % 4 != 0) { /* fill_conflict reads the offsets four at a time */
-    err = karst_set_error(ctx, KARST_EINVAL, "sampling: %d neighbour offsets", S.n_off);
-    goto cleanup;
-  }
   for (int o = 0; o < S.n_off; o++) {
     S.delta[o] = off[o][0] + S.pd[0] * (off[o][1] + S.pd[1] * off[o][2]);
   }
