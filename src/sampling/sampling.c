@@ -36,6 +36,10 @@
 /* Cells of the 5 x 5 x 5 block around a fill cell that come closer than the fill radius to it:
  * all but the centre and the 8 corners (see karst_sampling_run). */
 #define FILL_OFFSETS 116
+/* The first offsets, nearest first, that include every cell whose sample can cover the cell
+ * (cell_covered): the 26 at (|di|, |dj|, |dk|) <= 1, rounded up to whole groups of four (see
+ * fill_conflict). */
+#define FILL_COVER_OFFSETS 28
 
 /* ------------------------------------------------------------------------ */
 /* Column grid of feature samples                                            */
@@ -141,6 +145,56 @@ static const double *cgrid_conflict(const cgrid_t *g, const double p[3], double 
   return NULL;
 }
 
+/* The feature samples sorted by column (a CSR snapshot of the grid), for the fill: the feature
+ * samples are all placed before the fill starts, and the fill's darts only ask whether one
+ * lies within r, so the columns of one grid row within reach are one contiguous run. */
+typedef struct ccsr {
+  int32_t *start; /* per column + 1: column c holds entries [start[c], start[c + 1]) */
+  double *xyz;
+} ccsr_t;
+
+static int ccsr_build(ccsr_t *c, const cgrid_t *g) {
+  size_t cols = (size_t)(g->dims[0] * g->dims[1]), n = 0;
+  c->start = malloc(sizeof(int32_t) * (cols + 1));
+  if (!c->start) return 0;
+  for (size_t col = 0; col < cols; col++) {
+    c->start[col] = (int32_t)n;
+    for (int32_t e = g->head[col]; e >= 0; e = g->next[e])
+      n++;
+  }
+  c->start[cols] = (int32_t)n;
+  c->xyz = malloc(sizeof(double) * 3 * (n + 1));
+  if (!c->xyz) return 0;
+  for (size_t col = 0, w = 0; col < cols; col++)
+    for (int32_t e = g->head[col]; e >= 0; e = g->next[e], w++)
+      memcpy(c->xyz + 3 * w, g->xyz + 3 * e, 3 * sizeof(double));
+  return 1;
+}
+
+static void ccsr_destroy(ccsr_t *c) {
+  free(c->start), free(c->xyz);
+  memset(c, 0, sizeof *c);
+}
+
+/* Whether an entry of g lies closer than r to p: cgrid_conflict's columns and distance test, on
+ * the snapshot c of g. */
+static int ccsr_conflict(const ccsr_t *c, const cgrid_t *g, const double p[3], double r) {
+  int64_t i0 = cgrid_coord(g, p[0] - r, 0), i1 = cgrid_coord(g, p[0] + r, 0);
+  int64_t j0 = cgrid_coord(g, p[1] - r, 1), j1 = cgrid_coord(g, p[1] + r, 1);
+  double r2 = r * r;
+  for (int64_t j = j0; j <= j1; j++) {
+    const double *q = c->xyz + 3 * (int64_t)c->start[i0 + g->dims[0] * j];
+    const double *end = c->xyz + 3 * (int64_t)c->start[i1 + 1 + g->dims[0] * j];
+    for (; q < end; q += 3) {
+      double dz = q[2] - p[2];
+      if (dz * dz >= r2) continue;
+      double dx = q[0] - p[0], dy = q[1] - p[1];
+      if (dx * dx + dy * dy + dz * dz < r2) return 1;
+    }
+  }
+  return 0;
+}
+
 /* ------------------------------------------------------------------------ */
 /* The sampler                                                               */
 /* ------------------------------------------------------------------------ */
@@ -153,6 +207,7 @@ typedef struct sampler {
   double rf, rc, rm; /* feature radius, fill radius, min of both */
   double lo[3], hi[3];
   cgrid_t feat;
+  ccsr_t feat_cols; /* feat by column, for the fill (sample_fill) */
   /* dense fill grid with a border of 2 empty cells on every side, so that
    * neighbours are found by adding a precomputed linear offset */
   double cc;
@@ -590,19 +645,13 @@ typedef struct fill_job {
   int interrupted;
 } fill_job_t;
 
-/* Conflict of a fill dart p in cell c (bordered id `id`): NULL and *feat = 0
- * when p is free; else the conflicting fill sample, or NULL and *feat = 1
- * for a feature sample. */
-static const double *fill_conflict(const fill_job_t *J, const double p[3], int64_t id, int *feat) {
-  const sampler_t *S = J->S;
-  double r2 = S->rc * S->rc;
-  *feat = 0;
-  const int32_t *restrict f = S->fill + id;
-  const int64_t *restrict d = S->delta;
-  /* In the offsets' order, four cells at a time: most are empty (-1), and four empty cells
-   * AND to a negative number. */
-  _Static_assert(FILL_OFFSETS % 4 == 0, "fill_conflict reads the offsets four at a time");
-  for (int o = 0; o < FILL_OFFSETS; o += 4) {
+/* The fill sample in cells d[o0 .. o1) around f (in the offsets' order) first found closer
+ * than sqrt(r2) to p, or NULL. Four cells at a time: most are empty (-1), and four empty cells
+ * AND to a negative number. */
+static inline const double *fill_first(const fill_job_t *J, const int32_t *restrict f,
+                                       const int64_t *restrict d, int o0, int o1, const double p[3],
+                                       double r2) {
+  for (int o = o0; o < o1; o += 4) {
     int32_t e4[4] = {f[d[o]], f[d[o + 1]], f[d[o + 2]], f[d[o + 3]]};
     if ((e4[0] & e4[1] & e4[2] & e4[3]) < 0) continue;
     for (int i = 0; i < 4; i++) {
@@ -612,8 +661,37 @@ static const double *fill_conflict(const fill_job_t *J, const double p[3], int64
       if (dx * dx + dy * dy + dz * dz < r2) return q;
     }
   }
-  *feat = S->near[id] && cgrid_conflict(&S->feat, p, S->rm) != NULL;
   return NULL;
+}
+
+/* Conflict of a fill dart p in cell c (bordered id `id`): NULL and *feat = 0 when p is free;
+ * else a conflicting fill sample, or NULL and *feat = 1 for a feature sample. The conflicting
+ * fill sample returned decides whether the cell leaves the passes (cell_covered), so among the
+ * cells that can hold a sample covering c it is the first in the offsets' order; beyond them any
+ * conflict only keeps the cell, which is what a feature conflict does too, so the feature test,
+ * the likelier to fail near a feature layer, comes first there.
+ *
+ * Why the first FILL_COVER_OFFSETS cells are the only ones that matter: a cell is covered by q
+ * when its farthest corner is closer than rc = √3 cc to q. Along an axis where q's cell is d
+ * cells away, the farthest corner is at least (|d| + 1) cc − cc = |d| cc away for |d| >= 1, and
+ * at least cc / 2 for d = 0; at a cell with some |d| = 2 that is >= 2 cc along that axis alone,
+ * (2 cc)^2 = 4 cc^2 > 3 cc^2 = rc^2, far beyond any rounding. So only the 26 cells with every
+ * |d| <= 1 can cover c, and the offsets are sorted by d^2: they are the first 26. */
+static const double *fill_conflict(const fill_job_t *J, const double p[3], int64_t id, int *feat) {
+  const sampler_t *S = J->S;
+  double r2 = S->rc * S->rc;
+  *feat = 0;
+  const int32_t *restrict f = S->fill + id;
+  const int64_t *restrict d = S->delta;
+  _Static_assert(FILL_OFFSETS % 4 == 0 && FILL_COVER_OFFSETS % 4 == 0,
+                 "fill_conflict reads the offsets four at a time");
+  const double *q = fill_first(J, f, d, 0, FILL_COVER_OFFSETS, p, r2);
+  if (q) return q;
+  if (S->near[id] && ccsr_conflict(&S->feat_cols, &S->feat, p, S->rm)) {
+    *feat = 1;
+    return NULL;
+  }
+  return fill_first(J, f, d, FILL_COVER_OFFSETS, FILL_OFFSETS, p, r2);
 }
 
 /* Whether the ball of radius rc around q covers cell c entirely (every
@@ -737,6 +815,7 @@ static karst_error_t sample_fill(sampler_t *S) {
                           (long long)S->sc->sampling.max_samples);
     goto cleanup;
   }
+  if (!ccsr_build(&S->feat_cols, &S->feat)) goto nomem;
   J.cells = malloc(sizeof(int64_t) * ((size_t)total + 1));
   J.xyz = malloc(sizeof(double) * 3 * ((size_t)total + 1)); /* only the used slots are touched */
   if (!J.cells || !J.xyz) goto nomem;
@@ -798,6 +877,7 @@ cleanup:
   free(group);
   free(gstart);
   free(ktop);
+  ccsr_destroy(&S->feat_cols);
   return err;
 }
 
@@ -1058,6 +1138,9 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
       }
   assert(S.n_off == FILL_OFFSETS);
   qsort(off, (size_t)S.n_off, sizeof off[0], cmp_off);
+  for (int o = 0; o < 26; o++) /* the cells that can cover the centre come first (fill_conflict) */
+    assert(abs(off[o][0]) <= 1 && abs(off[o][1]) <= 1 && abs(off[o][2]) <= 1);
+  _Static_assert(FILL_COVER_OFFSETS >= 26, "the 26 cells next to a fill cell can cover it");
   for (int o = 0; o < S.n_off; o++) {
     S.delta[o] = off[o][0] + S.pd[0] * (off[o][1] + S.pd[1] * off[o][2]);
   }
