@@ -420,6 +420,13 @@ static int pure_type(const double *w) {
   return t;
 }
 
+/* Whether edge g, with areas @p area and type weights @p wa, @p wb at its ends, is a plain
+ * sweep: the same area at both ends and its own type only. */
+static int plain_edge(const edge_geom_t *g, const double area[2], const double *wa,
+                      const double *wb) {
+  return area[0] == area[1] && pure_type(wa) == g->type && pure_type(wb) == g->type;
+}
+
 /* Inscribed radius (m) at the end @p end (0: a, 1: b) of the primitive made
  * for an edge: r times the section's inscribed radius for a plain sweep, the
  * end's scale times the mixture's distance from the axis for a morph. */
@@ -699,6 +706,27 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
       }
     }
   }
+  /* The morphing sweeps' unit mixtures, integrated on ctx->nthreads threads ahead of the edges
+   * (most of the tree's building time): their sections, and the plain sweeps', are added to the
+   * tree in the order of the loop below, so that every section keeps its index. */
+  {
+    karst_int_t first = sdf->n_mix_areas;
+    for (karst_int_t e = 0; e < E; e++) {
+      const edge_geom_t *g = &eg[e];
+      if (!g->ok || g->type == KARST_TUNNEL_CHAMBER) continue;
+      const double *wa = endw[2 * e], *wb = endw[2 * e + 1];
+      int idx;
+      if (plain_edge(g, enda + 2 * e, wa, wb)) {
+        if ((err = karst_i_sdf_add_section(ctx, sdf, &unit[g->type], &idx))) goto cleanup;
+      } else {
+        karst_section_mix_t ma, mb;
+        make_mix(unit, wa, &ma);
+        make_mix(unit, wb, &mb);
+        if ((err = karst_i_morph_plan(ctx, sdf, &ma, &mb))) goto cleanup;
+      }
+    }
+    karst_i_morph_integrate(sdf, first, ctx && ctx->nthreads > 1 ? ctx->nthreads : 1);
+  }
   /* Edges: plain sweeps, or sweeps morphing between their end sections. */
   for (karst_int_t e = 0; e < E; e++) {
     const edge_geom_t *g = &eg[e];
@@ -726,9 +754,7 @@ karst_error_t karst_implicit_build(karst_ctx_t *ctx, const karst_network_t *net,
       }
       pa = qa, pb = qb;
       const double *wa = endw[2 * e], *wb = endw[2 * e + 1];
-      int same =
-          enda[2 * e] == enda[2 * e + 1] && pure_type(wa) == g->type && pure_type(wb) == g->type;
-      if (same) {
+      if (plain_edge(g, enda + 2 * e, wa, wb)) {
         double r = sqrt(enda[2 * e] / green[g->type]);
         if ((err =
                  karst_sdf_sweep(ctx, sdf, pa, pb, &unit[g->type], r, NULL, g->end, g->type, &id)))

@@ -297,6 +297,15 @@ karst_error_t karst_i_revolve_mix_offset(karst_ctx_t *ctx, karst_sdf_t *t, const
                                          const double up[3], const karst_section_mix_t *m,
                                          double area, const double n[2][3], double offset,
                                          int label, karst_int_t *node);
+/* Planning of the morphing sweeps' areas, so that they are integrated on several threads
+ * (morph.c): karst_i_morph_plan adds the sections of a morphing sweep from @p ma to @p mb to the
+ * tree exactly as karst_sdf_sweep_morph will, and a cache entry, its area not yet known, for each
+ * unit mixture it will integrate that is not cached; karst_i_morph_integrate then integrates the
+ * entries from @p first on, on @p nthreads threads (each entry alone: the areas do not depend on
+ * the thread count). karst_sdf_sweep_morph then finds them cached. */
+karst_error_t karst_i_morph_plan(karst_ctx_t *ctx, karst_sdf_t *t, const karst_section_mix_t *ma,
+                                 const karst_section_mix_t *mb);
+void karst_i_morph_integrate(karst_sdf_t *t, karst_int_t first, int nthreads);
 /* In-plane distance (m) of a morphing sweep at axial position l and section
  * coordinates (x, y) (morph.c). */
 double karst_i_morph_sweep_w(const karst_sdf_t *t, const karst_i_morph_t *m, double l, double x,

@@ -33,6 +33,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/parallel_internal.h"
 #include "implicit/implicit_internal.h"
 
 /* Largest |s'| of the smoothstep 3x² - 2x³ along the axis, per unit of l/L. */
@@ -164,13 +165,10 @@ double karst_i_morph_sweep_w(const karst_sdf_t *t, const karst_i_morph_t *m, dou
   return rho * karst_i_morph_mix_w(t, m, w, q);
 }
 
-/* The area of the unit mixture of tree sections @p sec with weights @p w
- * (summing to 1), from the tree's cache or integrated and cached. */
-static karst_error_t cached_area(karst_ctx_t *ctx, karst_sdf_t *t, int n, const int *sec,
-                                 const double *w, double *out) {
-  /* canonical order: by section index, zero weights dropped */
-  int cs[KARST_SECTION_MIX_MAX], m = 0;
-  double cw[KARST_SECTION_MIX_MAX];
+/* The canonical form of the unit mixture of tree sections @p sec with weights @p w: by section
+ * index, zero weights dropped. Returns the count. */
+static int canonical_mix(int n, const int *sec, const double *w, int *cs, double *cw) {
+  int m = 0;
   for (int k = 0; k < n; k++) {
     if (w[k] == 0) continue;
     int at = m++;
@@ -180,28 +178,25 @@ static karst_error_t cached_area(karst_ctx_t *ctx, karst_sdf_t *t, int n, const 
     }
     cs[at] = sec[k], cw[at] = w[k];
   }
-  if (m == 1) { /* one section: Green's theorem, exact and cheap */
-    *out = karst_section_area(&t->sections[cs[0]]);
-    return KARST_SUCCESS;
-  }
+  return m;
+}
+
+/* The tree's cache entry of a canonical mixture, or NULL. */
+static karst_i_mix_area_t *find_mix(const karst_sdf_t *t, int m, const int *cs, const double *cw) {
   for (karst_int_t i = 0; i < t->n_mix_areas; i++) {
-    const karst_i_mix_area_t *c = &t->mix_areas[i];
+    karst_i_mix_area_t *c = &t->mix_areas[i];
     if (c->n != m) continue;
     int same = 1;
     for (int k = 0; k < m && same; k++)
       same = c->sec[k] == cs[k] && c->w[k] == cw[k];
-    if (same) {
-      *out = c->area;
-      return KARST_SUCCESS;
-    }
+    if (same) return c;
   }
-  const karst_section_t *s[KARST_SECTION_MIX_MAX];
-  for (int k = 0; k < m; k++)
-    s[k] = &t->sections[cs[k]];
-  double a = mix_area(s, cw, m);
-  if (!(a > 0))
-    return karst_set_error(ctx, isnan(a) ? KARST_ENOMEM : KARST_EINVAL,
-                           "section mixture: enclosed area %g, must be > 0", a);
+  return NULL;
+}
+
+/* A new cache entry for a canonical mixture, its area not yet known (NAN). */
+static karst_error_t add_mix(karst_ctx_t *ctx, karst_sdf_t *t, int m, const int *cs,
+                             const double *cw, karst_i_mix_area_t **out) {
   if (karst_i_grow((void **)&t->mix_areas, &t->cap_mix_areas, t->n_mix_areas + 1,
                    sizeof *t->mix_areas))
     return karst_set_error(ctx, KARST_ENOMEM, "section mixture: out of memory");
@@ -210,7 +205,41 @@ static karst_error_t cached_area(karst_ctx_t *ctx, karst_sdf_t *t, int n, const 
   c->n = m;
   memcpy(c->sec, cs, (size_t)m * sizeof *cs);
   memcpy(c->w, cw, (size_t)m * sizeof *cw);
-  c->area = a;
+  c->area = NAN;
+  *out = c;
+  return KARST_SUCCESS;
+}
+
+/* Integrate the area of a cache entry. */
+static void integrate_mix(const karst_sdf_t *t, karst_i_mix_area_t *c) {
+  const karst_section_t *s[KARST_SECTION_MIX_MAX];
+  for (int k = 0; k < c->n; k++)
+    s[k] = &t->sections[c->sec[k]];
+  c->area = mix_area(s, c->w, c->n);
+}
+
+/* The area of the unit mixture of tree sections @p sec with weights @p w
+ * (summing to 1), from the tree's cache or integrated and cached. */
+static karst_error_t cached_area(karst_ctx_t *ctx, karst_sdf_t *t, int n, const int *sec,
+                                 const double *w, double *out) {
+  int cs[KARST_SECTION_MIX_MAX];
+  double cw[KARST_SECTION_MIX_MAX];
+  int m = canonical_mix(n, sec, w, cs, cw);
+  if (m == 1) { /* one section: Green's theorem, exact and cheap */
+    *out = karst_section_area(&t->sections[cs[0]]);
+    return KARST_SUCCESS;
+  }
+  karst_i_mix_area_t *c = find_mix(t, m, cs, cw);
+  if (!c) {
+    karst_error_t err = add_mix(ctx, t, m, cs, cw, &c);
+    if (err) return err;
+    integrate_mix(t, c);
+  }
+  /* An entry integrated ahead of time (karst_i_morph_plan) is checked here too, when used. */
+  double a = c->area;
+  if (!(a > 0))
+    return karst_set_error(ctx, isnan(a) ? KARST_ENOMEM : KARST_EINVAL,
+                           "section mixture: enclosed area %g, must be > 0", a);
   *out = a;
   return KARST_SUCCESS;
 }
@@ -278,6 +307,60 @@ static int hull_points(const karst_sdf_t *t, const karst_i_morph_t *m, double (*
   return ncp;
 }
 
+/* The sections of a morphing sweep from mixture ma to mb, added to the tree, and its weights at
+ * either end (m->sec, m->n, m->wa, m->wb). */
+static karst_error_t morph_mixtures(karst_ctx_t *ctx, karst_sdf_t *t, const karst_section_mix_t *ma,
+                                    const karst_section_mix_t *mb, karst_i_morph_t *m) {
+  double w[2][KARST_SECTION_MIX_MAX];
+  karst_error_t err;
+  if ((err = merge_mix(ctx, t, ma, "morphing sweep", m->sec, &m->n, w, 0)) ||
+      (err = merge_mix(ctx, t, mb, "morphing sweep", m->sec, &m->n, w, 1)))
+    return err;
+  memcpy(m->wa, w[0], sizeof m->wa);
+  memcpy(m->wb, w[1], sizeof m->wb);
+  return KARST_SUCCESS;
+}
+
+/* The weights of the unit mixture at table point j of a morph. */
+static void table_weights(const karst_i_morph_t *m, int j, double *wj) {
+  double tt = (double)j / KARST_I_MORPH_TAB;
+  for (int k = 0; k < m->n; k++)
+    wj[k] = (1 - tt) * m->wa[k] + tt * m->wb[k];
+}
+
+karst_error_t karst_i_morph_plan(karst_ctx_t *ctx, karst_sdf_t *t, const karst_section_mix_t *ma,
+                                 const karst_section_mix_t *mb) {
+  karst_i_morph_t m;
+  memset(&m, 0, sizeof m);
+  karst_error_t err = morph_mixtures(ctx, t, ma, mb, &m);
+  if (err) return err;
+  for (int j = 0; j <= KARST_I_MORPH_TAB; j++) {
+    double wj[KARST_SECTION_MIX_MAX], cw[KARST_SECTION_MIX_MAX];
+    int cs[KARST_SECTION_MIX_MAX];
+    table_weights(&m, j, wj);
+    int n = canonical_mix(m.n, m.sec, wj, cs, cw);
+    karst_i_mix_area_t *c;
+    if (n > 1 && !find_mix(t, n, cs, cw) && (err = add_mix(ctx, t, n, cs, cw, &c))) return err;
+  }
+  return KARST_SUCCESS;
+}
+
+typedef struct {
+  karst_sdf_t *t;
+  karst_int_t first, n; /* cache entries to integrate */
+} integrate_job_t;
+
+static void task_integrate(void *arg, int tid, int nth) {
+  integrate_job_t *J = arg;
+  for (karst_int_t i = tid; i < J->n; i += nth)
+    integrate_mix(J->t, &J->t->mix_areas[J->first + i]);
+}
+
+void karst_i_morph_integrate(karst_sdf_t *t, karst_int_t first, int nthreads) {
+  integrate_job_t J = {t, first, t->n_mix_areas - first};
+  if (J.n > 0) karst_i_parallel_run(nthreads, task_integrate, &J);
+}
+
 /**
  * Morphing sweep (see implicit.h and the proof at the top of this file).
  * Time complexity: O(pieces) per evaluation; building integrates each new
@@ -293,13 +376,8 @@ karst_error_t karst_sdf_sweep_morph(karst_ctx_t *ctx, karst_sdf_t *t, const doub
                            area_a, area_b);
   karst_i_morph_t m;
   memset(&m, 0, sizeof m);
-  double w[2][KARST_SECTION_MIX_MAX];
-  karst_error_t err;
-  if ((err = merge_mix(ctx, t, ma, "morphing sweep", m.sec, &m.n, w, 0)) ||
-      (err = merge_mix(ctx, t, mb, "morphing sweep", m.sec, &m.n, w, 1)))
-    return err;
-  memcpy(m.wa, w[0], sizeof m.wa);
-  memcpy(m.wb, w[1], sizeof m.wb);
+  karst_error_t err = morph_mixtures(ctx, t, ma, mb, &m);
+  if (err) return err;
   double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   m.len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   if (!(m.len > 0) || !isfinite(m.len))
@@ -309,8 +387,7 @@ karst_error_t karst_sdf_sweep_morph(karst_ctx_t *ctx, karst_sdf_t *t, const doub
   double rho_max = 0, slope = 0;
   for (int j = 0; j <= KARST_I_MORPH_TAB; j++) {
     double tt = (double)j / KARST_I_MORPH_TAB, wj[KARST_SECTION_MIX_MAX], am;
-    for (int k = 0; k < m.n; k++)
-      wj[k] = (1 - tt) * m.wa[k] + tt * m.wb[k];
+    table_weights(&m, j, wj);
     if ((err = cached_area(ctx, t, m.n, m.sec, wj, &am))) return err;
     m.rho[j] = sqrt(((1 - tt) * area_a + tt * area_b) / am);
     rho_max = fmax(rho_max, m.rho[j]);
