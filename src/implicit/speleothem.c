@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/parallel_internal.h"
 #include "implicit/implicit_internal.h"
 
 /* Stream of the speleothems in karst_rng_derive(seed, realisation, stream). */
@@ -225,8 +226,116 @@ static karst_error_t check_rule(karst_ctx_t *ctx, int k, const karst_speleothem_
   return KARST_SUCCESS;
 }
 
+/* At most this many candidates are examined at once (bounds the memory; the result does not
+ * depend on it). */
+#define CANDIDATE_BATCH 4096
+
+/* An edge's frame and candidates (karst_speleothems_place). */
+typedef struct {
+  int ok, type, chamber;
+  const double *pa;
+  double r, len, u[3], side[3], along, width, span;
+  karst_int_t n_cand, first; /* its candidates: [first, first + n_cand) of the batch */
+  karst_rng_t rng;           /* its stream after the count was drawn */
+} spel_edge_t;
+
+/* A candidate examined on its own: its stalactite when that passes every test but the spacing
+ * from those placed before (ok), and the stalagmite under it (have_m). */
+typedef struct {
+  int ok, have_m;
+  karst_speleothem_t s, m;
+} spel_cand_t;
+
+typedef struct {
+  const karst_sdf_t *sdf;
+  const karst_geometry_t *g;
+  karst_int_t conduits, e0, e1; /* the batch's edges */
+  double embed;
+  spel_edge_t *edges;
+  spel_cand_t *cand;
+} cand_job_t;
+
+/* The candidates of edge e: draws (from the edge's stream, in order), rays to the ceiling and
+ * floor, lengths, radii and the certification of the bodies. */
+static void edge_candidates(const cand_job_t *J, karst_int_t e) {
+  const spel_edge_t *E = &J->edges[e];
+  const karst_speleothem_rule_t *rule = &J->g->speleothems[E->type];
+  const double embed = J->embed, clear = rule->clearance + embed;
+  karst_rng_t re = E->rng;
+  for (karst_int_t c = 0; c < E->n_cand; c++) {
+    spel_cand_t *C = &J->cand[E->first + c];
+    C->ok = C->have_m = 0;
+    double fl = karst_rng_uniform_range(&re, -0.5 * SPAN_LENGTH, 0.5 * SPAN_LENGTH);
+    double fx = karst_rng_uniform_range(&re, -SPAN_WIDTH, SPAN_WIDTH);
+    double lt = karst_rng_uniform(&re), rr = karst_rng_uniform(&re);
+    double mt = karst_rng_uniform(&re), mr = karst_rng_uniform(&re);
+    double l = 0.5 * E->len + fl * E->along;
+    double w = E->chamber ? E->width * sqrt(fmax(0, 1 - 4 * fl * fl)) : E->width;
+    double p0[3];
+    for (int k = 0; k < 3; k++)
+      p0[k] = E->pa[k] + l * E->u[k] + fx * w * E->side[k];
+    double zc, zf;
+    if (ray_to_wall(J->sdf, J->conduits, p0, 1, E->span, &zc) ||
+        ray_to_wall(J->sdf, J->conduits, p0, -1, E->span, &zf))
+      continue;
+    double H = zc - zf;
+    double len_t = rule->min_length + lt * (rule->max_length - rule->min_length);
+    int paired = H < rule->pair_height;
+    double free_h = H - clear; /* what the speleothems may fill */
+    if (paired)
+      len_t = fmin(len_t, 0.5 * free_h);
+    else
+      len_t = fmin(len_t, free_h);
+    if (len_t < rule->min_length) continue;
+    double ra = fmax(MIN_RADIUS * 2, len_t * (STALACTITE_ROOT_LO +
+                                              rr * (STALACTITE_ROOT_HI - STALACTITE_ROOT_LO)));
+    double rb = fmax(MIN_RADIUS, STALACTITE_TIP * ra);
+    karst_speleothem_t *s = &C->s;
+    memset(s, 0, sizeof *s);
+    s->kind = KARST_STALACTITE;
+    s->edge = e;
+    s->type = E->type;
+    s->ceiling = zc;
+    s->floor = zf;
+    s->root[0] = s->tip[0] = p0[0];
+    s->root[1] = s->tip[1] = p0[1];
+    s->root[2] = zc + embed + ra; /* one radius deeper: roots hold on ceilings sloping up to 45° */
+    s->tip[2] = zc - len_t + rb;
+    s->root_radius = ra;
+    s->tip_radius = rb;
+    if (!(s->root[2] - s->tip[2] > ra - rb)) continue;
+    if (!certified(J->sdf, J->conduits, s->root, ra, s->tip, rb, zc, -1, embed + 3 * ra)) continue;
+    C->ok = 1;
+    if (paired) {
+      double len_m =
+          (free_h - len_t) * (STALAGMITE_LENGTH_LO + mt * (STALAGMITE_LENGTH_HI - STALAGMITE_LENGTH_LO));
+      double ma = fmax(MIN_RADIUS * 2, len_m * (STALAGMITE_ROOT_LO +
+                                                mr * (STALAGMITE_ROOT_HI - STALAGMITE_ROOT_LO)));
+      double mb = fmax(MIN_RADIUS, STALAGMITE_TIP * ma);
+      karst_speleothem_t *m = &C->m;
+      *m = *s;
+      m->kind = KARST_STALAGMITE;
+      m->root[2] = zf - embed - ma;
+      m->tip[2] = zf + len_m - mb;
+      m->root_radius = ma;
+      m->tip_radius = mb;
+      C->have_m = len_m > 2 * ma && m->tip[2] - m->root[2] > ma - mb &&
+                  certified(J->sdf, J->conduits, m->root, ma, m->tip, mb, zf, 1, embed + 3 * ma);
+    }
+  }
+}
+
+static void task_candidates(void *arg, int tid, int nth) {
+  cand_job_t *J = arg;
+  for (karst_int_t e = J->e0 + tid; e < J->e1; e += nth)
+    if (J->edges[e].ok) edge_candidates(J, e);
+}
+
 /**
- * Place speleothems (see implicit.h).
+ * Place speleothems (see implicit.h). The candidates are examined on ctx->nthreads threads by
+ * edges (each edge draws from its own stream), in batches of at most CANDIDATE_BATCH; only the
+ * spacing from those placed before depends on the others, so the candidates that pass every
+ * other test are then accepted in edge order: the list does not depend on the thread count.
  * Time complexity: O(Σ candidates (ray steps + certification) x field cost
  * + placed²).
  */
@@ -264,7 +373,14 @@ karst_error_t karst_speleothems_place(karst_ctx_t *ctx, const karst_sdf_t *sdf,
   karst_rng_derive(&base, seed, realisation, STREAM_SPELEOTHEMS);
   uint64_t edge_seed = karst_rng_u64(&base);
   list_t placed = {0};
-  for (karst_int_t e = 0; e < net->n_edges; e++) {
+  const karst_int_t n_edges = net->n_edges;
+  spel_edge_t *edges = calloc((size_t)(n_edges > 0 ? n_edges : 1), sizeof *edges);
+  spel_cand_t *cand = NULL;
+  if (!edges) goto nomem;
+  /* Each edge's frame and candidate count. */
+  karst_int_t max_cand = 0;
+  for (karst_int_t e = 0; e < n_edges; e++) {
+    spel_edge_t *E = &edges[e];
     double tv = typ ? typ->data[e * typ->ncomp] : KARST_TUNNEL_TUBE;
     if (!(tv >= 0 && tv < KARST_TUNNEL_TYPE_COUNT)) continue; /* the builder reports it */
     int type = (int)tv;
@@ -284,78 +400,41 @@ karst_error_t karst_speleothems_place(karst_ctx_t *ctx, const karst_sdf_t *sdf,
     /* footprint: the chamber's ellipse (semi-axes L/2 + r, r), else length x width */
     double along = chamber ? len + 2 * r : len, width = chamber ? r : r * halfw[type];
     double area = chamber ? M_PI * 0.5 * along * width : len * 2 * width;
-    karst_rng_t re;
-    karst_rng_init(&re, edge_seed, (uint64_t)e);
-    karst_int_t cand = poisson(&re, rule->density * area);
-    double clear = rule->clearance + embed, span = 2 * reach[type] * r + 2 * (embed + 1);
-    for (karst_int_t c = 0; c < cand; c++) {
-      double fl = karst_rng_uniform_range(&re, -0.5 * SPAN_LENGTH, 0.5 * SPAN_LENGTH);
-      double fx = karst_rng_uniform_range(&re, -SPAN_WIDTH, SPAN_WIDTH);
-      double lt = karst_rng_uniform(&re), rr = karst_rng_uniform(&re);
-      double mt = karst_rng_uniform(&re), mr = karst_rng_uniform(&re);
-      double l = 0.5 * len + fl * along;
-      double w = chamber ? width * sqrt(fmax(0, 1 - 4 * fl * fl)) : width;
-      double p0[3];
-      for (int k = 0; k < 3; k++)
-        p0[k] = pa[k] + l * u[k] + fx * w * side[k];
-      double zc, zf;
-      if (ray_to_wall(sdf, conduits, p0, 1, span, &zc) ||
-          ray_to_wall(sdf, conduits, p0, -1, span, &zf))
-        continue;
-      double H = zc - zf;
-      double len_t = rule->min_length + lt * (rule->max_length - rule->min_length);
-      int paired = H < rule->pair_height;
-      double free_h = H - clear; /* what the speleothems may fill */
-      if (paired)
-        len_t = fmin(len_t, 0.5 * free_h);
-      else
-        len_t = fmin(len_t, free_h);
-      if (len_t < rule->min_length) continue;
-      double ra = fmax(MIN_RADIUS * 2, len_t * (STALACTITE_ROOT_LO +
-                                                rr * (STALACTITE_ROOT_HI - STALACTITE_ROOT_LO)));
-      double rb = fmax(MIN_RADIUS, STALACTITE_TIP * ra);
-      if (!spaced(&placed, p0[0], p0[1], ra)) continue;
-      karst_speleothem_t s;
-      memset(&s, 0, sizeof s);
-      s.kind = KARST_STALACTITE;
-      s.edge = e;
-      s.type = type;
-      s.ceiling = zc;
-      s.floor = zf;
-      s.root[0] = s.tip[0] = p0[0];
-      s.root[1] = s.tip[1] = p0[1];
-      s.root[2] = zc + embed + ra; /* one radius deeper: roots hold on ceilings sloping up to 45° */
-      s.tip[2] = zc - len_t + rb;
-      s.root_radius = ra;
-      s.tip_radius = rb;
-      if (!(s.root[2] - s.tip[2] > ra - rb)) continue;
-      if (!certified(sdf, conduits, s.root, ra, s.tip, rb, zc, -1, embed + 3 * ra)) continue;
-      karst_speleothem_t m;
-      int have_m = 0;
-      if (paired) {
-        double len_m = (free_h - len_t) *
-                       (STALAGMITE_LENGTH_LO + mt * (STALAGMITE_LENGTH_HI - STALAGMITE_LENGTH_LO));
-        double ma = fmax(MIN_RADIUS * 2, len_m * (STALAGMITE_ROOT_LO +
-                                                  mr * (STALAGMITE_ROOT_HI - STALAGMITE_ROOT_LO)));
-        double mb = fmax(MIN_RADIUS, STALAGMITE_TIP * ma);
-        m = s;
-        m.kind = KARST_STALAGMITE;
-        m.root[2] = zf - embed - ma;
-        m.tip[2] = zf + len_m - mb;
-        m.root_radius = ma;
-        m.tip_radius = mb;
-        have_m = len_m > 2 * ma && m.tip[2] - m.root[2] > ma - mb &&
-                 certified(sdf, conduits, m.root, ma, m.tip, mb, zf, 1, embed + 3 * ma);
-      }
-      if (push(&placed, &s) || (have_m && push(&placed, &m))) {
-        free(placed.v);
-        return karst_set_error(ctx, KARST_ENOMEM, "speleothems: out of memory");
-      }
-    }
+    E->ok = 1, E->type = type, E->chamber = chamber, E->pa = pa, E->r = r, E->len = len;
+    memcpy(E->u, u, sizeof u), memcpy(E->side, side, sizeof side);
+    E->along = along, E->width = width, E->span = 2 * reach[type] * r + 2 * (embed + 1);
+    karst_rng_init(&E->rng, edge_seed, (uint64_t)e);
+    E->n_cand = poisson(&E->rng, rule->density * area);
+    if (E->n_cand > max_cand) max_cand = E->n_cand;
   }
+  size_t cap = (size_t)(max_cand > CANDIDATE_BATCH ? max_cand : CANDIDATE_BATCH);
+  if (!(cand = malloc(cap * sizeof *cand))) goto nomem;
+  const int nth = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
+  for (karst_int_t e0 = 0; e0 < n_edges;) {
+    /* a batch of edges with at most cap candidates */
+    karst_int_t e1 = e0, n = 0;
+    for (; e1 < n_edges && n + edges[e1].n_cand <= (karst_int_t)cap; e1++)
+      edges[e1].first = n, n += edges[e1].n_cand;
+    cand_job_t J = {sdf, g, conduits, e0, e1, embed, edges, cand};
+    karst_i_parallel_run(nth, task_candidates, &J);
+    /* in edge order: the spacing from those placed before */
+    for (karst_int_t i = 0; i < n; i++) {
+      const spel_cand_t *C = &cand[i];
+      if (!C->ok || !spaced(&placed, C->s.root[0], C->s.root[1], C->s.root_radius)) continue;
+      if (push(&placed, &C->s) || (C->have_m && push(&placed, &C->m))) goto nomem;
+    }
+    e0 = e1;
+  }
+  free(edges);
+  free(cand);
   *out = placed.v;
   *n_out = placed.n;
   return KARST_SUCCESS;
+nomem:
+  free(edges);
+  free(cand);
+  free(placed.v);
+  return karst_set_error(ctx, KARST_ENOMEM, "speleothems: out of memory");
 }
 
 /**

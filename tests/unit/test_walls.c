@@ -37,16 +37,22 @@ static void network(karst_network_t *net, const double (*P)[3], int n, const int
     rad[e] = r[e], typ[e] = type[e];
 }
 
-static karst_sdf_t *build(const karst_network_t *net, const karst_implicit_params_t *par,
-                          karst_implicit_stats_t *st) {
+static karst_sdf_t *build_on(const karst_network_t *net, const karst_implicit_params_t *par,
+                             karst_implicit_stats_t *st, int nthreads) {
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
+  ctx.nthreads = nthreads;
   karst_sdf_t *t;
   karst_sdf_create(&ctx, &t);
   karst_error_t err = karst_implicit_build(&ctx, net, par, NULL, t, st);
   if (err) print_error("%s\n", ctx.errmsg);
   assert_int_equal(err, KARST_SUCCESS);
   return t;
+}
+
+static karst_sdf_t *build(const karst_network_t *net, const karst_implicit_params_t *par,
+                          karst_implicit_stats_t *st) {
+  return build_on(net, par, st, 1);
 }
 
 static void assert_closed(const karst_mesh_t *m) {
@@ -354,8 +360,56 @@ static void test_speleothems(void **state) {
   karst_network_destroy(&net);
 }
 
+/* Speleothems are examined on several threads by edges, in batches of a few thousand
+ * candidates, and accepted in edge order: the list is the same, byte for byte, on 1 and 3
+ * threads, here over 4 edges with 4 353 candidates (two batches). */
+static void test_speleothems_threads(void **state) {
+  (void)state;
+  double P[5][3] = {{0, 0, 0}, {40, 0, 0}, {80, 2, 0}, {120, 2, 1}, {160, 0, 1}};
+  int E[4][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 4}};
+  int type[4] = {KARST_TUNNEL_PASSAGE, KARST_TUNNEL_PASSAGE, KARST_TUNNEL_CHAMBER,
+                 KARST_TUNNEL_PASSAGE};
+  double r[4] = {2.0, 2.5, 4.0, 2.0};
+  karst_network_t net;
+  network(&net, P, 5, E, 4, r, type);
+  karst_geometry_t g;
+  karst_geometry_init(&g);
+  g.speleothems[KARST_TUNNEL_CHAMBER].density = 4;
+  g.speleothems[KARST_TUNNEL_PASSAGE].density = 6;
+  karst_implicit_params_t par;
+  karst_implicit_params_init(&par);
+  par.geometry = &g;
+  par.details = 0;
+  par.speleothems = 0;
+  karst_sdf_t *bare = build(&net, &par, NULL);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_speleothem_t *s1 = NULL, *s3 = NULL;
+  karst_int_t n1 = 0, n3 = 0;
+  ctx.nthreads = 1;
+  assert_int_equal(karst_speleothems_place(&ctx, bare, karst_sdf_root(bare), &net, &g, 1, 0.05, 11,
+                                           0, &s1, &n1),
+                   KARST_SUCCESS);
+  ctx.nthreads = 3;
+  assert_int_equal(karst_speleothems_place(&ctx, bare, karst_sdf_root(bare), &net, &g, 1, 0.05, 11,
+                                           0, &s3, &n3),
+                   KARST_SUCCESS);
+  printf("speleothems over 4 edges: %lld placed on 1 thread, %lld on 3\n", (long long)n1,
+         (long long)n3);
+  assert_true(n1 > 100); /* dense: the spacing rejects many, and it depends on the order */
+  assert_int_equal(n1, n3);
+  assert_memory_equal(s1, s3, (size_t)n1 * sizeof *s1);
+  for (karst_int_t i = 1; i < n1; i++) /* in edge order */
+    assert_true(s1[i].edge >= s1[i - 1].edge);
+  free(s1);
+  free(s3);
+  karst_sdf_free(bare);
+  karst_network_destroy(&net);
+}
+
 /* With everything on (blending, sections, details, speleothems) the mesh is
- * the same, array for array, on 1 and 2 threads. */
+ * the same, array for array, on 1 and 2 threads; and so is the tree built on 1 and on 3 threads
+ * (its sections' mixtures are integrated, and its speleothems examined, on the threads). */
 static void test_deterministic(void **state) {
   (void)state;
   double P[5][3] = {{-15, 0, 0}, {0, 0, 0}, {12, 3, 1}, {0, 14, 0}, {20, 10, 1}};
@@ -380,6 +434,21 @@ static void test_deterministic(void **state) {
   printf("all on: %lld triangles, %lld stalactites, %lld morphs, %lld blends\n",
          (long long)m1.n_triangles, (long long)st.n_stalactites, (long long)st.n_morphs,
          (long long)st.n_blends);
+  assert_true(st.n_morphs > 0 && st.n_stalactites > 0);
+  karst_implicit_stats_t st3;
+  karst_sdf_t *t3 = build_on(&net, &par, &st3, 3);
+  assert_memory_equal(&st, &st3, sizeof st);
+  karst_mesh_t m3;
+  karst_mesh_init(&m3);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  assert_int_equal(karst_mesh_polygonize(&ctx, t3, box, 0.2, &m3, NULL), KARST_SUCCESS);
+  assert_int_equal(m1.n_vertices, m3.n_vertices);
+  assert_int_equal(m1.n_triangles, m3.n_triangles);
+  assert_memory_equal(m1.xyz, m3.xyz, (size_t)m1.n_vertices * 3 * sizeof(double));
+  assert_memory_equal(m1.tri, m3.tri, (size_t)m1.n_triangles * 3 * sizeof(karst_int_t));
+  karst_mesh_destroy(&m3);
+  karst_sdf_free(t3);
   karst_mesh_destroy(&m1);
   karst_mesh_destroy(&m2);
   karst_sdf_free(t);
@@ -509,6 +578,7 @@ int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_t_junction),         cmocka_unit_test(test_sections_along_paths),
       cmocka_unit_test(test_details_off_and_on), cmocka_unit_test(test_speleothems),
+      cmocka_unit_test(test_speleothems_threads),
       cmocka_unit_test(test_deterministic),      cmocka_unit_test(test_round_cone),
       cmocka_unit_test(test_geometry_section),
   };
