@@ -670,21 +670,32 @@ karst_error_t write_polydata(karst_ctx_t *ctx, const char *path, const karst_pol
   vtkSmartPointer<vtkPoints> pts;
   if ((err = make_points(ctx, path, "point", m->n_points, m->xyz, pts))) return err;
   pd->SetPoints(pts);
-  auto polys = vtkSmartPointer<vtkCellArray>::New();
+  /* offsets and connectivity written at their final size (cell by cell, the arrays' growth and
+   * first touch were most of the time of a large geology.vtp) */
+  auto offsets = vtkSmartPointer<vtkTypeInt64Array>::New();
+  auto conn = vtkSmartPointer<vtkTypeInt64Array>::New();
+  offsets->SetNumberOfValues(m->n_polys + 1);
+  offsets->SetValue(0, 0);
+  karst_int_t n_conn = 0;
   for (karst_int_t c = 0; c < m->n_polys; c++) {
     karst_int_t b = m->offsets[c], e = m->offsets[c + 1];
     if (b < 0 || e < b + 3)
       return karst_set_error(ctx, KARST_EINVAL, "%s: polygon %" PRId64 " has fewer than 3 points",
                              path, c);
-    polys->InsertNextCell((vtkIdType)(e - b));
-    for (karst_int_t i = b; i < e; i++) {
+    n_conn += e - b;
+    offsets->SetValue(c + 1, n_conn);
+  }
+  conn->SetNumberOfValues(n_conn);
+  for (karst_int_t c = 0, k = 0; c < m->n_polys; c++)
+    for (karst_int_t i = m->offsets[c]; i < m->offsets[c + 1]; i++, k++) {
       if (m->conn[i] < 0 || m->conn[i] >= m->n_points)
         return karst_set_error(ctx, KARST_EINVAL,
                                "%s: polygon %" PRId64 " refers to point %" PRId64 " of %" PRId64,
                                path, c, m->conn[i], m->n_points);
-      polys->InsertCellPoint((vtkIdType)m->conn[i]);
+      conn->SetValue(k, m->conn[i]);
     }
-  }
+  auto polys = vtkSmartPointer<vtkCellArray>::New();
+  polys->SetData(offsets, conn);
   pd->SetPolys(polys);
   for (int a = 0; a < m->n_cell_arrays; a++) {
     auto arr = vtkSmartPointer<vtkIntArray>::New();
