@@ -9,6 +9,8 @@
 
 /** Most grid intervals along x or y of a surface drawn in geology.vtp. */
 #define GEOLOGY_VTP_MAX_INTERVALS 100
+/** A plane this far (m) below the terrain's lowest point is drawn whole, as two triangles. */
+#define GEOLOGY_VTP_PLANE_MARGIN 1e-6
 /** Sides of the polygon that draws a disc (a fault disc or a fracture of a network). */
 #define GEOLOGY_VTP_DISC_SIDES 24
 
@@ -98,9 +100,21 @@ static void add_tin(polys_t *P, const karst_geology_t *g, const karst_surface_t 
   free(tri);
 }
 
+/* Whether plane s lies below the terrain by more than GEOLOGY_VTP_PLANE_MARGIN over the whole
+ * domain: its highest corner below the terrain's lowest point there. */
+static int plane_under_terrain(const karst_geology_t *g, const karst_i_surf_t *s) {
+  const karst_scenario_t *sc = g->sc;
+  double x0 = sc->domain_min[0], x1 = sc->domain_max[0], y0 = sc->domain_min[1],
+         y1 = sc->domain_max[1], plo, phi, tlo, thi;
+  karst_i_surf_range(s, x0, x1, y0, y1, &plo, &phi);
+  karst_i_surf_range(&g->terrain, x0, x1, y0, y1, &tlo, &thi);
+  return phi < tlo - GEOLOGY_VTP_PLANE_MARGIN; /* false for NAN */
+}
+
 /* A surface over the domain's x-y extent on a regular grid, triangles entirely above the
  * terrain left out (they are not in the rock); NAN vertices (outside a file surface) skip their
- * triangles. */
+ * triangles. A plane the terrain does not cut (or the terrain itself, when a plane) is the
+ * domain's rectangle, two triangles: the grid's triangles would all be kept, in that plane. */
 static void add_surface(polys_t *P, const karst_geology_t *g, const karst_i_surf_t *s, int feature,
                         int id, int clip_to_terrain) {
   const karst_scenario_t *sc = g->sc;
@@ -111,6 +125,8 @@ static void add_surface(polys_t *P, const karst_geology_t *g, const karst_i_surf
   double ex = sc->domain_max[0] - sc->domain_min[0], ey = sc->domain_max[1] - sc->domain_min[1];
   double step = fmax(ex, ey) / GEOLOGY_VTP_MAX_INTERVALS;
   int nx = (int)fmax(1.0, ceil(ex / step)), ny = (int)fmax(1.0, ceil(ey / step));
+  if (s->kind == KARST_I_SURF_PLANE && (!clip_to_terrain || plane_under_terrain(g, s)))
+    nx = ny = 1;
   karst_int_t base = P->np;
   for (int j = 0; j <= ny; j++)
     for (int i = 0; i <= nx; i++) {

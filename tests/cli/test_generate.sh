@@ -111,6 +111,21 @@ assert feat is not None and g.GetCellData().GetArray("feature_id") is not None
 assert 0 in {int(feat.GetValue(i)) for i in range(feat.GetNumberOfValues())}
 fn = g.GetFieldData().GetAbstractArray("feature_names")
 assert fn.GetValue(0) == "terrain" and fn.GetValue(6) == "exclusion", fn.GetValue(0)
+# The flat terrain (z 60), horizon (35) and water table (20), none cut by the terrain, are each
+# the domain's 200 x 200 m rectangle as two triangles: 40 000 m2 by hand.
+import math
+area, count = {}, {}
+for c in range(g.GetNumberOfCells()):
+    f = int(feat.GetValue(c))
+    if f > 2: continue
+    P = [g.GetPoints().GetPoint(g.GetCell(c).GetPointId(i)) for i in range(3)]
+    u = [P[1][k] - P[0][k] for k in range(3)]; v = [P[2][k] - P[0][k] for k in range(3)]
+    w = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+    area[f] = area.get(f, 0) + 0.5 * math.sqrt(sum(x * x for x in w))
+    count[f] = count.get(f, 0) + 1
+    assert {p[2] for p in P} == {[60, 35, 20][f]}, (f, P)
+assert count == {0: 2, 1: 2, 2: 2}, count
+assert all(abs(area[f] - 40000) < 1e-6 for f in area), area
 r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1] + "/samples.vtp"); r.Update()
 assert r.GetOutput().GetNumberOfPoints() == d["counts"]["samples"], r.GetOutput().GetNumberOfPoints()
 EOF
