@@ -55,6 +55,20 @@ static karst_sdf_t *build(const karst_network_t *net, const karst_implicit_param
   return build_on(net, par, st, 1);
 }
 
+/* The conduits of @p net without details or speleothems, with speleothem rules (@p g, in @p par)
+ * of the given densities (per m²) in chambers and passages. */
+static karst_sdf_t *bare_conduits(const karst_network_t *net, double chamber, double passage,
+                                  karst_geometry_t *g, karst_implicit_params_t *par) {
+  karst_geometry_init(g);
+  g->speleothems[KARST_TUNNEL_CHAMBER].density = chamber;
+  g->speleothems[KARST_TUNNEL_PASSAGE].density = passage;
+  karst_implicit_params_init(par);
+  par->geometry = g;
+  par->details = 0;
+  par->speleothems = 0;
+  return build(net, par, NULL);
+}
+
 static void assert_closed(const karst_mesh_t *m) {
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
@@ -268,15 +282,8 @@ static void test_speleothems(void **state) {
   karst_network_t net;
   network(&net, P, 4, E, 3, r, type);
   karst_geometry_t g;
-  karst_geometry_init(&g);
-  g.speleothems[KARST_TUNNEL_CHAMBER].density = 0.3;
-  g.speleothems[KARST_TUNNEL_PASSAGE].density = 0.2;
   karst_implicit_params_t par;
-  karst_implicit_params_init(&par);
-  par.geometry = &g;
-  par.details = 0;
-  par.speleothems = 0;
-  karst_sdf_t *bare = build(&net, &par, NULL);
+  karst_sdf_t *bare = bare_conduits(&net, 0.3, 0.2, &g, &par);
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
   karst_speleothem_t *s = NULL, *s2 = NULL, *s3 = NULL;
@@ -373,15 +380,8 @@ static void test_speleothems_threads(void **state) {
   karst_network_t net;
   network(&net, P, 5, E, 4, r, type);
   karst_geometry_t g;
-  karst_geometry_init(&g);
-  g.speleothems[KARST_TUNNEL_CHAMBER].density = 4;
-  g.speleothems[KARST_TUNNEL_PASSAGE].density = 6;
   karst_implicit_params_t par;
-  karst_implicit_params_init(&par);
-  par.geometry = &g;
-  par.details = 0;
-  par.speleothems = 0;
-  karst_sdf_t *bare = build(&net, &par, NULL);
+  karst_sdf_t *bare = bare_conduits(&net, 4, 6, &g, &par);
   karst_ctx_t ctx;
   karst_ctx_init(&ctx);
   karst_speleothem_t *s1 = NULL, *s3 = NULL;
