@@ -669,12 +669,12 @@ static inline const double *fill_first(const fill_job_t *J, const int32_t *restr
  * fill sample returned decides whether the cell leaves the passes (cell_covered), so among the
  * cells that can hold a sample covering c it is the first in the offsets' order; beyond them any
  * conflict only keeps the cell, which is what a feature conflict does too, so the feature test,
- * the likelier to fail near a feature layer, comes first there.
+ * the likelier to find a conflict near a feature layer, comes first there.
  *
  * Why the first FILL_COVER_OFFSETS cells are the only ones that matter: a cell is covered by q
- * when its farthest corner is closer than rc = √3 cc to q. Along an axis where q's cell is d
- * cells away, the farthest corner is at least (|d| + 1) cc − cc = |d| cc away for |d| >= 1, and
- * at least cc / 2 for d = 0; at a cell with some |d| = 2 that is >= 2 cc along that axis alone,
+ * when its farthest corner is closer than rc = √3 cc to q. Along an axis where q's cell is d != 0
+ * cells away, q is at least |d| cc from the cell's far face (and at least cc / 2 from one face
+ * where d = 0); in a cell with some |d| = 2 that is >= 2 cc along that axis alone,
  * (2 cc)^2 = 4 cc^2 > 3 cc^2 = rc^2, far beyond any rounding. So only the 26 cells with every
  * |d| <= 1 can cover c, and the offsets are sorted by d^2: they are the first 26. */
 static const double *fill_conflict(const fill_job_t *J, const double p[3], int64_t id, int *feat) {
