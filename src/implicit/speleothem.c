@@ -337,7 +337,8 @@ static void task_candidates(void *arg, int tid, int nth) {
  * spacing from those placed before depends on the others, so the candidates that pass every
  * other test are then accepted in edge order: the list does not depend on the thread count.
  * Time complexity: O(Σ candidates (ray steps + certification) x field cost
- * + placed²).
+ * + placed²); memory O(max(CANDIDATE_BATCH, the largest edge's candidates)), KARST_ENOMEM
+ * when that does not fit.
  */
 karst_error_t karst_speleothems_place(karst_ctx_t *ctx, const karst_sdf_t *sdf,
                                       karst_int_t conduits, const karst_network_t *net,
