@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "karst.h"
+#include "igraph/paths_igraph.h"
 #include "metrics/metrics_internal.h"
 
 static double now(void) {

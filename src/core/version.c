@@ -9,7 +9,6 @@
 #include <GeographicLib/Config.h>
 #include <flann/config.h>
 #include <gdal_version.h>
-#include <igraph_version.h>
 #include <proj.h>
 #include <vtkVersionMacros.h>
 #include <yaml.h>
@@ -38,9 +37,9 @@ static void put(karst_component_t *c, int *n, const char *name, const char *vers
 }
 
 /**
- * The components in a fixed order: karst, the compiler, then VTK, igraph, FLANN,
+ * The components in a fixed order: karst, the compiler, then VTK, FLANN,
  * GeographicLib, CGAL, libyaml, GDAL, PROJ and MPI. Where the library reports
- * its version at run time (igraph, libyaml, GDAL, PROJ through GDAL) that one
+ * its version at run time (libyaml) that one
  * is given, else the version of the headers karst was compiled against (VTK,
  * FLANN, GeographicLib, CGAL, Open MPI).
  * @param out  receives the components.
@@ -49,7 +48,6 @@ static void put(karst_component_t *c, int *n, const char *name, const char *vers
 int karst_versions(karst_component_t out[KARST_COMPONENTS_MAX]) {
   int n = 0;
   char buf[96];
-  const char *igraph = NULL;
   put(out, &n, "karst", karst_version());
 #if defined(__clang__)
   put(out, &n, "compiler", "clang " __clang_version__);
@@ -59,8 +57,6 @@ int karst_versions(karst_component_t out[KARST_COMPONENTS_MAX]) {
   put(out, &n, "compiler", "unknown");
 #endif
   put(out, &n, "VTK", VTK_VERSION);
-  igraph_version(&igraph, NULL, NULL, NULL);
-  put(out, &n, "igraph", igraph ? igraph : IGRAPH_VERSION);
   put(out, &n, "FLANN", FLANN_VERSION_);
   put(out, &n, "GeographicLib", GEOGRAPHICLIB_VERSION_STRING);
   put(out, &n, "CGAL", KARST_STR(CGAL_VERSION));

@@ -46,12 +46,4 @@ void karst_i_csr_destroy(karst_i_csr_t *g);
 karst_error_t karst_i_paths_all_sources(karst_ctx_t *ctx, const karst_i_csr_t *g,
                                         double *betweenness, karst_int_t *dist_sum);
 
-/**
- * The same two quantities computed with igraph 0.10 (igraph_betweenness and
- * igraph_distances per source), kept as an independent check for the tests
- * and as the comparison in bench/bench_metrics.c.
- */
-karst_error_t karst_i_paths_igraph(karst_ctx_t *ctx, const karst_i_csr_t *g, double *betweenness,
-                                   karst_int_t *dist_sum);
-
 #endif

@@ -21,7 +21,6 @@ want() { # name expected
   echo "ok: $1 $2"
 }
 want karst "$(sed -n 's/^project(karst VERSION \([0-9.]*\).*/\1/p' "$SRC/CMakeLists.txt")"
-want igraph "$(pkg-config --modversion igraph)"
 want libyaml "$(pkg-config --modversion yaml-0.1)"
 want GeographicLib "$(pkg-config --modversion geographiclib)"
 want FLANN "$(pkg-config --modversion flann)"

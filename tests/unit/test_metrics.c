@@ -11,6 +11,7 @@
 #include <cmocka.h>
 
 #include "karst.h"
+#include "igraph/paths_igraph.h"
 #include "metrics/metrics_internal.h"
 #include "test_util.h"
 

@@ -1,9 +1,8 @@
-/* The all-sources quantities of paths.c computed with igraph 0.10, as an
- * independent check (tests) and a speed comparison (bench/bench_metrics.c). */
+/* The all-sources quantities of src/metrics/paths.c computed with igraph 0.10 (paths_igraph.h). */
+#include "paths_igraph.h"
+
 #include <igraph.h>
 #include <stdlib.h>
-
-#include "metrics/metrics_internal.h"
 
 karst_error_t karst_i_paths_igraph(karst_ctx_t *ctx, const karst_i_csr_t *g, double *betweenness,
                                    karst_int_t *dist_sum) {
