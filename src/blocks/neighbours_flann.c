@@ -3,12 +3,12 @@
  * (tests/unit/test_blocks.c) and its rival in bench/bench_blocks.c. The
  * torus is handled by ghosts: the copies x + s L (L in {-1, 0, 1}³) that
  * fall within the graph radius of the cube are indexed with the points. */
-#include <flann/flann.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "blocks/blocks_internal.h"
+#include "graph/flann_api_internal.h"
 
 /* Neighbours asked of FLANN per query: far above the ~20 a Poisson sample
  * has within 2 r (a point has at most (2 rg / r + 1)³ within rg). */
@@ -33,7 +33,8 @@ karst_error_t karst_i_blocks_radius_graph_flann(karst_ctx_t *ctx, const double *
     return karst_set_error(
         ctx, KARST_EINVAL,
         "tile graph (FLANN): radius %g must be within (0, s/3) for a tile of %g m", radius, s);
-  karst_error_t err = KARST_SUCCESS;
+  karst_error_t err = karst_i_flann_load(ctx);
+  if (err != KARST_SUCCESS) return err;
   karst_int_t cap = 27 * n + 1, ng = 0, ne = 0, ecap = 0;
   double *g = malloc(3 * (size_t)cap * sizeof *g);
   int32_t *gi = malloc((size_t)cap * sizeof *gi);
@@ -43,7 +44,7 @@ karst_error_t karst_i_blocks_radius_graph_flann(karst_ctx_t *ctx, const double *
   double *dist = malloc((size_t)kmax * sizeof *dist);
   karst_i_edge_t *e = NULL;
   flann_index_t index = NULL;
-  struct FLANNParameters p = DEFAULT_FLANN_PARAMETERS;
+  struct FLANNParameters p = *karst_i_flann.defaults;
   if (!g || !gi || !gl || !ind || !dist) goto nomem;
   for (karst_int_t i = 0; i < n; i++)
     for (int lz = -1; lz <= 1; lz++)
@@ -65,9 +66,9 @@ karst_error_t karst_i_blocks_radius_graph_flann(karst_ctx_t *ctx, const double *
   p.log_level = FLANN_LOG_NONE;
   p.checks = FLANN_CHECKS_UNLIMITED;
   p.cores = 1;
-  flann_log_verbosity(FLANN_LOG_NONE);
+  karst_i_flann.flann_log_verbosity(FLANN_LOG_NONE);
   float speedup;
-  index = flann_build_index_double(g, (int)ng, 3, &speedup, &p);
+  index = karst_i_flann.flann_build_index_double(g, (int)ng, 3, &speedup, &p);
   if (!index) {
     err = karst_set_error(ctx, KARST_EEXTERNAL, "tile graph (FLANN): the index failed");
     goto cleanup;
@@ -75,7 +76,7 @@ karst_error_t karst_i_blocks_radius_graph_flann(karst_ctx_t *ctx, const double *
   for (karst_int_t i = 0; i < n; i++) {
     double q[3] = {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
     /* FLANN's L2 radius is squared; ask slightly wider and decide in double below */
-    int m = flann_radius_search_double(index, q, ind, dist, kmax, (float)(radius * radius) * 1.001f,
+    int m = karst_i_flann.flann_radius_search_double(index, q, ind, dist, kmax, (float)(radius * radius) * 1.001f,
                                        &p);
     if (m < 0) {
       err = karst_set_error(ctx, KARST_EEXTERNAL, "tile graph (FLANN): the search failed");
@@ -113,7 +114,7 @@ karst_error_t karst_i_blocks_radius_graph_flann(karst_ctx_t *ctx, const double *
 nomem:
   err = karst_set_error(ctx, KARST_ENOMEM, "tile graph (FLANN): out of memory");
 cleanup:
-  if (index) flann_free_index_double(index, &p);
+  if (index) karst_i_flann.flann_free_index_double(index, &p);
   free(g);
   free(gi);
   free(gl);

@@ -6,9 +6,9 @@
  * FLANN 23.7 s, grid 1.7 s), so this backend is kept for comparison and as the
  * independent check of the grid search in tests/unit/test_knn.c.
  */
-#include <flann/flann.h>
 #include <stdlib.h>
 
+#include "graph/flann_api_internal.h"
 #include "graph/graph_internal.h"
 
 typedef struct {
@@ -34,7 +34,8 @@ static int cand_cmp(const void *pa, const void *pb) {
  */
 karst_error_t karst_i_knn_flann(karst_ctx_t *ctx, const double *xyz, karst_int_t n, int k,
                                 int nthreads, int32_t *nbr, double *kd2, int32_t *kidx) {
-  karst_error_t err = KARST_SUCCESS;
+  karst_error_t err = karst_i_flann_load(ctx);
+  if (err != KARST_SUCCESS) return err;
   int kq = k + 1 <= n ? k + 1 : (int)n;
   int *ind = malloc(sizeof(int) * (size_t)n * (size_t)kq);
   double *dist = malloc(sizeof(double) * (size_t)n * (size_t)kq);
@@ -45,16 +46,16 @@ karst_error_t karst_i_knn_flann(karst_ctx_t *ctx, const double *xyz, karst_int_t
                           (long long)n);
     goto cleanup;
   }
-  struct FLANNParameters p = DEFAULT_FLANN_PARAMETERS;
+  struct FLANNParameters p = *karst_i_flann.defaults;
   p.algorithm = FLANN_INDEX_KDTREE_SINGLE;
   p.log_level = FLANN_LOG_NONE;
   p.checks = FLANN_CHECKS_UNLIMITED; /* exact search */
   p.cores = nthreads > 0 ? nthreads : 1;
-  flann_log_verbosity(FLANN_LOG_NONE);
+  karst_i_flann.flann_log_verbosity(FLANN_LOG_NONE);
   float speedup;
-  index = flann_build_index_double((double *)xyz, (int)n, 3, &speedup, &p);
+  index = karst_i_flann.flann_build_index_double((double *)xyz, (int)n, 3, &speedup, &p);
   if (!index ||
-      flann_find_nearest_neighbors_index_double(index, (double *)xyz, (int)n, ind, dist, kq, &p) !=
+      karst_i_flann.flann_find_nearest_neighbors_index_double(index, (double *)xyz, (int)n, ind, dist, kq, &p) !=
           0) {
     err = karst_set_error(ctx, KARST_EEXTERNAL, "kNN (FLANN): the search failed for %lld points",
                           (long long)n);
@@ -76,7 +77,7 @@ karst_error_t karst_i_knn_flann(karst_ctx_t *ctx, const double *xyz, karst_int_t
     kidx[v] = c[m - 1].i;
   }
 cleanup:
-  if (index) flann_free_index_double(index, &p);
+  if (index) karst_i_flann.flann_free_index_double(index, &p);
   free(ind);
   free(dist);
   free(c);
