@@ -10,7 +10,7 @@
 #define KARST_I_HUGE_PAGE ((size_t)2 << 20)
 
 void *karst_i_alloc_large(size_t bytes) {
-  if (bytes < 2 * KARST_I_HUGE_PAGE) return malloc(bytes > 0 ? bytes : 1);
+  if (bytes < KARST_I_HUGE_PAGE / 2) return malloc(bytes > 0 ? bytes : 1);
   size_t rounded = (bytes + KARST_I_HUGE_PAGE - 1) / KARST_I_HUGE_PAGE * KARST_I_HUGE_PAGE;
   if (rounded < bytes) return NULL; /* overflow */
   void *p = aligned_alloc(KARST_I_HUGE_PAGE, rounded);
@@ -23,7 +23,7 @@ void *karst_i_alloc_large(size_t bytes) {
 void *karst_i_calloc_large(size_t count, size_t size) {
   if (size > 0 && count > SIZE_MAX / size) return NULL;
   size_t bytes = count * size;
-  if (bytes < 2 * KARST_I_HUGE_PAGE) return calloc(count > 0 ? count : 1, size > 0 ? size : 1);
+  if (bytes < KARST_I_HUGE_PAGE / 2) return calloc(count > 0 ? count : 1, size > 0 ? size : 1);
   void *p = karst_i_alloc_large(bytes);
   if (p) memset(p, 0, bytes);
   return p;

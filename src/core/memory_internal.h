@@ -1,16 +1,20 @@
 /* Allocation of the large arrays (graph arcs, neighbour tables, search
- * records): on Linux they are asked to be backed by 2 MiB pages. A search
- * over a 1.5-million-vertex graph walks 2.5 GB of arcs in heap order, so
- * with 4 KiB pages nearly every arc list costs a TLB miss, and first
- * touching the arrays costs one page fault per 4 KiB. */
+ * records, sampling grids): on Linux they are asked to be backed by 2 MiB
+ * pages. A search over a 1.5-million-vertex graph walks 2.5 GB of arcs in
+ * heap order, so with 4 KiB pages nearly every arc list costs a TLB miss, and
+ * first touching the arrays costs one page fault per 4 KiB. On the 2-core
+ * project machine (a virtual machine) a 4 KiB fault costs about 14 µs, so an
+ * array of a few MiB filled once costs milliseconds in faults alone: from
+ * 1 MiB on, the array is rounded up to whole 2 MiB pages (at most 1 MiB more
+ * resident, once per array) and faults once per 2 MiB. */
 #ifndef KARST_MEMORY_INTERNAL_H
 #define KARST_MEMORY_INTERNAL_H
 
 #include <stddef.h>
 
 /**
- * Like malloc(bytes) (release with free()), but an array of 4 MiB or more
- * is aligned to 2 MiB and advised as a transparent-huge-page candidate
+ * Like malloc(bytes) (release with free()), but an array of 1 MiB or more
+ * is rounded up to whole 2 MiB pages, aligned to 2 MiB and advised as a transparent-huge-page candidate
  * (madvise MADV_HUGEPAGE; the advice is only a hint and its failure is
  * ignored). Returns NULL when out of memory, as malloc does.
  */

@@ -816,8 +816,8 @@ static karst_error_t sample_fill(sampler_t *S) {
     goto cleanup;
   }
   if (!ccsr_build(&S->feat_cols, &S->feat)) goto nomem;
-  J.cells = malloc(sizeof(int64_t) * ((size_t)total + 1));
-  J.xyz = malloc(sizeof(double) * 3 * ((size_t)total + 1)); /* only the used slots are touched */
+  J.cells = karst_i_alloc_large(sizeof(int64_t) * ((size_t)total + 1));
+  J.xyz = karst_i_alloc_large(sizeof(double) * 3 * ((size_t)total + 1));
   if (!J.cells || !J.xyz) goto nomem;
   /* Cell lists by tile; tiles grouped by colour (in tile order within one). */
   size_t nc = 0, ng = 0;
@@ -920,8 +920,8 @@ static void radix_sort(uint64_t *k0, int32_t *i0, uint64_t *k1, int32_t *i1, kar
 static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc,
                                   karst_samples_t *s) {
   karst_int_t n = s->n;
-  uint64_t *key = malloc(sizeof(uint64_t) * 2 * (size_t)n + 1);
-  int32_t *idx = malloc(sizeof(int32_t) * 2 * (size_t)n + 1);
+  uint64_t *key = karst_i_alloc_large(sizeof(uint64_t) * 2 * (size_t)n + 1);
+  int32_t *idx = karst_i_alloc_large(sizeof(int32_t) * 2 * (size_t)n + 1);
   /* The ordered coordinates go to a new array of large pages: the searches read them at random
    * (the A* heuristic), and the grown array they come from is not. */
   double *xyz = karst_i_alloc_large(sizeof(double) * 3 * (size_t)(n > 0 ? n : 1));
@@ -1103,8 +1103,8 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
     goto cleanup;
   }
   size_t nfill = (size_t)ncells_fill;
-  S.fill = malloc(sizeof(int32_t) * nfill);
-  S.near = calloc(nfill, 1);
+  S.fill = karst_i_alloc_large(sizeof(int32_t) * nfill);
+  S.near = karst_i_calloc_large(nfill, 1);
   if (!S.fill || !S.near || !cgrid_init(&S.feat, fcell, S.lo, fd)) {
     err = karst_set_error(ctx, KARST_ENOMEM, "no memory for a sampling grid of %.0f cells",
                           ncells_fill);
