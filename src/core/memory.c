@@ -20,6 +20,15 @@ void *karst_i_alloc_large(size_t bytes) {
   return p;
 }
 
+void *karst_i_realloc_large(void *p, size_t used, size_t bytes) {
+  if (bytes < KARST_I_HUGE_PAGE / 2) return realloc(p, bytes > 0 ? bytes : 1);
+  void *q = karst_i_alloc_large(bytes);
+  if (!q) return NULL;
+  if (p) memcpy(q, p, used < bytes ? used : bytes);
+  free(p);
+  return q;
+}
+
 void *karst_i_calloc_large(size_t count, size_t size) {
   if (size > 0 && count > SIZE_MAX / size) return NULL;
   size_t bytes = count * size;

@@ -27,4 +27,12 @@ void *karst_i_alloc_large(size_t bytes);
  */
 void *karst_i_calloc_large(size_t count, size_t size);
 
+/**
+ * Like realloc(p, bytes) for an array that grows (release with free()): the
+ * first @p used bytes are kept; from 1 MiB on the new block comes from
+ * karst_i_alloc_large (the old one is copied and freed). On failure returns
+ * NULL and leaves @p p as it was.
+ */
+void *karst_i_realloc_large(void *p, size_t used, size_t bytes);
+
 #endif

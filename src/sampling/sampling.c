@@ -83,10 +83,10 @@ static int64_t cgrid_coord(const cgrid_t *g, double x, int a) {
 static int cgrid_insert(cgrid_t *g, const double p[3]) {
   if (g->n == g->ncap) {
     size_t nc = g->ncap ? 2 * g->ncap : 1024;
-    double *xyz = realloc(g->xyz, sizeof(double) * 3 * nc);
+    double *xyz = karst_i_realloc_large(g->xyz, sizeof(double) * 3 * g->n, sizeof(double) * 3 * nc);
     if (!xyz) return 0;
     g->xyz = xyz;
-    int32_t *next = realloc(g->next, sizeof(int32_t) * nc);
+    int32_t *next = karst_i_realloc_large(g->next, sizeof(int32_t) * g->n, sizeof(int32_t) * nc);
     if (!next) return 0;
     g->next = next, g->ncap = nc;
   }
@@ -103,10 +103,10 @@ static int cgrid_insert(cgrid_t *g, const double p[3]) {
 static int cgrid_reserve(cgrid_t *g, size_t extra) {
   if (g->n + extra <= g->ncap) return 1;
   size_t nc = g->n + extra;
-  double *xyz = realloc(g->xyz, sizeof(double) * 3 * nc);
+  double *xyz = karst_i_realloc_large(g->xyz, sizeof(double) * 3 * g->n, sizeof(double) * 3 * nc);
   if (!xyz) return 0;
   g->xyz = xyz;
-  int32_t *next = realloc(g->next, sizeof(int32_t) * nc);
+  int32_t *next = karst_i_realloc_large(g->next, sizeof(int32_t) * g->n, sizeof(int32_t) * nc);
   if (!next) return 0;
   g->next = next, g->ncap = nc;
   return 1;
