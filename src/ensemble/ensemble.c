@@ -17,6 +17,7 @@
 #include "karst/ensemble.h"
 
 #include <dirent.h>
+#include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <inttypes.h>
@@ -34,9 +35,7 @@
 #include "karst/io.h"
 #include "karst/version.h"
 
-#if KARST_HAVE_MPI
-#include <mpi.h>
-#endif
+#include "ensemble/mpi_api_internal.h"
 
 void karst_ensemble_options_init(karst_ensemble_options_t *opt) {
   memset(opt, 0, sizeof *opt);
@@ -502,16 +501,27 @@ cleanup:
 /* ------------------------------------------------------------------------ */
 /* MPI                                                                      */
 /* ------------------------------------------------------------------------ */
+/* MPI's calls come from a plugin opened on first use (mpi_api_internal.h): by
+ * karst_ensemble_mpi_start under a launcher, or here when the process already holds MPI (a
+ * program embedding libkarst that initialised it itself). */
 static int mpi_world(int use_mpi, int *rank) {
   *rank = 0;
 #if KARST_HAVE_MPI
+  if (!use_mpi) return 1;
+  const karst_i_mpi_api_t *m = karst_i_mpi_loaded();
+  if (!m) {
+    void *self = dlopen(NULL, RTLD_NOW); /* the global scope: is MPI in the process already? */
+    if (self && dlsym(self, "MPI_Initialized")) m = karst_i_mpi_load(NULL, 0);
+    if (self) dlclose(self);
+  }
+  if (!m) return 1;
   int init = 0, fin = 0;
-  MPI_Initialized(&init);
-  MPI_Finalized(&fin);
-  if (use_mpi && init && !fin) {
+  m->initialized(&init);
+  m->finalized(&fin);
+  if (init && !fin) {
     int size = 1;
-    MPI_Comm_size(MPI_COMM_WORLD, &size);
-    MPI_Comm_rank(MPI_COMM_WORLD, rank);
+    m->size(&size);
+    m->rank(rank);
     return size;
   }
 #else
@@ -523,9 +533,10 @@ static int mpi_world(int use_mpi, int *rank) {
 /* All ranks agree on the worst error code (max); without MPI the local one. */
 static karst_error_t mpi_agree(int ranks, karst_error_t local) {
 #if KARST_HAVE_MPI
-  if (ranks > 1) {
-    int in = (int)local, out = 0;
-    MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  const karst_i_mpi_api_t *m = karst_i_mpi_loaded(); /* ranks > 1 came from it */
+  if (ranks > 1 && m) {
+    int out = 0;
+    m->max_int((int)local, &out);
     return (karst_error_t)out;
   }
 #else
@@ -536,9 +547,10 @@ static karst_error_t mpi_agree(int ranks, karst_error_t local) {
 
 static karst_int_t mpi_sum(int ranks, karst_int_t local) {
 #if KARST_HAVE_MPI
-  if (ranks > 1) {
-    long long in = (long long)local, out = 0;
-    MPI_Allreduce(&in, &out, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  const karst_i_mpi_api_t *m = karst_i_mpi_loaded();
+  if (ranks > 1 && m) {
+    long long out = 0;
+    m->sum_long_long((long long)local, &out);
     return (karst_int_t)out;
   }
 #else
@@ -908,16 +920,23 @@ karst_error_t karst_ensemble_mpi_start(karst_ctx_t *ctx, int *ranks, int *rank, 
   if (err) return err;
 #if KARST_HAVE_MPI
   if (!getenv("OMPI_COMM_WORLD_SIZE") && !getenv("PMI_SIZE")) return KARST_SUCCESS;
+  char why[1024];
+  const karst_i_mpi_api_t *m = karst_i_mpi_load(why, sizeof why);
+  if (!m)
+    return karst_set_error(ctx, KARST_ENOTIMPL,
+                           "started by an MPI launcher, but karst's MPI plugin (%s, next to "
+                           "libkarst) could not be loaded: %s",
+                           KARST_I_MPI_PLUGIN, why);
   int init = 0;
-  MPI_Initialized(&init);
+  m->initialized(&init);
   if (!init) {
     int provided = 0;
-    if (MPI_Init_thread(NULL, NULL, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
+    if (m->init_thread_funneled(&provided) != 0)
       return karst_set_error(ctx, KARST_EEXTERNAL, "MPI_Init_thread failed");
     *initialised = 1;
   }
-  MPI_Comm_size(MPI_COMM_WORLD, ranks);
-  MPI_Comm_rank(MPI_COMM_WORLD, rank);
+  m->size(ranks);
+  m->rank(rank);
 #endif
   return KARST_SUCCESS;
 }
@@ -925,9 +944,11 @@ karst_error_t karst_ensemble_mpi_start(karst_ctx_t *ctx, int *ranks, int *rank, 
 /** Finalise MPI when @p initialised (from karst_ensemble_mpi_start) says it was started there. */
 void karst_ensemble_mpi_finish(int initialised) {
 #if KARST_HAVE_MPI
+  const karst_i_mpi_api_t *m = karst_i_mpi_loaded();
   int fin = 0;
-  MPI_Finalized(&fin);
-  if (initialised && !fin) MPI_Finalize();
+  if (!m) return;
+  m->finalized(&fin);
+  if (initialised && !fin) m->finalize();
 #else
   (void)initialised;
 #endif

@@ -163,6 +163,25 @@ elif grep -q "but this karst was built without MPI" "$T/mpi.log"; then
 else
   echo "FAIL: mpirun"; cat "$T/mpi.log"; fail=1
 fi
+# Under a launcher karst opens its MPI plugin, libkarst_mpi.so, from libkarst's own directory
+# (libkarst itself is not linked with MPI). A libkarst without the plugin beside it must refuse
+# cleanly, naming the plugin, and create nothing (a copy of the library in an empty directory).
+LIBKARST=$(ldd "$KARST" | awk '/libkarst\.so/ { print $3; exit }')
+if [ -e "$(dirname "$LIBKARST")/libkarst_mpi.so" ]; then
+  mkdir -p "$T/lonely"
+  cp "$(readlink -f "$LIBKARST")" "$T/lonely/$(basename "$LIBKARST")"
+  if LD_LIBRARY_PATH="$T/lonely" OMPI_COMM_WORLD_SIZE=2 OMPI_COMM_WORLD_RANK=0 \
+      "$KARST" ensemble "$SCEN" -n 2 -o "$T/noplugin" -j 1 --quiet >"$T/noplugin.log" 2>&1; then
+    echo "FAIL: a launched run without the MPI plugin succeeded"; fail=1
+  elif grep -q "MPI plugin (libkarst_mpi.so, next to libkarst) could not be loaded" "$T/noplugin.log" &&
+      [ ! -e "$T/noplugin" ]; then
+    echo "ok: without libkarst_mpi.so a launched run refuses and creates nothing"
+  else
+    echo "FAIL: missing MPI plugin: $(cat "$T/noplugin.log")"; fail=1
+  fi
+elif [ "$("$KARST" --version | awk '$1 == "MPI" { print $2 }')" = "Open" ]; then
+  echo "FAIL: karst says it has MPI but $(dirname "$LIBKARST") holds no libkarst_mpi.so"; fail=1
+fi
 # Compare and report on the real ensemble with a real survey.
 check 0 "compare with Sakany" "$KARST" compare "$T/ref" --survey "$SRC/datasets/surveys/karstnet/Sakany_nodes.dat"
 check 0 "report" "$KARST" report "$T/ref" --survey "$SRC/datasets/surveys/karstnet/Sakany_nodes.dat" -o "$T/report.html"

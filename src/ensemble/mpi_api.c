@@ -1,0 +1,61 @@
+/* The MPI plugin loaded on first use (src/ensemble/mpi_api_internal.h). */
+#define _GNU_SOURCE /* dladdr */
+#include "ensemble/mpi_api_internal.h"
+
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <string.h>
+
+static pthread_once_t once = PTHREAD_ONCE_INIT;
+static const karst_i_mpi_api_t *loaded;
+static char load_error[1024]; /* why the load failed; empty when it succeeded */
+
+static void load(void) {
+  /* The plugin sits next to libkarst (build tree and installed tree alike): find libkarst's own
+   * file from an address inside it. */
+  Dl_info info;
+  char path[4096];
+  if (!dladdr((void *)karst_i_mpi_load, &info) || !info.dli_fname) {
+    snprintf(load_error, sizeof load_error, "cannot tell where libkarst is (dladdr)");
+    return;
+  }
+  const char *slash = strrchr(info.dli_fname, '/');
+  int dir = slash ? (int)(slash - info.dli_fname) : 0;
+  if (snprintf(path, sizeof path, "%.*s%s" KARST_I_MPI_PLUGIN, dir, info.dli_fname,
+               slash ? "/" : "") >= (int)sizeof path) {
+    snprintf(load_error, sizeof load_error, "the path of %s is too long", KARST_I_MPI_PLUGIN);
+    return;
+  }
+  /* RTLD_GLOBAL: Open MPI's own components, which it opens later, resolve MPI's symbols. */
+  void *lib = dlopen(slash ? path : KARST_I_MPI_PLUGIN, RTLD_NOW | RTLD_GLOBAL);
+  if (!lib) {
+    const char *why = dlerror();
+    snprintf(load_error, sizeof load_error, "%s", why ? why : "dlopen failed");
+    return;
+  }
+  void *sym = dlsym(lib, KARST_I_MPI_ENTRY);
+  if (!sym) {
+    snprintf(load_error, sizeof load_error, "%s has no function %s", path, KARST_I_MPI_ENTRY);
+    return;
+  }
+  const karst_i_mpi_api_t *(*entry)(void);
+  memcpy(&entry, &sym, sizeof sym);
+  const karst_i_mpi_api_t *api = entry();
+  if (!api || api->version != KARST_I_MPI_API_VERSION) {
+    snprintf(load_error, sizeof load_error, "%s is of another karst (interface %d, expected %d)",
+             path, api ? api->version : -1, KARST_I_MPI_API_VERSION);
+    return;
+  }
+  loaded = api;
+}
+
+const karst_i_mpi_api_t *karst_i_mpi_load(char *why, size_t why_size) {
+  if (pthread_once(&once, load) != 0) snprintf(load_error, sizeof load_error, "pthread_once failed");
+  if (!loaded && why && why_size > 0) snprintf(why, why_size, "%s", load_error);
+  return loaded;
+}
+
+const karst_i_mpi_api_t *karst_i_mpi_loaded(void) {
+  return loaded;
+}
