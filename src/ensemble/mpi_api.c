@@ -36,14 +36,14 @@ static void load(void) {
   }
   void *sym = dlsym(lib, KARST_I_MPI_ENTRY);
   if (!sym) {
-    snprintf(load_error, sizeof load_error, "%s has no function %s", path, KARST_I_MPI_ENTRY);
+    snprintf(load_error, sizeof load_error, "%.900s has no function %s", path, KARST_I_MPI_ENTRY);
     return;
   }
   const karst_i_mpi_api_t *(*entry)(void);
   memcpy(&entry, &sym, sizeof sym);
   const karst_i_mpi_api_t *api = entry();
   if (!api || api->version != KARST_I_MPI_API_VERSION) {
-    snprintf(load_error, sizeof load_error, "%s is of another karst (interface %d, expected %d)",
+    snprintf(load_error, sizeof load_error, "%.900s is of another karst (interface %d, expected %d)",
              path, api ? api->version : -1, KARST_I_MPI_API_VERSION);
     return;
   }
