@@ -6,8 +6,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "karst.h"
 #include "igraph/paths_igraph.h"
+#include "karst.h"
 #include "metrics/metrics_internal.h"
 
 static double now(void) {

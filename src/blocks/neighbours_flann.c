@@ -76,8 +76,8 @@ karst_error_t karst_i_blocks_radius_graph_flann(karst_ctx_t *ctx, const double *
   for (karst_int_t i = 0; i < n; i++) {
     double q[3] = {xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]};
     /* FLANN's L2 radius is squared; ask slightly wider and decide in double below */
-    int m = karst_i_flann.flann_radius_search_double(index, q, ind, dist, kmax, (float)(radius * radius) * 1.001f,
-                                       &p);
+    int m = karst_i_flann.flann_radius_search_double(index, q, ind, dist, kmax,
+                                                     (float)(radius * radius) * 1.001f, &p);
     if (m < 0) {
       err = karst_set_error(ctx, KARST_EEXTERNAL, "tile graph (FLANN): the search failed");
       goto cleanup;

@@ -14,9 +14,9 @@
 
 /**
  * Like malloc(bytes) (release with free()), but an array of 1 MiB or more
- * is rounded up to whole 2 MiB pages, aligned to 2 MiB and advised as a transparent-huge-page candidate
- * (madvise MADV_HUGEPAGE; the advice is only a hint and its failure is
- * ignored). Returns NULL when out of memory, as malloc does.
+ * is rounded up to whole 2 MiB pages, aligned to 2 MiB and advised as a transparent-huge-page
+ * candidate (madvise MADV_HUGEPAGE; the advice is only a hint and its failure is ignored). Returns
+ * NULL when out of memory, as malloc does.
  */
 void *karst_i_alloc_large(size_t bytes);
 

@@ -1,10 +1,11 @@
 /* PROJ loaded on first use (src/crs/proj_api_internal.h). */
 #include "crs/proj_api_internal.h"
 
-#include <dlfcn.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
+
+#include "core/library_internal.h"
 
 #ifndef KARST_PROJ_SONAME
 #error "KARST_PROJ_SONAME (the soname of libproj, e.g. libproj.so.25) is set by CMakeLists.txt"
@@ -16,24 +17,16 @@ static pthread_once_t once = PTHREAD_ONCE_INIT;
 static char load_error[512]; /* why the load failed; empty when it succeeded */
 
 static void load(void) {
-  void *lib = dlopen(KARST_PROJ_SONAME, RTLD_NOW | RTLD_LOCAL);
-  if (!lib) {
-    const char *why = dlerror();
-    snprintf(load_error, sizeof load_error, "%s", why ? why : "dlopen failed");
+  static const char *const names[] = {KARST_I_PROJ_FUNCTIONS(KARST_I_SYMBOL_NAME)};
+  void *syms[sizeof names / sizeof *names];
+  if (karst_i_library_open(KARST_PROJ_SONAME, names, syms, sizeof names / sizeof *names, load_error,
+                           sizeof load_error) != 0)
     return;
-  }
+  size_t i = 0;
   /* dlsym returns void *; POSIX guarantees it converts to a function pointer. */
-#define KARST_I_PROJ_LOOKUP(name)                                                                  \
-  {                                                                                                \
-    void *sym = dlsym(lib, #name);                                                                 \
-    if (!sym) {                                                                                    \
-      snprintf(load_error, sizeof load_error, "%s has no function %s", KARST_PROJ_SONAME, #name);  \
-      return;                                                                                      \
-    }                                                                                              \
-    memcpy(&karst_i_proj.name, &sym, sizeof sym);                                                  \
-  }
-  KARST_I_PROJ_FUNCTIONS(KARST_I_PROJ_LOOKUP)
-#undef KARST_I_PROJ_LOOKUP
+#define KARST_I_PROJ_SET(name) memcpy(&karst_i_proj.name, &syms[i++], sizeof(void *));
+  KARST_I_PROJ_FUNCTIONS(KARST_I_PROJ_SET)
+#undef KARST_I_PROJ_SET
 }
 
 karst_error_t karst_i_proj_load(karst_ctx_t *ctx) {

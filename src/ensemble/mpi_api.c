@@ -43,15 +43,17 @@ static void load(void) {
   memcpy(&entry, &sym, sizeof sym);
   const karst_i_mpi_api_t *api = entry();
   if (!api || api->version != KARST_I_MPI_API_VERSION) {
-    snprintf(load_error, sizeof load_error, "%.900s is of another karst (interface %d, expected %d)",
-             path, api ? api->version : -1, KARST_I_MPI_API_VERSION);
+    snprintf(load_error, sizeof load_error,
+             "%.900s is of another karst (interface %d, expected %d)", path,
+             api ? api->version : -1, KARST_I_MPI_API_VERSION);
     return;
   }
   loaded = api;
 }
 
 const karst_i_mpi_api_t *karst_i_mpi_load(char *why, size_t why_size) {
-  if (pthread_once(&once, load) != 0) snprintf(load_error, sizeof load_error, "pthread_once failed");
+  if (pthread_once(&once, load) != 0)
+    snprintf(load_error, sizeof load_error, "pthread_once failed");
   if (!loaded && why && why_size > 0) snprintf(why, why_size, "%s", load_error);
   return loaded;
 }

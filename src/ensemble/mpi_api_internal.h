@@ -21,7 +21,7 @@
 
 /** The MPI calls karst makes, on MPI_COMM_WORLD; each returns MPI's error code (0: success). */
 typedef struct {
-  int version; /* KARST_I_MPI_API_VERSION */
+  int version;      /* KARST_I_MPI_API_VERSION */
   char library[96]; /* "Open MPI 4.1.4 (MPI 3.1)", from the headers the plugin was built with */
   int (*initialized)(int *flag);
   int (*finalized)(int *flag);
@@ -29,7 +29,7 @@ typedef struct {
   int (*finalize)(void);
   int (*size)(int *size);
   int (*rank)(int *rank);
-  int (*max_int)(int in, int *out);                  /* MPI_Allreduce, MPI_MAX */
+  int (*max_int)(int in, int *out);                   /* MPI_Allreduce, MPI_MAX */
   int (*sum_long_long)(long long in, long long *out); /* MPI_Allreduce, MPI_SUM */
 } karst_i_mpi_api_t;
 

@@ -31,8 +31,15 @@ static int sum_long_long(long long in, long long *out) {
   return MPI_Allreduce(&in, out, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
 }
 
-static karst_i_mpi_api_t api = {KARST_I_MPI_API_VERSION, "", initialized, finalized,
-                                init_thread_funneled,    finalize, size, rank, max_int,
+static karst_i_mpi_api_t api = {KARST_I_MPI_API_VERSION,
+                                "",
+                                initialized,
+                                finalized,
+                                init_thread_funneled,
+                                finalize,
+                                size,
+                                rank,
+                                max_int,
                                 sum_long_long};
 
 /* The entry point (KARST_I_MPI_ENTRY), the one symbol the module exports. */

@@ -1,10 +1,11 @@
 /* GDAL loaded on first use (src/export/gdal_api_internal.h). */
 #include "export/gdal_api_internal.h"
 
-#include <dlfcn.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
+
+#include "core/library_internal.h"
 
 #ifndef KARST_GDAL_SONAME
 #error "KARST_GDAL_SONAME (the soname of libgdal, e.g. libgdal.so.32) is set by CMakeLists.txt"
@@ -16,24 +17,16 @@ static pthread_once_t once = PTHREAD_ONCE_INIT;
 static char load_error[512]; /* why the load failed; empty when it succeeded */
 
 static void load(void) {
-  void *lib = dlopen(KARST_GDAL_SONAME, RTLD_NOW | RTLD_LOCAL);
-  if (!lib) {
-    const char *why = dlerror();
-    snprintf(load_error, sizeof load_error, "%s", why ? why : "dlopen failed");
+  static const char *const names[] = {KARST_I_GDAL_FUNCTIONS(KARST_I_SYMBOL_NAME)};
+  void *syms[sizeof names / sizeof *names];
+  if (karst_i_library_open(KARST_GDAL_SONAME, names, syms, sizeof names / sizeof *names, load_error,
+                           sizeof load_error) != 0)
     return;
-  }
+  size_t i = 0;
   /* dlsym returns void *; POSIX guarantees it converts to a function pointer. */
-#define KARST_I_GDAL_LOOKUP(name)                                                                  \
-  {                                                                                                \
-    void *sym = dlsym(lib, #name);                                                                 \
-    if (!sym) {                                                                                    \
-      snprintf(load_error, sizeof load_error, "%s has no function %s", KARST_GDAL_SONAME, #name);  \
-      return;                                                                                      \
-    }                                                                                              \
-    memcpy(&karst_i_gdal.name, &sym, sizeof sym);                                                  \
-  }
-  KARST_I_GDAL_FUNCTIONS(KARST_I_GDAL_LOOKUP)
-#undef KARST_I_GDAL_LOOKUP
+#define KARST_I_GDAL_SET(name) memcpy(&karst_i_gdal.name, &syms[i++], sizeof(void *));
+  KARST_I_GDAL_FUNCTIONS(KARST_I_GDAL_SET)
+#undef KARST_I_GDAL_SET
 }
 
 karst_error_t karst_i_gdal_load(karst_ctx_t *ctx) {

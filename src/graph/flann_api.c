@@ -1,10 +1,11 @@
 /* FLANN loaded on first use (src/graph/flann_api_internal.h). */
 #include "graph/flann_api_internal.h"
 
-#include <dlfcn.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
+
+#include "core/library_internal.h"
 
 #ifndef KARST_FLANN_SONAME
 #error "KARST_FLANN_SONAME (the soname of libflann, e.g. libflann.so.1.9) is set by CMakeLists.txt"
@@ -16,33 +17,20 @@ static pthread_once_t once = PTHREAD_ONCE_INIT;
 static char load_error[512]; /* why the load failed; empty when it succeeded */
 
 static void load(void) {
-  void *lib = dlopen(KARST_FLANN_SONAME, RTLD_NOW | RTLD_LOCAL);
-  if (!lib) {
-    const char *why = dlerror();
-    snprintf(load_error, sizeof load_error, "%s", why ? why : "dlopen failed");
+  static const char *const names[] = {
+      KARST_I_FLANN_FUNCTIONS(KARST_I_SYMBOL_NAME) "DEFAULT_FLANN_PARAMETERS"};
+  void *syms[sizeof names / sizeof *names];
+  if (karst_i_library_open(KARST_FLANN_SONAME, names, syms, sizeof names / sizeof *names,
+                           load_error, sizeof load_error) != 0)
     return;
-  }
   karst_i_flann_t f;
-  memset(&f, 0, sizeof f);
+  size_t i = 0;
   /* dlsym returns void *; POSIX guarantees it converts to a function pointer. */
-#define KARST_I_FLANN_LOOKUP(name)                                                                 \
-  {                                                                                                \
-    void *sym = dlsym(lib, #name);                                                                 \
-    if (!sym) {                                                                                    \
-      snprintf(load_error, sizeof load_error, "%s has no function %s", KARST_FLANN_SONAME, #name); \
-      return;                                                                                      \
-    }                                                                                              \
-    memcpy(&f.name, &sym, sizeof sym);                                                             \
-  }
-  KARST_I_FLANN_FUNCTIONS(KARST_I_FLANN_LOOKUP)
-#undef KARST_I_FLANN_LOOKUP
-  f.defaults = dlsym(lib, "DEFAULT_FLANN_PARAMETERS");
-  if (!f.defaults) {
-    snprintf(load_error, sizeof load_error, "%s has no DEFAULT_FLANN_PARAMETERS",
-             KARST_FLANN_SONAME);
-    return;
-  }
-  karst_i_flann = f; /* all or nothing */
+#define KARST_I_FLANN_SET(name) memcpy(&f.name, &syms[i++], sizeof(void *));
+  KARST_I_FLANN_FUNCTIONS(KARST_I_FLANN_SET)
+#undef KARST_I_FLANN_SET
+  f.defaults = syms[i];
+  karst_i_flann = f;
 }
 
 karst_error_t karst_i_flann_load(karst_ctx_t *ctx) {

@@ -54,9 +54,8 @@ karst_error_t karst_i_knn_flann(karst_ctx_t *ctx, const double *xyz, karst_int_t
   karst_i_flann.flann_log_verbosity(FLANN_LOG_NONE);
   float speedup;
   index = karst_i_flann.flann_build_index_double((double *)xyz, (int)n, 3, &speedup, &p);
-  if (!index ||
-      karst_i_flann.flann_find_nearest_neighbors_index_double(index, (double *)xyz, (int)n, ind, dist, kq, &p) !=
-          0) {
+  if (!index || karst_i_flann.flann_find_nearest_neighbors_index_double(
+                    index, (double *)xyz, (int)n, ind, dist, kq, &p) != 0) {
     err = karst_set_error(ctx, KARST_EEXTERNAL, "kNN (FLANN): the search failed for %lld points",
                           (long long)n);
     goto cleanup;
@@ -72,7 +71,8 @@ karst_error_t karst_i_knn_flann(karst_ctx_t *ctx, const double *xyz, karst_int_t
     }
     qsort(c, (size_t)m, sizeof *c, cand_cmp);
     if (m > k) m = k;
-    for (int j = 0; j < m; j++) nbr[(size_t)v * k + j] = c[j].i;
+    for (int j = 0; j < m; j++)
+      nbr[(size_t)v * k + j] = c[j].i;
     kd2[v] = c[m - 1].d;
     kidx[v] = c[m - 1].i;
   }

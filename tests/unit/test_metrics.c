@@ -10,8 +10,8 @@
 
 #include <cmocka.h>
 
-#include "karst.h"
 #include "igraph/paths_igraph.h"
+#include "karst.h"
 #include "metrics/metrics_internal.h"
 #include "test_util.h"
 
