@@ -53,6 +53,18 @@ cc $SAN -std=c11 "$T/consumer/main.c" $(pkg-config --cflags karst) $(pkg-config 
   -Wl,-rpath,"$T/prefix/lib" -o "$T/consumer_pc" || fail "consumer with pkg-config"
 "$T/consumer_pc" | grep -q "^karst [0-9.]* 5.0$" || fail "consumer (pkg-config) output"
 echo "ok: pkg-config consumer"
+# With MPI, the plugin (libkarst_mpi.so) is installed beside libkarst, and the installed karst,
+# started by mpirun, opens it from there (LD_LIBRARY_PATH makes the installed libkarst the one
+# loaded): the ranks split the members, as ensemble_log.json says.
+if [ -e "$BUILD/libkarst_mpi.so" ]; then
+  [ -e "$T/prefix/lib/libkarst_mpi.so" ] || fail "libkarst_mpi.so not installed beside libkarst"
+  mpirun --allow-run-as-root --oversubscribe -np 2 -x LD_LIBRARY_PATH="$T/prefix/lib" \
+    -x ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0" \
+    "$T/prefix/bin/karst" ensemble "$SRC/datasets/scenarios/branchwork.yaml" -n 2 -j 1 \
+    -o "$T/mpi" --quiet >"$T/mpi.log" 2>&1 || { cat "$T/mpi.log"; fail "installed karst under mpirun"; }
+  grep -q '"ranks": 2' "$T/mpi/ensemble_log.json" || fail "installed karst under mpirun: not 2 ranks"
+  echo "ok: the installed karst runs under mpirun -np 2 with the installed MPI plugin"
+fi
 
 # --- DESTDIR install of everything -------------------------------------------------------
 cache() { sed -n "s/^$1:[A-Z]*=//p" "$BUILD/CMakeCache.txt"; }
