@@ -21,8 +21,10 @@
  * (default 5 runs; --keep writes the scenarios to DIR; KS is a Karst-Synthesis checkout with
  * KS/ks_rect built as docs/performance.md says, run R times from KS/G++ on this machine.)
  *
- * Prints, per scene, the sample and edge counts of the run, the fastest and median wall time of
- * R runs, the peak resident memory, and the ratio to the peer's time: measured now with
+ * Prints first what every karst process pays before any work (`karst --version`: median wall
+ * time of 30 runs, page faults, peak memory); then, per scene, the sample and edge counts of the
+ * run, the fastest and median wall time of R runs, the peak resident memory, the page faults of
+ * a run, and the ratio to the peer's time: measured now with
  * --karst-synthesis, otherwise the figure docs/performance.md records (measured on another
  * machine of the CI type: a ratio to it holds only there).
  */
@@ -138,11 +140,12 @@ static int write_kns(const char *path) {
 }
 
 /* One whole-process run: wall time and peak RSS (KiB), or -1 on failure. */
-static double run_once(const char *scenario, const char *out, long *rss_kib) {
+static double run_once(const char *scenario, const char *out, long *rss_kib, long *faults) {
   char *argv[] = {(char *)KARST_CLI, "generate", (char *)scenario, "-o", (char *)out,
                   "--threads",       "1",        "--quiet",        NULL};
-  return bench_run(argv, rss_kib);
+  return bench_run_counted(argv, 0, rss_kib, faults);
 }
+
 
 /* The number @p key in the object @p section of DIR/run.json, or -1. */
 static long run_value(const char *dir, const char *section, const char *key) {
@@ -200,6 +203,22 @@ typedef struct {
   double peer_s; /* the peer's whole-process time, one thread (docs/performance.md) */
 } scene_t;
 
+/* What every karst process pays before any work: `karst --version`, median wall time of
+ * @p n runs, and its page faults (docs/performance.md: libraries loaded at start-up). */
+static int startup(int n) {
+  double t[100];
+  long rss = 0, faults = 0;
+  char *argv[] = {(char *)KARST_CLI, "--version", NULL};
+  for (int r = 0; r < n; r++)
+    if ((t[r] = bench_run_counted(argv, 1, &rss, &faults)) < 0) {
+      fprintf(stderr, "bench_peers: %s --version failed\n", KARST_CLI);
+      return 1;
+    }
+  printf("%-28s karst --version: %.1f ms (median of %d), %ld page faults, peak RSS %.0f MiB\n",
+         "start-up", 1e3 * median(t, n), n, faults, rss / 1024.0);
+  return 0;
+}
+
 int main(int argc, char **argv) {
   int runs = 5;
   const char *keep = NULL, *ks = NULL;
@@ -235,6 +254,7 @@ int main(int argc, char **argv) {
   int status = 0;
   printf("bench_peers: whole process (%s generate ... --threads 1), %d runs each\n", KARST_CLI,
          runs);
+  if (startup(30) != 0) status = 1;
   for (int s = 0; s < 2; s++) {
     const scene_t *S = &scenes[s];
     char path[4096], out[4096];
@@ -246,10 +266,10 @@ int main(int argc, char **argv) {
       continue;
     }
     double t[100];
-    long rss = 0, peak = 0;
+    long rss = 0, peak = 0, faults = 0;
     int ok = 1;
     for (int r = 0; r < runs && ok; r++) {
-      t[r] = run_once(path, out, &rss);
+      t[r] = run_once(path, out, &rss, &faults);
       if (t[r] < 0) ok = 0;
       if (rss > peak) peak = rss;
     }
@@ -263,10 +283,10 @@ int main(int argc, char **argv) {
       if (t[r] < fastest) fastest = t[r];
     double med = median(t, runs);
     printf("%-28s samples %7ld  edges %8ld  k %3ld  key points %2ld: %.3f s fastest, %.3f s "
-           "median, peak RSS %.0f MiB\n",
+           "median, peak RSS %.0f MiB, %ld page faults\n",
            S->name, run_value(out, "counts", "samples"), run_value(out, "counts", "graph_edges"),
            run_value(out, "sampling", "k"), run_value(out, "counts", "key_points"), fastest, med,
-           peak / 1024.0);
+           peak / 1024.0, faults);
     if (s == 0 && ks) {
       long ks_peak = 0;
       double ks_med = run_karst_synthesis(ks, runs, &ks_peak);

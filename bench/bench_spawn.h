@@ -4,6 +4,7 @@
 #define KARST_BENCH_SPAWN_H
 
 #include <errno.h>
+#include <fcntl.h>
 #include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,19 +36,33 @@ static inline double bench_now_s(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
-/* Run @p argv (argv[0] the program) to completion: its wall time in seconds and its peak
- * resident memory (KiB, *rss_kib), or -1 when it could not start or did not exit with 0. */
-static inline double bench_run(char *const argv[], long *rss_kib) {
+/* Run @p argv (argv[0] the program) to completion, its standard output to /dev/null when
+ * @p quiet: its wall time in seconds, its peak resident memory (KiB, *rss_kib) and its page
+ * faults (*faults, minor and major; may be NULL), or -1 when it could not start or did not exit
+ * with 0. */
+static inline double bench_run_counted(char *const argv[], int quiet, long *rss_kib,
+                                       long *faults) {
+  posix_spawn_file_actions_t fa;
+  if (posix_spawn_file_actions_init(&fa) != 0) return -1;
+  if (quiet) posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
   double t0 = bench_now_s();
   pid_t pid;
-  if (posix_spawn(&pid, argv[0], NULL, NULL, argv, environ) != 0) return -1;
+  int started = posix_spawn(&pid, argv[0], &fa, NULL, argv, environ) == 0;
+  posix_spawn_file_actions_destroy(&fa);
+  if (!started) return -1;
   int status;
   struct rusage ru;
   if (wait4(pid, &status, 0, &ru) < 0) return -1;
   double t = bench_now_s() - t0;
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return -1;
   *rss_kib = ru.ru_maxrss;
+  if (faults) *faults = ru.ru_minflt + ru.ru_majflt;
   return t;
+}
+
+/* bench_run_counted without the page faults, output shown. */
+static inline double bench_run(char *const argv[], long *rss_kib) {
+  return bench_run_counted(argv, 0, rss_kib, NULL);
 }
 
 /* DIR/run.json as a string (static storage, overwritten by the next call), or NULL. */
