@@ -4,11 +4,11 @@
 #include <dlfcn.h>
 #include <stdio.h>
 
-int karst_i_library_open(const char *soname, const char *const *names, void **syms, size_t n,
-                         char *why, size_t why_size) {
+int karst_i_library_open(const char *file, int global, const char *const *names, void **syms,
+                         size_t n, char *why, size_t why_size) {
   for (size_t i = 0; i < n; i++)
     syms[i] = NULL;
-  void *lib = dlopen(soname, RTLD_NOW | RTLD_LOCAL);
+  void *lib = dlopen(file, RTLD_NOW | (global ? RTLD_GLOBAL : RTLD_LOCAL));
   if (!lib) {
     const char *e = dlerror();
     snprintf(why, why_size, "%s", e ? e : "dlopen failed");
@@ -17,7 +17,7 @@ int karst_i_library_open(const char *soname, const char *const *names, void **sy
   for (size_t i = 0; i < n; i++) {
     syms[i] = dlsym(lib, names[i]);
     if (!syms[i]) {
-      snprintf(why, why_size, "%s has no symbol %s", soname, names[i]);
+      snprintf(why, why_size, "%s has no symbol %s", file, names[i]);
       for (size_t j = 0; j < n; j++)
         syms[j] = NULL;
       return -1;

@@ -1,7 +1,7 @@
 /* Shared libraries opened on first use (PROJ, GDAL, FLANN: src/crs/proj_api.c,
- * src/export/gdal_api.c, src/graph/flann_api.c). Each loader lists the symbols it needs with an
- * X-macro, opens the library once per process (pthread_once) and copies the addresses into its
- * table of typed pointers. */
+ * src/export/gdal_api.c, src/graph/flann_api.c; karst's own MPI plugin: src/ensemble/mpi_api.c).
+ * Each loader lists the symbols it needs (the first three with an X-macro), opens the library
+ * once per process (pthread_once) and copies the addresses into its table of typed pointers. */
 #ifndef KARST_LIBRARY_INTERNAL_H
 #define KARST_LIBRARY_INTERNAL_H
 
@@ -11,12 +11,13 @@
 #define KARST_I_SYMBOL_NAME(name) #name,
 
 /**
- * Open the shared library @p soname (dlopen, RTLD_NOW | RTLD_LOCAL) and look up the @p n
- * symbols @p names into @p syms, all or none: on failure every entry is NULL and @p why holds
- * the reason (dlopen's, or "SONAME has no symbol NAME"). The library stays open.
+ * Open the shared library @p file (a soname, or a path; dlopen with RTLD_NOW, and RTLD_GLOBAL
+ * when @p global, else RTLD_LOCAL) and look up the @p n symbols @p names into @p syms, all or
+ * none: on failure every entry is NULL and @p why holds the reason (dlopen's, or "FILE has no
+ * symbol NAME"). The library stays open.
  * @return 0 on success, -1 on failure. Time complexity: O(n) lookups.
  */
-int karst_i_library_open(const char *soname, const char *const *names, void **syms, size_t n,
-                         char *why, size_t why_size);
+int karst_i_library_open(const char *file, int global, const char *const *names, void **syms,
+                         size_t n, char *why, size_t why_size);
 
 #endif

@@ -19,8 +19,8 @@ static char load_error[512]; /* why the load failed; empty when it succeeded */
 static void load(void) {
   static const char *const names[] = {KARST_I_PROJ_FUNCTIONS(KARST_I_SYMBOL_NAME)};
   void *syms[sizeof names / sizeof *names];
-  if (karst_i_library_open(KARST_PROJ_SONAME, names, syms, sizeof names / sizeof *names, load_error,
-                           sizeof load_error) != 0)
+  if (karst_i_library_open(KARST_PROJ_SONAME, 0, names, syms, sizeof names / sizeof *names,
+                           load_error, sizeof load_error) != 0)
     return;
   size_t i = 0;
   /* dlsym returns void *; POSIX guarantees it converts to a function pointer. */

@@ -7,6 +7,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "core/library_internal.h"
+
 static pthread_once_t once = PTHREAD_ONCE_INIT;
 static const karst_i_mpi_api_t *loaded;
 static char load_error[1024]; /* why the load failed; empty when it succeeded */
@@ -27,18 +29,12 @@ static void load(void) {
     snprintf(load_error, sizeof load_error, "the path of %s is too long", KARST_I_MPI_PLUGIN);
     return;
   }
-  /* RTLD_GLOBAL: Open MPI's own components, which it opens later, resolve MPI's symbols. */
-  void *lib = dlopen(slash ? path : KARST_I_MPI_PLUGIN, RTLD_NOW | RTLD_GLOBAL);
-  if (!lib) {
-    const char *why = dlerror();
-    snprintf(load_error, sizeof load_error, "%s", why ? why : "dlopen failed");
+  /* Global: Open MPI's own components, which it opens later, resolve MPI's symbols. */
+  static const char *const names[] = {KARST_I_MPI_ENTRY};
+  void *sym;
+  if (karst_i_library_open(slash ? path : KARST_I_MPI_PLUGIN, 1, names, &sym, 1, load_error,
+                           sizeof load_error) != 0)
     return;
-  }
-  void *sym = dlsym(lib, KARST_I_MPI_ENTRY);
-  if (!sym) {
-    snprintf(load_error, sizeof load_error, "%.900s has no function %s", path, KARST_I_MPI_ENTRY);
-    return;
-  }
   const karst_i_mpi_api_t *(*entry)(void);
   memcpy(&entry, &sym, sizeof sym);
   const karst_i_mpi_api_t *api = entry();

@@ -21,8 +21,7 @@
 
 /** The MPI calls karst makes, on MPI_COMM_WORLD; each returns MPI's error code (0: success). */
 typedef struct {
-  int version;      /* KARST_I_MPI_API_VERSION */
-  char library[96]; /* "Open MPI 4.1.4 (MPI 3.1)", from the headers the plugin was built with */
+  int version; /* KARST_I_MPI_API_VERSION */
   int (*initialized)(int *flag);
   int (*finalized)(int *flag);
   int (*init_thread_funneled)(int *provided);

@@ -2,7 +2,6 @@
  * of karst linked with MPI. Not part of libkarst: CMakeLists.txt builds it as a module next to
  * the library, which opens it with dlopen under mpirun. */
 #include <mpi.h>
-#include <stdio.h>
 
 #include "ensemble/mpi_api_internal.h"
 
@@ -31,25 +30,18 @@ static int sum_long_long(long long in, long long *out) {
   return MPI_Allreduce(&in, out, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
 }
 
-static karst_i_mpi_api_t api = {KARST_I_MPI_API_VERSION,
-                                "",
-                                initialized,
-                                finalized,
-                                init_thread_funneled,
-                                finalize,
-                                size,
-                                rank,
-                                max_int,
-                                sum_long_long};
+static const karst_i_mpi_api_t api = {KARST_I_MPI_API_VERSION,
+                                      initialized,
+                                      finalized,
+                                      init_thread_funneled,
+                                      finalize,
+                                      size,
+                                      rank,
+                                      max_int,
+                                      sum_long_long};
 
 /* The entry point (KARST_I_MPI_ENTRY), the one symbol the module exports. */
 __attribute__((visibility("default"))) const karst_i_mpi_api_t *karst_i_mpi_plugin_api(void);
 const karst_i_mpi_api_t *karst_i_mpi_plugin_api(void) {
-#if defined(OMPI_MAJOR_VERSION)
-  snprintf(api.library, sizeof api.library, "Open MPI %d.%d.%d (MPI %d.%d)", OMPI_MAJOR_VERSION,
-           OMPI_MINOR_VERSION, OMPI_RELEASE_VERSION, MPI_VERSION, MPI_SUBVERSION);
-#else
-  snprintf(api.library, sizeof api.library, "MPI %d.%d", MPI_VERSION, MPI_SUBVERSION);
-#endif
   return &api;
 }

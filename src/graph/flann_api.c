@@ -20,7 +20,7 @@ static void load(void) {
   static const char *const names[] = {
       KARST_I_FLANN_FUNCTIONS(KARST_I_SYMBOL_NAME) "DEFAULT_FLANN_PARAMETERS"};
   void *syms[sizeof names / sizeof *names];
-  if (karst_i_library_open(KARST_FLANN_SONAME, names, syms, sizeof names / sizeof *names,
+  if (karst_i_library_open(KARST_FLANN_SONAME, 0, names, syms, sizeof names / sizeof *names,
                            load_error, sizeof load_error) != 0)
     return;
   karst_i_flann_t f;
