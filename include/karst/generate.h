@@ -34,6 +34,7 @@ enum {
 /** What a realisation produced besides the network: counts and per-stage wall times. */
 typedef struct karst_generate_stats {
   karst_int_t n_samples, n_graph_edges, n_key_points, n_skeleton_paths;
+  karst_int_t n_points_kept; /**< samples taken from sampling.points (0 without it) */
   karst_int_t n_nodes, n_edges;
   double total_length;
   karst_int_t n_skeleton_nodes; /**< graph vertices on the skeleton S before amplification (#S of

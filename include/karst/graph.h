@@ -27,7 +27,8 @@ extern "C" {
   X(KARST_SAMPLE_FILL, "fill")                                                                     \
   X(KARST_SAMPLE_AMPLIFICATION, "amplification")                                                   \
   X(KARST_SAMPLE_PRESCRIBED, "prescribed_path")                                                    \
-  X(KARST_SAMPLE_SURVEY, "survey")
+  X(KARST_SAMPLE_SURVEY, "survey")                                                                 \
+  X(KARST_SAMPLE_POINTS, "points")
 
 typedef enum {
 #define KARST_X_ENUM(code, name) code,

@@ -30,6 +30,10 @@ extern "C" {
 #define KARST_HEIGHTFIELD_MAX_BYTES (2LL << 30)
 /** Most cells (ncols x nrows) of a heightfield (1e8 cells, 800 MB of elevations). */
 #define KARST_HEIGHTFIELD_MAX_CELLS 100000000LL
+/** Largest point cloud file read (sampling.points), in bytes (1 GiB). */
+#define KARST_POINTS_MAX_BYTES (1LL << 30)
+/** Most points of a point cloud file (sampling.points): 20 M, 480 MB of coordinates. */
+#define KARST_POINTS_MAX_POINTS 20000000
 /**
  * A heightfield covers the domain when its cells (edges, not centres) span the
  * domain's x-y extent; it may fall short by this fraction of a cell, so that
@@ -292,6 +296,9 @@ typedef struct karst_sampling {
   int k;               /**< neighbours in the kNN graph, >= 1, default 40 */
   int knn;             /**< karst_knn_method_t: grid (default) or flann */
   karst_int_t max_samples; /**< safety cap, default 5e6 */
+  char *points;            /**< sampling.points: the point cloud file as resolved, or NULL */
+  double *points_xyz;      /**< its points (3 coordinates each), read with the scenario */
+  karst_int_t n_points;    /**< how many */
 } karst_sampling_t;
 
 /** Where a hierarchical amplification step anchors its points (amplification.anchor). */
@@ -504,7 +511,7 @@ typedef struct karst_scenario {
   karst_srcpos_t pos_key_points;    /**< the key_points list */
   karst_srcpos_t pos_sampling;      /**< the sampling map */
   /* Where the keys behind the resource estimate were given (include/karst/budget.h). */
-  karst_srcpos_t pos_fill_radius, pos_feature_radius, pos_k, pos_max_samples;
+  karst_srcpos_t pos_fill_radius, pos_feature_radius, pos_k, pos_max_samples, pos_points;
   karst_srcpos_t pos_amplification_steps, pos_amplification_points;
   karst_geometry_t geometry;           /**< `karst mesh`: blending, wall details, speleothems */
   struct karst_blocks_section *blocks; /**< the blocks section (karst blocks), NULL when absent */
@@ -610,6 +617,22 @@ karst_error_t karst_scenario_files(karst_ctx_t *ctx, const char *path, char ***f
 /** Check the cross-field rules (key points inside the domain and below the terrain, a spring
  * present ...). */
 karst_error_t karst_scenario_check(karst_ctx_t *ctx, const karst_scenario_t *sc);
+
+/**
+ * Read a point cloud file (sampling.points, docs/scenario.md): one point "x y z" per line (m),
+ * separated by blanks or commas, '#' comment lines, blank lines, an optional header "x y z".
+ * @param xyz receives 3 × *@p n coordinates in the file's order (free() it).
+ * @param lines if not NULL, receives each point's line in the file (free() it).
+ * @return KARST_SUCCESS; KARST_EPARSE naming the file, line, column and field (x, y or z) for a
+ *         field that is not a finite number, a missing or extra field, a line over 4096 bytes, a
+ *         point repeating an earlier one (both lines given) or a file without points;
+ *         KARST_ERANGE beyond KARST_POINTS_MAX_POINTS points or KARST_POINTS_MAX_BYTES bytes;
+ *         KARST_EIO (missing, unreadable, not a regular file), KARST_ENOMEM. Nothing is returned
+ *         on failure.
+ * Time complexity: O(file size + n).
+ */
+karst_error_t karst_points_load(karst_ctx_t *ctx, const char *path, double **xyz, karst_int_t *n,
+                                long **lines);
 
 /** Read an ESRI ASCII grid (.asc) into @p t; errors name the file, line and field. */
 karst_error_t karst_terrain_load_grid(karst_ctx_t *ctx, const char *path, karst_terrain_t *t);

@@ -78,7 +78,8 @@ static const karst_array_info_t entries[] = {
     /* samples.vtp */
     {"source", "samples.vtp point data", KARST_ARRAYS_UNIT_CATEGORY, "sample source",
      "which sampler placed the point: a key point, a horizon, the water table, a permeable "
-     "zone, the fill, amplification or a prescribed path",
+     "zone, the fill, amplification, a prescribed path, a survey station or the point cloud of "
+     "sampling.points",
      CAT, "source_names", NULL},
     /* meshes */
     {"feature", "mesh .vtp cell data", KARST_ARRAYS_UNIT_CATEGORY, "surface feature",

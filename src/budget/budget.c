@@ -31,7 +31,8 @@ void karst_budget_estimate(const karst_scenario_t *sc, int threads, karst_budget
     L[a] = sc->domain_max[a] - sc->domain_min[a];
   const karst_sampling_t *sp = &sc->sampling;
   double rc = sp->fill_radius, rf = sp->feature_radius;
-  b->fill_samples = packing(L[0], L[1], L[2], rc);
+  /* A point cloud (sampling.points) replaces the fill: at most all of its points are kept. */
+  b->fill_samples = sp->points_xyz ? (double)sp->n_points : packing(L[0], L[1], L[2], rc);
   int springs = 0;
   for (int k = 0; k < sc->n_key_points; k++)
     springs += sc->key_points[k].type == KARST_KEYPOINT_SPRING;
@@ -67,6 +68,8 @@ void karst_budget_estimate(const karst_scenario_t *sc, int threads, karst_budget
     b->driver = "sampling.max_samples", b->driver_pos = sc->pos_max_samples;
   } else if (b->feature_samples > b->fill_samples) {
     b->driver = "sampling.feature_radius", b->driver_pos = sc->pos_feature_radius;
+  } else if (sp->points_xyz) {
+    b->driver = "sampling.points", b->driver_pos = sc->pos_points;
   } else if (sc->pos_fill_radius.line > 0 || !(sc->pos_domain.line > 0)) {
     b->driver = "sampling.fill_radius", b->driver_pos = sc->pos_fill_radius;
   } else {

@@ -415,6 +415,9 @@ karst_error_t karst_generate(karst_ctx_t *ctx, const karst_scenario_t *sc, uint6
   if (stats) {
     stats->stage_seconds[KARST_STAGE_GRAPH] = karst_i_now() - t;
     stats->n_samples = smp->n;
+    stats->n_points_kept = 0;
+    for (karst_int_t i = 0; i < smp->n; i++)
+      stats->n_points_kept += smp->source[i] == KARST_SAMPLE_POINTS;
     stats->n_graph_edges = g.n_arcs / 2;
   }
   if (smp->n_key_points != sc->n_key_points) {

@@ -369,9 +369,11 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   fputs(", \"feature_radius\": ", fp), json_num(fp, sc->sampling.feature_radius);
   fputs(", \"permeable_threshold\": ", fp), json_num(fp, sc->sampling.permeable_threshold);
   fputs(", \"feature_band\": ", fp), json_num(fp, sc->sampling.feature_band);
-  fprintf(fp, ", \"k\": %d, \"knn\": \"%s\", \"max_samples\": %lld},\n", sc->sampling.k,
+  fprintf(fp, ", \"k\": %d, \"knn\": \"%s\", \"max_samples\": %lld, ", sc->sampling.k,
           sc->sampling.knn == KARST_KNN_FLANN ? "flann" : "grid",
           (long long)sc->sampling.max_samples);
+  file_json(fp, "points", sc->sampling.points);
+  fprintf(fp, ", \"points_count\": %lld},\n", (long long)sc->sampling.n_points);
   kv_num(fp, I, "gamma", sc->gamma, 0);
   kv_num(fp, I, "reuse", sc->reuse, 0);
   kv_num(fp, I, "tortuosity", sc->tortuosity, 0);
@@ -460,6 +462,7 @@ karst_error_t karst_generate_write_run(karst_ctx_t *ctx, const char *path,
       fp,
       "    \"skeleton_paths\": %lld,\n    \"network_nodes\": %lld,\n    \"network_edges\": %lld,\n",
       (long long)st->n_skeleton_paths, (long long)st->n_nodes, (long long)st->n_edges);
+  fprintf(fp, "    \"points_kept\": %lld,\n", (long long)st->n_points_kept);
   fprintf(fp, "    \"skeleton_nodes\": %lld,\n", (long long)st->n_skeleton_nodes);
   kv_num(fp, I, "skeleton_length", st->skeleton_length, 0);
   fprintf(fp, "    \"observed_edges\": %lld,\n", (long long)st->n_observed_edges);

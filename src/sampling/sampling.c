@@ -247,7 +247,7 @@ static karst_error_t record_sample(sampler_t *S, const double p[3], karst_sample
   if (karst_samples_add(S->s, p, src) != KARST_SUCCESS)
     return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for %lld samples",
                            (long long)S->s->n + 1);
-  if (src == KARST_SAMPLE_FILL) return KARST_SUCCESS;
+  if (src == KARST_SAMPLE_FILL || src == KARST_SAMPLE_POINTS) return KARST_SUCCESS;
   int64_t lo[3], hi[3];
   for (int a = 0; a < 3; a++) {
     double l = floor((p[a] - S->rm - S->lo[a]) / S->cc),
@@ -263,7 +263,7 @@ static karst_error_t record_sample(sampler_t *S, const double p[3], karst_sample
 }
 
 static karst_error_t add_sample(sampler_t *S, const double p[3], karst_sample_source_t src) {
-  if (src != KARST_SAMPLE_FILL && !cgrid_insert(&S->feat, p))
+  if (src != KARST_SAMPLE_FILL && src != KARST_SAMPLE_POINTS && !cgrid_insert(&S->feat, p))
     return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the feature sample grid");
   return record_sample(S, p, src);
 }
@@ -881,6 +881,44 @@ cleanup:
   return err;
 }
 
+/* The fill given as a point cloud (sampling.points) instead of drawn: each point of the file, in
+ * the file's order, that lies in the bedrock and no closer than min(r_f, r_c) to a feature sample
+ * (the distance a fill dart keeps from them) becomes a sample. The file's points are not tested
+ * against one another: the cloud is the user's. */
+static karst_error_t sample_points(sampler_t *S) {
+  const karst_sampling_t *sp = &S->sc->sampling;
+  karst_error_t err = KARST_SUCCESS;
+  karst_int_t outside = 0, near = 0;
+  if (!ccsr_build(&S->feat_cols, &S->feat)) {
+    ccsr_destroy(&S->feat_cols);
+    return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the feature sample columns");
+  }
+  for (karst_int_t i = 0; i < sp->n_points; i++) {
+    const double *p = sp->points_xyz + 3 * i;
+    if ((i & 65535) == 0 && karst_interrupted(S->ctx)) {
+      err = karst_set_error(S->ctx, KARST_EINTERRUPTED, "sampling interrupted");
+      break;
+    }
+    if (!karst_geology_in_bedrock(S->geo, p)) {
+      outside++;
+      continue;
+    }
+    if (ccsr_conflict(&S->feat_cols, &S->feat, p, S->rm)) {
+      near++;
+      continue;
+    }
+    if ((err = add_sample(S, p, KARST_SAMPLE_POINTS)) != KARST_SUCCESS) break;
+  }
+  ccsr_destroy(&S->feat_cols);
+  if (err == KARST_SUCCESS)
+    karst_log(S->ctx, KARST_LOG_INFO,
+              "sampling.points: %lld of the %lld points of %s kept, %lld outside the bedrock, "
+              "%lld closer than %g m to a feature sample",
+              (long long)(sp->n_points - outside - near), (long long)sp->n_points, sp->points,
+              (long long)outside, (long long)near, S->rm);
+  return err;
+}
+
 /* Spread the low 21 bits of x so that two zero bits separate them. */
 static uint64_t spread3(uint64_t x) {
   x &= 0x1fffff;
@@ -1040,7 +1078,8 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_geology_t *geo
  *     horizon, then of each spring's water table (once per distinct table);
  *  4. feature-radius Poisson samples where the resistance π is below
  *     sampling.permeable_threshold;
- *  5. fill samples at fill_radius elsewhere.
+ *  5. fill samples at fill_radius elsewhere; or, with sampling.points, the points of that
+ *     file that lie in the bedrock and no closer than min(r_f, r_c) to a feature sample.
  * Within each source the samples are then ordered along a Morton curve
  * (cache locality for the graph and path stages).
  * Only points in the bedrock are kept: inside the domain box, strictly below
@@ -1192,8 +1231,13 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
     region_t R = {KARST_SAMPLE_PERMEABILITY, NULL, 0.0};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
-  S.stage = "fill";
-  if ((err = sample_fill(&S)) != KARST_SUCCESS) goto cleanup;
+  if (sc->sampling.points_xyz) {
+    S.stage = "sampling.points";
+    if ((err = sample_points(&S)) != KARST_SUCCESS) goto cleanup;
+  } else {
+    S.stage = "fill";
+    if ((err = sample_fill(&S)) != KARST_SUCCESS) goto cleanup;
+  }
   if ((err = morton_order(ctx, sc, &s)) != KARST_SUCCESS) goto cleanup;
   karst_progress(ctx, "sampling", 1, 1);
   karst_log(ctx, KARST_LOG_INFO, "sampling: %lld samples (%d key points)", (long long)s.n,

@@ -136,6 +136,8 @@ void karst_scenario_destroy(karst_scenario_t *sc) {
   free(sc->name);
   free(sc->terrain.path);
   free(sc->terrain.z);
+  free(sc->sampling.points);
+  free(sc->sampling.points_xyz);
   karst_surface_free(sc->terrain.surface);
   for (int i = 0; i < sc->n_horizons; i++)
     free(sc->horizons[i].path), karst_surface_free(sc->horizons[i].surface);
@@ -2252,6 +2254,26 @@ static const schema_t cost_schema = {cost_fields, 6};
 /* Indexed by karst_knn_method_t. */
 static const char *const knn_method_names[] = {"grid", "flann"};
 
+/* sampling.points: a point cloud file (relative to the scenario) read now, so that every
+ * realisation of an ensemble shares it; a failure gives the file's FILE:LINE:COLUMN message
+ * followed by the key and its position in the scenario. */
+static karst_error_t read_points_file(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_sampling_t *sp = base;
+  const char *name;
+  karst_error_t err = get_string(r, n, path, &name);
+  if (err) return err;
+  free(sp->points), free(sp->points_xyz);
+  sp->points = NULL, sp->points_xyz = NULL, sp->n_points = 0;
+  if (!(sp->points = resolve_relative(r, name, path))) return no_memory(r);
+  err = karst_points_load(r->ctx, sp->points, &sp->points_xyz, &sp->n_points, NULL);
+  if (err) {
+    size_t len = strlen(r->ctx->errmsg);
+    snprintf(r->ctx->errmsg + len, KARST_ERRMSG_MAX - len, " (the points of %s at %s:%d:%d)", path,
+             r->file, line_of(n), col_of(n));
+  }
+  return err;
+}
+
 static const field_t sampling_fields[] = {
     {.key = "fill_radius",
      .type = T_NUM,
@@ -2286,8 +2308,12 @@ static const field_t sampling_fields[] = {
      .off = offsetof(karst_sampling_t, knn),
      .names = knn_method_names,
      .n_names = 2},
+    {.key = "points",
+     .type = T_FN,
+     .fn = read_points_file,
+     .pos = offsetof(karst_scenario_t, pos_points)},
 };
-static const schema_t sampling_schema = {sampling_fields, 7};
+static const schema_t sampling_schema = {sampling_fields, 8};
 
 static const field_t skeleton_fields[] = {
     {.key = "gamma",

@@ -96,6 +96,13 @@ for kind in fifo zero dir; do
   # mesh reads its network through the same readers.
   p=$(make_input $kind net.vtp)
   expect "mesh" $kind "$p" "$TMP/out/cave.ply" "$KARST" mesh "$p" -o "$TMP/out/cave.ply"
+  # generate reads a scenario's point cloud (sampling.points) with the scenario.
+  p=$(make_input $kind cloud.xyz)
+  sed 's/^sampling:$/sampling:\n  points: cloud.xyz/' "$SRC/datasets/scenarios/branchwork.yaml" \
+    >"$TMP/in/$kind/cloud.yaml"
+  grep -q "points: cloud.xyz" "$TMP/in/$kind/cloud.yaml" || bad "cloud.yaml has no sampling.points"
+  expect "generate sampling.points" $kind "$p" "$TMP/out/gen" \
+    "$KARST" generate "$TMP/in/$kind/cloud.yaml" -o "$TMP/out/gen"
 done
 
 # A file within its type but over the size cap is refused before it is read: a sparse 600 MiB
@@ -108,6 +115,18 @@ if [ $got = 1 ] && grep -qF "$TMP/in/big.pl: the GOCAD PLine file is 629145600 b
   ok "over the size cap"
 else
   bad "over the size cap: exit $got"; cat "$TMP/stderr"
+fi
+
+# The same for a point cloud over its cap (1 GiB): a sparse 1.1 GiB cloud.xyz.
+truncate -s 1100M "$TMP/in/dir/cloud.xyz.big"
+rm -rf "$TMP/in/dir/cloud.xyz" && mv "$TMP/in/dir/cloud.xyz.big" "$TMP/in/dir/cloud.xyz"
+timeout $LIMIT "$KARST" generate "$TMP/in/dir/cloud.yaml" -o "$TMP/out/gen" >"$TMP/stdout" 2>"$TMP/stderr"
+got=$?
+if [ $got = 1 ] && grep -qF "$TMP/in/dir/cloud.xyz: the point cloud file is 1153433600 bytes, more than the limit of 1 GiB" "$TMP/stderr" \
+  && grep -qF "(the points of sampling.points at $TMP/in/dir/cloud.yaml:" "$TMP/stderr" && [ ! -e "$TMP/out/gen" ]; then
+  ok "point cloud over the size cap"
+else
+  bad "point cloud over the size cap: exit $got"; cat "$TMP/stderr"
 fi
 
 # An inf coordinate in an ASCII .vtp: the error names the file and the element.

@@ -1,0 +1,230 @@
+/* A cloud of sample points (sampling.points, docs/scenario.md): a text file of one point per
+ * line, "x y z" in metres, separated by blanks or commas; '#' starts a comment line; blank lines
+ * are skipped; a first line "x y z" (any case, same separators) is a header. */
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "io/input_internal.h"
+#include "karst/scenario.h"
+
+/* Longest line (bytes, without its newline): three numbers need far fewer. */
+#define POINTS_MAX_LINE 4096
+
+static const char *const AXIS[3] = {"x", "y", "z"};
+
+static int is_sep(char c) {
+  return c == ' ' || c == '\t' || c == ',' || c == '\r';
+}
+
+static int is_blank(char c) {
+  return c == ' ' || c == '\t' || c == '\r';
+}
+
+/* The fields of a line: their starts and lengths, at most 4 (a fourth is an error). Fields are
+ * separated by blanks, or by one comma with blanks around it; "1,,2" has an empty second field
+ * and "1,2," an empty third. */
+static int split(const char *line, size_t len, const char *f[4], size_t fl[4]) {
+  int n = 0;
+  size_t i = 0;
+  while (i < len && is_blank(line[i]))
+    i++;
+  if (i >= len) return 0;
+  for (;;) {
+    size_t s = i;
+    while (i < len && !is_sep(line[i]))
+      i++;
+    f[n] = line + s, fl[n] = i - s, n++;
+    while (i < len && is_blank(line[i]))
+      i++;
+    if (i >= len || n == 4) return n;
+    if (line[i] == ',') {
+      i++;
+      while (i < len && is_blank(line[i]))
+        i++;
+    }
+  }
+}
+
+static int is_header(const char *f[4], const size_t fl[4], int n) {
+  if (n != 3) return 0;
+  for (int a = 0; a < 3; a++)
+    if (fl[a] != 1 || tolower((unsigned char)f[a][0]) != AXIS[a][0]) return 0;
+  return 1;
+}
+
+/* A point's hash: its three coordinates' bits (+0 for -0, which compares equal). */
+static uint64_t point_hash(const double p[3]) {
+  uint64_t h = 0x9E3779B97F4A7C15ull;
+  for (int k = 0; k < 3; k++) {
+    double x = p[k] == 0.0 ? 0.0 : p[k];
+    uint64_t b;
+    memcpy(&b, &x, sizeof b);
+    h = (h ^ b) * 0xff51afd7ed558ccdull;
+    h ^= h >> 33;
+  }
+  return h;
+}
+
+/* The first point in file order that repeats an earlier one (*rep, or -1), and its first copy
+ * (*earlier): an open-addressing table of point indices, O(n). */
+static karst_error_t find_repeat(karst_ctx_t *ctx, const char *path, const double *xyz,
+                                 karst_int_t n, karst_int_t *rep, karst_int_t *earlier) {
+  *rep = -1, *earlier = -1;
+  size_t cap = 1024;
+  while (cap < 2 * (size_t)n)
+    cap *= 2;
+  int32_t *slot = malloc(sizeof(int32_t) * cap);
+  if (!slot) return karst_set_error(ctx, KARST_ENOMEM, "%s: no memory to check the points", path);
+  memset(slot, 0xff, sizeof(int32_t) * cap);
+  for (karst_int_t i = 0; i < n && *rep < 0; i++) {
+    const double *p = xyz + 3 * i;
+    size_t s = (size_t)point_hash(p) & (cap - 1);
+    for (; slot[s] >= 0; s = (s + 1) & (cap - 1)) {
+      const double *q = xyz + 3 * (karst_int_t)slot[s];
+      if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2]) {
+        *rep = i, *earlier = slot[s];
+        break;
+      }
+    }
+    slot[s] = (int32_t)i;
+  }
+  free(slot);
+  return KARST_SUCCESS;
+}
+
+/* Documented in include/karst/scenario.h. */
+karst_error_t karst_points_load(karst_ctx_t *ctx, const char *path, double **xyz, karst_int_t *n,
+                                long **lines) {
+  *xyz = NULL, *n = 0;
+  if (lines) *lines = NULL;
+  unsigned char *text = NULL;
+  size_t size = 0;
+  karst_error_t err =
+      karst_i_read_regular(ctx, path, "point cloud", KARST_POINTS_MAX_BYTES, &text, &size);
+  if (err) return err;
+  double *v = NULL;
+  long *ln = NULL;
+  karst_int_t m = 0, cap = 0;
+  long lineno = 0;
+  int seen_data = 0;
+  for (size_t at = 0; at < size;) {
+    lineno++;
+    char *buf = (char *)text + at;
+    const char *eol = memchr(buf, '\n', size - at);
+    size_t len = eol ? (size_t)(eol - buf) : size - at;
+    at += len + (eol != NULL);
+    if (len > POINTS_MAX_LINE) {
+      err = karst_set_error(ctx, KARST_EPARSE,
+                            "%s:%ld: line longer than %d bytes; a line holds x y z only", path,
+                            lineno, POINTS_MAX_LINE);
+      goto fail;
+    }
+    if (memchr(buf, '\0', len)) {
+      err = karst_set_error(ctx, KARST_EPARSE,
+                            "%s:%ld: a NUL byte; the points file must be text (x y z per line)",
+                            path, lineno);
+      goto fail;
+    }
+    size_t s = 0;
+    while (s < len && (buf[s] == ' ' || buf[s] == '\t' || buf[s] == '\r'))
+      s++;
+    if (s == len || buf[s] == '#') continue;
+    const char *f[4];
+    size_t fl[4];
+    int nf = split(buf, len, f, fl);
+    if (!seen_data && is_header(f, fl, nf)) {
+      seen_data = 1;
+      continue;
+    }
+    seen_data = 1;
+    if (nf > 3) {
+      err = karst_set_error(ctx, KARST_EPARSE,
+                            "%s:%ld:%ld: a fourth field '%.*s'; a line holds x y z only", path,
+                            lineno, (long)(f[3] - buf) + 1, (int)(fl[3] > 40 ? 40 : fl[3]), f[3]);
+      goto fail;
+    }
+    if (nf < 3) {
+      err = karst_set_error(ctx, KARST_EPARSE,
+                            "%s:%ld: field %s missing; a line holds x y z (%d field%s found)", path,
+                            lineno, AXIS[nf], nf, nf == 1 ? "" : "s");
+      goto fail;
+    }
+    if (m == cap) {
+      if (m >= KARST_POINTS_MAX_POINTS) {
+        err = karst_set_error(ctx, KARST_ERANGE,
+                              "%s:%ld: more than %d points; sampling.points takes at most that "
+                              "many",
+                              path, lineno, KARST_POINTS_MAX_POINTS);
+        goto fail;
+      }
+      karst_int_t nc = cap ? 2 * cap : 4096;
+      if (nc > KARST_POINTS_MAX_POINTS) nc = KARST_POINTS_MAX_POINTS;
+      double *nv = realloc(v, sizeof(double) * 3 * (size_t)nc);
+      if (!nv) goto nomem;
+      v = nv;
+      long *nlp = realloc(ln, sizeof(long) * (size_t)nc);
+      if (!nlp) goto nomem;
+      ln = nlp;
+      cap = nc;
+    }
+    for (int a = 0; a < 3; a++) {
+      char tok[POINTS_MAX_LINE + 1]; /* a field is no longer than its line */
+      long col = (long)(f[a] - buf) + 1;
+      if (fl[a] == 0 || fl[a] >= sizeof tok) {
+        err = karst_set_error(ctx, KARST_EPARSE, "%s:%ld:%ld: field %s: '%.*s' is not a number",
+                              path, lineno, col, AXIS[a], (int)(fl[a] > 40 ? 40 : fl[a]), f[a]);
+        goto fail;
+      }
+      memcpy(tok, f[a], fl[a]);
+      tok[fl[a]] = '\0';
+      char *end;
+      errno = 0;
+      double x = strtod(tok, &end);
+      if (end == tok || *end != '\0') {
+        err = karst_set_error(ctx, KARST_EPARSE, "%s:%ld:%ld: field %s: '%s' is not a number", path,
+                              lineno, col, AXIS[a], tok);
+        goto fail;
+      }
+      if (!isfinite(x)) {
+        err = karst_set_error(ctx, KARST_EPARSE,
+                              "%s:%ld:%ld: field %s: '%s' is not a finite number of metres", path,
+                              lineno, col, AXIS[a], tok);
+        goto fail;
+      }
+      v[3 * m + a] = x;
+    }
+    ln[m++] = lineno;
+  }
+  if (m == 0) {
+    err = karst_set_error(ctx, KARST_EPARSE, "%s: no points (a line per point: x y z)", path);
+    goto fail;
+  }
+  karst_int_t rep, earlier;
+  if ((err = find_repeat(ctx, path, v, m, &rep, &earlier))) goto fail;
+  if (rep >= 0) {
+    err = karst_set_error(ctx, KARST_EPARSE,
+                          "%s:%ld: the point (%.17g, %.17g, %.17g) repeats line %ld; each sample "
+                          "must be a distinct point",
+                          path, ln[rep], v[3 * rep], v[3 * rep + 1], v[3 * rep + 2], ln[earlier]);
+    goto fail;
+  }
+  free(text);
+  *xyz = v, *n = m;
+  if (lines)
+    *lines = ln;
+  else
+    free(ln);
+  return KARST_SUCCESS;
+nomem:
+  err = karst_set_error(ctx, KARST_ENOMEM, "%s: no memory for %lld points", path, (long long)m);
+fail:
+  free(text);
+  free(v);
+  free(ln);
+  return err;
+}
