@@ -21,6 +21,11 @@
  * (default 5 runs; --keep writes the scenarios to DIR; KS is a Karst-Synthesis checkout with
  * KS/ks_rect built as docs/performance.md says, run R times from KS/G++ on this machine.)
  *
+ * With --karst-synthesis, karst also runs the rectilinear scene on Karst-Synthesis's own sample
+ * cloud (its KS/Data/poissonSamples3d.dat, the cloud it loads instead of sampling, written as
+ * a sampling.points file), and the three runs alternate: karst on its own samples, karst on the
+ * peer's cloud, the peer.
+ *
  * Prints first what every karst process pays before any work (`karst --version`: median wall
  * time of 30 runs, page faults, peak memory); then, per scene, the sample and edge counts of the
  * run, the fastest and median wall time of R runs, the peak resident memory, the page faults of
@@ -32,6 +37,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,7 +79,9 @@ static const double KS_WAYPOINTS[10][3] = {{-40, -42, 45},
  * 500 m above every sink) and 12.8 m gives about 117 000 samples. */
 #define KNS_FILL_RADIUS 12.8
 
-static int write_ks(const char *path) {
+/* The rectilinear scene; with @p points, on that point cloud (sampling.points) instead of
+ * karst's own fill. */
+static int write_ks_scene(const char *path, const char *points) {
   FILE *f = fopen(path, "w");
   if (!f) return -1;
   fprintf(f, "# Karst-Synthesis's rectilinear scene as karst scenario (bench/bench_peers.c)\n"
@@ -96,11 +104,63 @@ static int write_ks(const char *path) {
             KS_WAYPOINTS[i][0], KS_WAYPOINTS[i][1], KS_WAYPOINTS[i][2]);
   fprintf(f,
           "cost: {w0: 1, fracture: 10, fracture_combine: min}\n"
-          "sampling: {fill_radius: %g, feature_radius: %g, k: 32}\n"
+          "sampling: {fill_radius: %g, feature_radius: %g, k: 32%s%s}\n"
           "skeleton: {gamma: 2, reuse: 1}\n"
           "amplification: {steps: 1, points: 10, dead_end_fraction: 0.5}\n",
-          KS_FILL_RADIUS, KS_FILL_RADIUS);
+          KS_FILL_RADIUS, KS_FILL_RADIUS, points ? ", points: " : "", points ? points : "");
   return fclose(f) == 0 ? 0 : -1;
+}
+
+static int write_ks(const char *path) {
+  return write_ks_scene(path, NULL);
+}
+
+/* The shortest of %.15g, %.16g, %.17g that reads back as @p x. */
+static void shortest(char *buf, size_t size, double x) {
+  for (int digits = 15; digits <= 17; digits++) {
+    snprintf(buf, size, "%.*g", digits, x);
+    if (strtod(buf, NULL) == x) return;
+  }
+}
+
+/* Karst-Synthesis's baked Poisson cloud (KS/Data/poissonSamples3d.dat: a size_t count, then
+ * that many Vector3 of 3 doubles, y up) as a sampling.points file in karst's frame (x, z, y).
+ * Returns the number of points, or -1. */
+static long write_ks_cloud(const char *ks, const char *path) {
+  char in[4096];
+  snprintf(in, sizeof in, "%s/Data/poissonSamples3d.dat", ks);
+  FILE *f = fopen(in, "rb");
+  if (!f) {
+    fprintf(stderr, "bench_peers: %s: %s\n", in, strerror(errno));
+    return -1;
+  }
+  uint64_t n = 0;
+  struct stat st;
+  if (fstat(fileno(f), &st) != 0 || fread(&n, sizeof n, 1, f) != 1 || n == 0 || n > 100000000 ||
+      (uint64_t)st.st_size != 8 + 24 * n) {
+    fprintf(stderr, "bench_peers: %s: not a count and that many 3-double points\n", in);
+    fclose(f);
+    return -1;
+  }
+  FILE *o = fopen(path, "w");
+  if (!o) {
+    fclose(f);
+    return -1;
+  }
+  fprintf(o, "# Karst-Synthesis's baked cloud (Data/poissonSamples3d.dat), (x, y, z) = its (x, z, "
+             "y)\nx y z\n");
+  long written = 0;
+  for (uint64_t i = 0; i < n; i++) {
+    double p[3];
+    if (fread(p, sizeof p, 1, f) != 1) break;
+    char a[32], b[32], c[32];
+    shortest(a, sizeof a, p[0]), shortest(b, sizeof b, p[2]), shortest(c, sizeof c, p[1]);
+    fprintf(o, "%s %s %s\n", a, b, c);
+    written++;
+  }
+  fclose(f);
+  if (fclose(o) != 0 || written != (long)n) return -1;
+  return written;
 }
 
 static int write_kns(const char *path) {
@@ -146,7 +206,6 @@ static double run_once(const char *scenario, const char *out, long *rss_kib, lon
   return bench_run_counted(argv, 0, rss_kib, faults);
 }
 
-
 /* The number @p key in the object @p section of DIR/run.json, or -1. */
 static long run_value(const char *dir, const char *section, const char *key) {
   double v = bench_json_number(bench_run_json(dir), section, key);
@@ -163,37 +222,34 @@ static double median(double *t, int n) {
   return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
 }
 
-/* Median wall time of @p runs runs of KS/ks_rect started in KS/G++ (it reads ../Data/ and writes
+/* Wall time of one run of KS/ks_rect started in KS/G++ (it reads ../Data/ and writes
  * ../Results/), its output discarded; -1 when it cannot run. */
-static double run_karst_synthesis(const char *ks, int runs, long *peak_kib) {
+static double run_karst_synthesis_once(const char *ks, long *peak_kib) {
   char prog[4096], cwd[4096];
   snprintf(prog, sizeof prog, "%s/ks_rect", ks);
   snprintf(cwd, sizeof cwd, "%s/G++", ks);
-  double t[100];
-  for (int r = 0; r < runs; r++) {
-    posix_spawn_file_actions_t fa;
-    if (posix_spawn_file_actions_init(&fa) != 0) return -1;
-    posix_spawn_file_actions_addchdir_np(&fa, cwd);
-    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-    char *argv[] = {prog, NULL};
-    double t0 = bench_now_s();
-    pid_t pid;
-    int err = posix_spawn(&pid, prog, &fa, NULL, argv, environ);
-    posix_spawn_file_actions_destroy(&fa);
-    if (err != 0) {
-      fprintf(stderr, "bench_peers: cannot run %s: %s\n", prog, strerror(err));
-      return -1;
-    }
-    int status;
-    struct rusage ru;
-    if (wait4(pid, &status, 0, &ru) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-      fprintf(stderr, "bench_peers: %s (run in %s) failed\n", prog, cwd);
-      return -1;
-    }
-    t[r] = bench_now_s() - t0;
-    if (ru.ru_maxrss > *peak_kib) *peak_kib = ru.ru_maxrss;
+  posix_spawn_file_actions_t fa;
+  if (posix_spawn_file_actions_init(&fa) != 0) return -1;
+  posix_spawn_file_actions_addchdir_np(&fa, cwd);
+  posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+  char *argv[] = {prog, NULL};
+  double t0 = bench_now_s();
+  pid_t pid;
+  int err = posix_spawn(&pid, prog, &fa, NULL, argv, environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (err != 0) {
+    fprintf(stderr, "bench_peers: cannot run %s: %s\n", prog, strerror(err));
+    return -1;
   }
-  return median(t, runs);
+  int status;
+  struct rusage ru;
+  if (wait4(pid, &status, 0, &ru) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    fprintf(stderr, "bench_peers: %s (run in %s) failed\n", prog, cwd);
+    return -1;
+  }
+  double t = bench_now_s() - t0;
+  if (ru.ru_maxrss > *peak_kib) *peak_kib = ru.ru_maxrss;
+  return t;
 }
 
 typedef struct {
@@ -265,16 +321,39 @@ int main(int argc, char **argv) {
       status = 1;
       continue;
     }
-    double t[100];
-    long rss = 0, peak = 0, faults = 0;
+    /* With a Karst-Synthesis checkout, its scene runs alternate with karst's (on its own
+     * samples and on Karst-Synthesis's own cloud), so that the machine's drift hits all three
+     * alike. */
+    int with_ks = s == 0 && ks;
+    char cloud_yaml[4096], cloud_out[4096];
+    long n_cloud = 0;
+    if (with_ks) {
+      char cloud[4096];
+      snprintf(cloud, sizeof cloud, "%s/ks_cloud.xyz", dir);
+      snprintf(cloud_yaml, sizeof cloud_yaml, "%s/ks_rectilinear_cloud.yaml", dir);
+      snprintf(cloud_out, sizeof cloud_out, "%s/out_cloud", tmp);
+      if ((n_cloud = write_ks_cloud(ks, cloud)) < 0 ||
+          write_ks_scene(cloud_yaml, "ks_cloud.xyz") != 0) {
+        fprintf(stderr, "bench_peers: cannot write %s or %s\n", cloud, cloud_yaml);
+        status = 1;
+        with_ks = 0;
+      }
+    }
+    double t[100], tc[100], tk[100];
+    long rss = 0, peak = 0, faults = 0, crss = 0, cpeak = 0, cfaults = 0, ks_peak = 0;
     int ok = 1;
     for (int r = 0; r < runs && ok; r++) {
       t[r] = run_once(path, out, &rss, &faults);
       if (t[r] < 0) ok = 0;
       if (rss > peak) peak = rss;
+      if (!with_ks || !ok) continue;
+      tc[r] = run_once(cloud_yaml, cloud_out, &crss, &cfaults);
+      if (crss > cpeak) cpeak = crss;
+      tk[r] = run_karst_synthesis_once(ks, &ks_peak);
+      if (tc[r] < 0 || tk[r] < 0) ok = 0;
     }
     if (!ok) {
-      fprintf(stderr, "bench_peers: karst generate %s failed\n", path);
+      fprintf(stderr, "bench_peers: karst generate %s or its peer failed\n", path);
       status = 1;
       continue;
     }
@@ -287,16 +366,22 @@ int main(int argc, char **argv) {
            S->name, run_value(out, "counts", "samples"), run_value(out, "counts", "graph_edges"),
            run_value(out, "sampling", "k"), run_value(out, "counts", "key_points"), fastest, med,
            peak / 1024.0, faults);
-    if (s == 0 && ks) {
-      long ks_peak = 0;
-      double ks_med = run_karst_synthesis(ks, runs, &ks_peak);
-      if (ks_med < 0) {
-        status = 1;
-        continue;
-      }
-      printf("%-28s %s, measured now (median of %d, peak RSS %.0f MiB): %.2f s, %.1fx karst's "
-             "median (target >= 10x)\n",
-             "", S->peer, runs, ks_peak / 1024.0, ks_med, ks_med / med);
+    if (with_ks) {
+      double cfast = tc[0];
+      for (int r = 1; r < runs; r++)
+        if (tc[r] < cfast) cfast = tc[r];
+      double cmed = median(tc, runs), ks_med = median(tk, runs);
+      printf("%-28s samples %7ld  edges %8ld  k %3ld  key points %2ld: %.3f s fastest, %.3f s "
+             "median, peak RSS %.0f MiB, %ld page faults (sampling.points: %ld of its %ld "
+             "points kept)\n",
+             "  on Karst-Synthesis's cloud", run_value(cloud_out, "counts", "samples"),
+             run_value(cloud_out, "counts", "graph_edges"), run_value(cloud_out, "sampling", "k"),
+             run_value(cloud_out, "counts", "key_points"), cfast, cmed, cpeak / 1024.0, cfaults,
+             run_value(cloud_out, "counts", "points_kept"), n_cloud);
+      printf("%-28s %s, measured now, alternated with karst's runs (median of %d, peak RSS "
+             "%.0f MiB): %.2f s: %.1fx karst's median on its own samples, %.1fx on the peer's "
+             "cloud (target >= 10x)\n",
+             "", S->peer, runs, ks_peak / 1024.0, ks_med, ks_med / med, ks_med / cmed);
     } else {
       printf("%-28s %s, recorded in docs/performance.md: %.2f s, %.1fx karst's median (target "
              ">= 10x; the ratio holds on the machine the figure was measured on)\n",

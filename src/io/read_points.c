@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "io/input_internal.h"
 #include "karst/scenario.h"
@@ -102,22 +103,53 @@ karst_error_t karst_points_load(karst_ctx_t *ctx, const char *path, double **xyz
                                 long **lines) {
   *xyz = NULL, *n = 0;
   if (lines) *lines = NULL;
-  unsigned char *text = NULL;
-  size_t size = 0;
-  karst_error_t err =
-      karst_i_read_regular(ctx, path, "point cloud", KARST_POINTS_MAX_BYTES, &text, &size);
+  FILE *fp = NULL;
+  karst_error_t err = karst_i_open_regular(ctx, path, "point cloud", KARST_POINTS_MAX_BYTES, &fp);
   if (err) return err;
-  double *v = NULL;
-  long *ln = NULL;
-  karst_int_t m = 0, cap = 0;
+  /* The file is read in chunks (a line is at most POINTS_MAX_LINE bytes), and the points go to
+   * arrays reserved for as many points as the file's size allows (a point takes 6 bytes or more,
+   * "0 0 0\n"): untouched pages cost nothing, and no array is grown and copied. */
+  struct stat st;
+  karst_int_t cap = 1;
+  if (fstat(fileno(fp), &st) == 0 && st.st_size > 0) cap = (karst_int_t)(st.st_size / 6) + 1;
+  if (cap > KARST_POINTS_MAX_POINTS) cap = KARST_POINTS_MAX_POINTS;
+  enum { CHUNK = 1 << 16 };
+  const size_t bufcap = CHUNK + POINTS_MAX_LINE + 1;
+  char *text = malloc(bufcap);
+  double *v = malloc(sizeof(double) * 3 * (size_t)cap);
+  long *ln = malloc(sizeof(long) * (size_t)cap);
+  karst_int_t m = 0;
   long lineno = 0;
-  int seen_data = 0;
-  for (size_t at = 0; at < size;) {
-    lineno++;
-    char *buf = (char *)text + at;
-    const char *eol = memchr(buf, '\n', size - at);
-    size_t len = eol ? (size_t)(eol - buf) : size - at;
+  long long total = 0;
+  int seen_data = 0, eof = 0;
+  if (!text || !v || !ln) goto nomem;
+  for (size_t at = 0, have = 0;;) {
+    char *buf = text + at;
+    size_t avail = have - at;
+    const char *eol = memchr(buf, '\n', avail);
+    if (!eol && !eof && avail <= POINTS_MAX_LINE) { /* no whole line yet: read more */
+      memmove(text, buf, avail);
+      at = 0, have = avail;
+      size_t got = fread(text + have, 1, bufcap - have, fp);
+      if (got == 0) {
+        if (ferror(fp)) {
+          err = karst_set_error(ctx, KARST_EIO, "%s: read error after line %ld", path, lineno);
+          goto fail;
+        }
+        eof = 1;
+      }
+      have += got, total += (long long)got;
+      if (total > KARST_POINTS_MAX_BYTES) {
+        err =
+            karst_set_error(ctx, KARST_ERANGE, "%s: the point cloud file grew beyond 1 GiB", path);
+        goto fail;
+      }
+      continue;
+    }
+    if (avail == 0) break;
+    size_t len = eol ? (size_t)(eol - buf) : avail;
     at += len + (eol != NULL);
+    lineno++;
     if (len > POINTS_MAX_LINE) {
       err = karst_set_error(ctx, KARST_EPARSE,
                             "%s:%ld: line longer than %d bytes; a line holds x y z only", path,
@@ -154,23 +186,11 @@ karst_error_t karst_points_load(karst_ctx_t *ctx, const char *path, double **xyz
                             lineno, AXIS[nf], nf, nf == 1 ? "" : "s");
       goto fail;
     }
-    if (m == cap) {
-      if (m >= KARST_POINTS_MAX_POINTS) {
-        err = karst_set_error(ctx, KARST_ERANGE,
-                              "%s:%ld: more than %d points; sampling.points takes at most that "
-                              "many",
-                              path, lineno, KARST_POINTS_MAX_POINTS);
-        goto fail;
-      }
-      karst_int_t nc = cap ? 2 * cap : 4096;
-      if (nc > KARST_POINTS_MAX_POINTS) nc = KARST_POINTS_MAX_POINTS;
-      double *nv = realloc(v, sizeof(double) * 3 * (size_t)nc);
-      if (!nv) goto nomem;
-      v = nv;
-      long *nlp = realloc(ln, sizeof(long) * (size_t)nc);
-      if (!nlp) goto nomem;
-      ln = nlp;
-      cap = nc;
+    if (m == cap) { /* only at KARST_POINTS_MAX_POINTS (or a file grown since its size was read) */
+      err = karst_set_error(ctx, KARST_ERANGE,
+                            "%s:%ld: more than %lld points; sampling.points takes at most %d", path,
+                            lineno, (long long)cap, KARST_POINTS_MAX_POINTS);
+      goto fail;
     }
     for (int a = 0; a < 3; a++) {
       char tok[POINTS_MAX_LINE + 1]; /* a field is no longer than its line */
@@ -214,6 +234,11 @@ karst_error_t karst_points_load(karst_ctx_t *ctx, const char *path, double **xyz
     goto fail;
   }
   free(text);
+  fclose(fp);
+  double *vs = realloc(v, sizeof(double) * 3 * (size_t)m); /* give back the reserve */
+  if (vs) v = vs;
+  long *ls = realloc(ln, sizeof(long) * (size_t)m);
+  if (ls) ln = ls;
   *xyz = v, *n = m;
   if (lines)
     *lines = ln;
@@ -224,6 +249,7 @@ nomem:
   err = karst_set_error(ctx, KARST_ENOMEM, "%s: no memory for %lld points", path, (long long)m);
 fail:
   free(text);
+  fclose(fp);
   free(v);
   free(ln);
   return err;

@@ -247,7 +247,7 @@ static karst_error_t record_sample(sampler_t *S, const double p[3], karst_sample
   if (karst_samples_add(S->s, p, src) != KARST_SUCCESS)
     return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for %lld samples",
                            (long long)S->s->n + 1);
-  if (src == KARST_SAMPLE_FILL || src == KARST_SAMPLE_POINTS) return KARST_SUCCESS;
+  if (src == KARST_SAMPLE_FILL || src == KARST_SAMPLE_POINTS || !S->near) return KARST_SUCCESS;
   int64_t lo[3], hi[3];
   for (int a = 0; a < 3; a++) {
     double l = floor((p[a] - S->rm - S->lo[a]) / S->cc),
@@ -1127,7 +1127,9 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
     S.cd[a] = (int64_t)fmin(nc, 1e18), fd[a] = (int64_t)fmin(nf, 1e18);
     S.pd[a] = S.cd[a] + 4;
   }
-  if (ncells_fill > MAX_GRID_CELLS) {
+  /* A point cloud (sampling.points) replaces the fill: no fill grid then. */
+  const int fill = sc->sampling.points_xyz == NULL;
+  if (fill && ncells_fill > MAX_GRID_CELLS) {
     err = karst_set_error(ctx, KARST_ERANGE,
                           "the domain box needs %.3g fill grid cells of %g m, more than %.0f: "
                           "increase sampling.fill_radius (%g m) or shrink the domain",
@@ -1141,16 +1143,18 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
                           S.rf, (double)fd[0] * (double)fd[1], fcell, MAX_GRID_CELLS);
     goto cleanup;
   }
-  size_t nfill = (size_t)ncells_fill;
-  S.fill = karst_i_alloc_large(sizeof(int32_t) * nfill);
-  S.near = karst_i_calloc_large(nfill, 1);
-  if (!S.fill || !S.near || !cgrid_init(&S.feat, fcell, S.lo, fd)) {
+  size_t nfill = fill ? (size_t)ncells_fill : 0;
+  if (fill) {
+    S.fill = karst_i_alloc_large(sizeof(int32_t) * nfill);
+    S.near = karst_i_calloc_large(nfill, 1);
+  }
+  if ((fill && (!S.fill || !S.near)) || !cgrid_init(&S.feat, fcell, S.lo, fd)) {
     err = karst_set_error(ctx, KARST_ENOMEM, "no memory for a sampling grid of %.0f cells",
                           ncells_fill);
     goto cleanup;
   }
-  memset(S.fill, 0xff, sizeof(int32_t) * nfill);
-  for (int a = 0; a < 3; a++) {
+  if (fill) memset(S.fill, 0xff, sizeof(int32_t) * nfill);
+  for (int a = 0; a < 3 && fill; a++) {
     size_t m = (size_t)S.cd[a] + 1;
     S.corner[a] = malloc(3 * m * sizeof(double));
     if (!S.corner[a]) {
