@@ -16,8 +16,6 @@
 #define OI_REDDISH_PURPLE "#CC79A7"
 /** "None" and background categories (no tunnel type, terrain, interior nodes, fill samples). */
 #define NEUTRAL_GREY "#999999"
-/** Samples read from sampling.points: the fill's role, a darker grey than the fill's. */
-#define POINTS_GREY "#5F5F5F"
 /** Surfaces without categories: a pale limestone. */
 #define LIMESTONE "#D9D2C5"
 /** Survey and observed conduits: the red of the report's survey lines. */
@@ -45,7 +43,7 @@ static const karst_palette_category_t sample_source[] = {{0, "key_point", OI_BLA
                                                          {5, "amplification", OI_SKY_BLUE},
                                                          {6, "prescribed_path", OI_REDDISH_PURPLE},
                                                          {7, "survey", OI_VERMILLION},
-                                                         {8, "points", POINTS_GREY}};
+                                                         {8, "points", OI_YELLOW}};
 
 /* Hydrological zones, from dry to flooded: the blues deepen with saturation. */
 static const karst_palette_category_t zone[] = {

@@ -128,7 +128,7 @@ if s is not None:
     check([s.GetValue(i) for i in range(4)] == [0, 1, 4, 2], "samples: source values")
 check(strings(pd.GetFieldData(), "source_names") ==
       ["key_point", "horizon", "water_table", "permeability", "fill", "amplification", "prescribed_path",
-       "survey"],
+       "survey", "points"],
       "samples: source_names")
 nk = pd.GetFieldData().GetArray("n_key_points")
 check(nk is not None and nk.GetValue(0) == 1, "samples: n_key_points")
