@@ -82,6 +82,18 @@ karst_error_t karst_i_vtp_check(karst_ctx_t *ctx, const char *path);
 karst_error_t karst_i_vtp_check_buffer(karst_ctx_t *ctx, const char *name,
                                        const unsigned char *data, size_t len);
 
+/**
+ * A decimal number "[+-]digits[.digits][(e|E)[+-]digits]" (at least one mantissa digit) filling
+ * s[0 .. len) exactly, by Clinger's fast path (W. D. Clinger, "How to read floating point
+ * numbers accurately", PLDI 1990): when its significant digits make an integer m <= 2^53 and
+ * its decimal exponent e is within [-22, 22], m and 10^|e| are exact doubles and one correctly
+ * rounded product or quotient is the correctly rounded value, strtod's. Returns 1 with *out
+ * set; 0 for anything else (more than 19 significant digits, a larger exponent, hexadecimal,
+ * inf, nan, other characters), which the caller hands to strtod.
+ * Time complexity: O(len).
+ */
+int karst_i_parse_decimal(const char *s, size_t len, double *out);
+
 #ifdef __cplusplus
 }
 #endif

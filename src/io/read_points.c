@@ -3,6 +3,7 @@
  * are skipped; a first line "x y z" (any case, same separators) is a header. */
 #include <ctype.h>
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -12,6 +13,55 @@
 
 #include "io/input_internal.h"
 #include "karst/scenario.h"
+
+/* Exact powers of ten: 10^22 is the largest that a double holds exactly (5^22 < 2^53). */
+static const double POW10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                 1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+
+_Static_assert(FLT_EVAL_METHOD == 0, "the fast path needs double arithmetic in double precision");
+
+/* Documented in io/input_internal.h. */
+int karst_i_parse_decimal(const char *s, size_t len, double *out) {
+  size_t i = 0;
+  int neg = 0;
+  if (i < len && (s[i] == '+' || s[i] == '-')) neg = s[i++] == '-';
+  uint64_t m = 0;
+  int sig = 0, digits = 0; /* significant digits kept; all mantissa digits seen */
+  long e10 = 0;
+  for (; i < len && s[i] >= '0' && s[i] <= '9'; i++, digits++) {
+    if (m == 0 && s[i] == '0') continue; /* a leading zero */
+    if (++sig > 19) return 0;
+    m = 10 * m + (uint64_t)(s[i] - '0');
+  }
+  if (i < len && s[i] == '.') {
+    for (i++; i < len && s[i] >= '0' && s[i] <= '9'; i++, digits++) {
+      e10--;
+      if (m == 0 && s[i] == '0') continue;
+      if (++sig > 19) return 0;
+      m = 10 * m + (uint64_t)(s[i] - '0');
+    }
+  }
+  if (digits == 0) return 0;
+  if (i < len && (s[i] == 'e' || s[i] == 'E')) {
+    i++;
+    int eneg = 0;
+    if (i < len && (s[i] == '+' || s[i] == '-')) eneg = s[i++] == '-';
+    if (i == len || s[i] < '0' || s[i] > '9') return 0;
+    long x = 0;
+    for (; i < len && s[i] >= '0' && s[i] <= '9'; i++)
+      if (x < 100000) x = 10 * x + (s[i] - '0');
+    e10 += eneg ? -x : x;
+  }
+  if (i != len) return 0;
+  /* Clinger's fast path: m and 10^|e10| are exact doubles, so one correctly rounded product or
+   * quotient is the correctly rounded value (what strtod returns). */
+  if (m > ((uint64_t)1 << 53) || e10 < -22 || e10 > 22) return 0;
+  double v = (double)m;
+  v = e10 >= 0 ? v * POW10[e10] : v / POW10[-e10];
+  *out = neg ? -v : v;
+  return 1;
+}
 
 /* Longest line (bytes, without its newline): three numbers need far fewer. */
 #define POINTS_MAX_LINE 4096
@@ -200,11 +250,16 @@ karst_error_t karst_points_load(karst_ctx_t *ctx, const char *path, double **xyz
                               path, lineno, col, AXIS[a], (int)(fl[a] > 40 ? 40 : fl[a]), f[a]);
         goto fail;
       }
+      double x;
+      if (karst_i_parse_decimal(f[a], fl[a], &x)) {
+        v[3 * m + a] = x; /* finite: at most 19 digits times 10^22 */
+        continue;
+      }
       memcpy(tok, f[a], fl[a]);
       tok[fl[a]] = '\0';
       char *end;
       errno = 0;
-      double x = strtod(tok, &end);
+      x = strtod(tok, &end);
       if (end == tok || *end != '\0') {
         err = karst_set_error(ctx, KARST_EPARSE, "%s:%ld:%ld: field %s: '%s' is not a number", path,
                               lineno, col, AXIS[a], tok);
