@@ -51,15 +51,19 @@ static int run(int argc, char **argv) {
         springs += sc.key_points[k].type == KARST_KEYPOINT_SPRING;
         waypoints += sc.key_points[k].type == KARST_KEYPOINT_WAYPOINT;
       }
+      char cloud[64] = "";
+      if (sc.sampling.points)
+        snprintf(cloud, sizeof cloud, "a cloud of %lld points (sampling.points), ",
+                 (long long)sc.sampling.n_points);
       printf("%s: ok: '%s', domain %.6g x %.6g x %.6g m, %d %s, %d %s, %d %s, %d %s, %d %s, "
-             "gamma %.6g, theta %.6g, seed %llu; needs about %.4g samples, %.4g graph edges, %.4g "
-             "path searches, %s of memory\n",
+             "%sgamma %.6g, theta %.6g, seed %llu; needs about %.4g samples, %.4g graph edges, "
+             "%.4g path searches, %s of memory\n",
              argv[i], sc.name ? sc.name : "", sc.domain_max[0] - sc.domain_min[0],
              sc.domain_max[1] - sc.domain_min[1], sc.domain_max[2] - sc.domain_min[2], sinks,
              plural(sinks, "sink", "sinks"), springs, plural(springs, "spring", "springs"),
              waypoints, plural(waypoints, "waypoint", "waypoints"), sc.n_horizons,
              plural(sc.n_horizons, "horizon", "horizons"), sc.n_fractures,
-             plural(sc.n_fractures, "fracture family", "fracture families"), sc.gamma,
+             plural(sc.n_fractures, "fracture family", "fracture families"), cloud, sc.gamma,
              sc.tortuosity, (unsigned long long)sc.seed, budget.samples, budget.edges,
              budget.searches, karst_budget_format_size(budget.bytes, mem, sizeof mem));
     }

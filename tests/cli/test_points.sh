@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# sampling.points end to end on the real binary: the branchwork scenario on a given cloud (a
+# 10 m lattice, so the counts are known by hand), what validate and run.json say about it, that
+# a realisation is reproducible, and a malformed cloud refused with FILE:LINE:COLUMN, the key's
+# place in the scenario, exit 1 and no output.
+set -u
+KARST=$1
+SRC=$(cd "$2" && pwd)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+ok() { echo "ok: $1"; }
+bad() { echo "FAIL: $1"; fail=1; }
+PY=/usr/bin/python3
+
+# The lattice x = 5, 15, ..., 395; y = 5, ..., 595; z = 5, ..., 95: 40 x 60 x 10 = 24 000 points,
+# all inside the 400 x 600 x 100 m domain and below the terrain at 100 m.
+{
+  echo "# a 10 m lattice"
+  echo "x,y,z"
+  for z in $(seq 5 10 95); do
+    for y in $(seq 5 10 595); do
+      for x in $(seq 5 10 395); do echo "$x,$y,$z"; done
+    done
+  done
+} >"$tmp/cloud.xyz"
+[ "$(grep -c '^[0-9]' "$tmp/cloud.xyz")" = 24000 ] || bad "lattice has $(grep -c '^[0-9]' "$tmp/cloud.xyz") points"
+sed 's/^sampling:$/sampling:\n  points: cloud.xyz/' "$SRC/datasets/scenarios/branchwork.yaml" >"$tmp/s.yaml"
+grep -q "^  points: cloud.xyz" "$tmp/s.yaml" || bad "the scenario has no sampling.points"
+
+"$KARST" validate "$tmp/s.yaml" >"$tmp/out" 2>&1 || bad "validate: exit $?"
+grep -q "a cloud of 24000 points (sampling.points)" "$tmp/out" && ok "validate names the cloud" \
+  || { bad "validate: $(cat "$tmp/out")"; }
+
+for run in a b; do
+  "$KARST" generate "$tmp/s.yaml" -o "$tmp/$run" --quiet --threads $([ $run = a ] && echo 1 || echo 2) \
+    >"$tmp/gen.log" 2>&1 || { bad "generate $run: exit $?"; cat "$tmp/gen.log"; }
+done
+cmp -s "$tmp/a/network.vtp" "$tmp/b/network.vtp" && cmp -s "$tmp/a/network_links.dat" "$tmp/b/network_links.dat" \
+  && ok "the same network on 1 and 2 threads" || bad "networks differ between 1 and 2 threads"
+# run.json: the file, its count, and the points kept. Every lattice point is in the bedrock; those
+# within min(feature_radius 6, fill_radius 10) = 6 m of a feature sample are dropped, so some but
+# not all are kept, and every sample is a key point, a feature sample or a kept point.
+$PY - "$tmp/a/run.json" <<'EOF' || fail=1
+import json, sys
+d = json.load(open(sys.argv[1]))
+sp, c = d["parameters"]["sampling"], d["counts"]
+errs = []
+if not sp["points"].endswith("/cloud.xyz"): errs.append("points %r" % sp["points"])
+if sp["points_count"] != 24000: errs.append("points_count %r" % sp["points_count"])
+if not isinstance(sp["points_hash"], str) or len(sp["points_hash"]) != 16: errs.append("hash %r" % sp["points_hash"])
+if not (0 < c["points_kept"] < 24000): errs.append("points_kept %r" % c["points_kept"])
+if not (c["samples"] > c["points_kept"] + c["key_points"]): errs.append("samples %r" % c["samples"])
+for e in errs: print("FAIL: run.json:", e)
+if not errs: print("ok: run.json records the cloud (%d of 24000 points kept)" % c["points_kept"])
+sys.exit(1 if errs else 0)
+EOF
+
+# A malformed cloud: the file's line and column, the key's place, exit 1, nothing written.
+sed -i '7s/.*/5,15,abc/' "$tmp/cloud.xyz"
+"$KARST" generate "$tmp/s.yaml" -o "$tmp/c" --quiet >"$tmp/out" 2>"$tmp/err"
+got=$?
+line=$(grep -n "^  points: cloud.xyz" "$tmp/s.yaml" | cut -d: -f1)
+if [ $got = 1 ] && grep -qF "$tmp/cloud.xyz:7:6: field z: 'abc' is not a number (the points of sampling.points at $tmp/s.yaml:$line:11)" "$tmp/err" \
+  && [ ! -e "$tmp/c" ]; then
+  ok "a malformed cloud is refused at its line and column"
+else
+  bad "malformed cloud: exit $got: $(cat "$tmp/err")"
+fi
+exit $fail
