@@ -39,4 +39,10 @@ static inline char *test_util_read_file(const char *path) {
   fclose(fp);
   return s;
 }
+/* Remove @p dir and everything in it (a test's scratch directory); 0 on success. */
+static inline int test_util_remove_dir(const char *dir) {
+  char cmd[600];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  return system(cmd) == 0 ? 0 : -1;
+}
 #endif

@@ -364,9 +364,7 @@ static int setup(void **state) {
 }
 static int teardown(void **state) {
   (void)state;
-  char cmd[300];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-  return system(cmd) == 0 ? 0 : -1;
+  return test_util_remove_dir(dir);
 }
 
 int main(void) {

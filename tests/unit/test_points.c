@@ -29,9 +29,7 @@ static int setup(void **state) {
 
 static int teardown(void **state) {
   (void)state;
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-  return system(cmd) == 0 ? 0 : -1;
+  return test_util_remove_dir(dir);
 }
 
 /* Write @p len bytes of @p text to DIR/NAME; the path in a static buffer. */

@@ -34,9 +34,7 @@ static int setup(void **state) {
 
 static int teardown(void **state) {
   (void)state;
-  char cmd[128];
-  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-  return system(cmd) == 0 ? 0 : -1;
+  return test_util_remove_dir(dir);
 }
 
 /* dir/name, written with @p text (or not written when text is NULL). */
