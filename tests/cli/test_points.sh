@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # sampling.points end to end on the real binary: the branchwork scenario on a given cloud (a
 # 10 m lattice, so the counts are known by hand), what validate and run.json say about it, that
-# a realisation is reproducible, and a malformed cloud refused with FILE:LINE:COLUMN, the key's
-# place in the scenario, exit 1 and no output.
+# a realisation is reproducible, that a run's own fill given back reproduces its network, and a
+# malformed cloud refused with FILE:LINE:COLUMN, the key's place in the scenario, exit 1 and no
+# output.
 set -u
 KARST=$1
 SRC=$(cd "$2" && pwd)
@@ -55,6 +56,39 @@ for e in errs: print("FAIL: run.json:", e)
 if not errs: print("ok: run.json records the cloud (%d of 24000 points kept)" % c["points_kept"])
 sys.exit(1 if errs else 0)
 EOF
+
+# A run's own fill samples given back as the cloud reproduce its network: the same seed draws the
+# same feature samples, every fill sample keeps r_m from them, and the samples are ordered
+# within their source, so the graph and every later stage see the same points (an independent
+# check: the expected network is the run without the cloud).
+"$KARST" generate "$SRC/datasets/scenarios/branchwork.yaml" -o "$tmp/own" --samples --quiet \
+  >"$tmp/gen.log" 2>&1 || { bad "generate with --samples: exit $?"; cat "$tmp/gen.log"; }
+$PY - "$tmp/own/samples.vtp" "$tmp/own_fill.xyz" <<'EOF' || bad "extracting the fill from samples.vtp"
+import sys, vtk
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update()
+pd = r.GetOutput()
+names = pd.GetFieldData().GetAbstractArray("source_names")
+fill = [names.GetValue(i) for i in range(names.GetNumberOfValues())].index("fill")
+src = pd.GetPointData().GetArray("source")
+with open(sys.argv[2], "w") as f:
+    f.write("x y z\n")
+    for i in range(pd.GetNumberOfPoints()):
+        if src.GetValue(i) == fill:
+            f.write("%r %r %r\n" % pd.GetPoint(i))
+EOF
+sed "s#^sampling:\$#sampling:\n  points: $tmp/own_fill.xyz#" "$SRC/datasets/scenarios/branchwork.yaml" \
+  >"$tmp/own.yaml"
+"$KARST" generate "$tmp/own.yaml" -o "$tmp/again" --quiet >"$tmp/gen.log" 2>&1 \
+  || { bad "generate on its own fill: exit $?"; cat "$tmp/gen.log"; }
+n_fill=$(($(wc -l <"$tmp/own_fill.xyz") - 1))
+kept=$($PY -c "import json,sys; print(json.load(open(sys.argv[1]))['counts']['points_kept'])" "$tmp/again/run.json")
+if cmp -s "$tmp/own/network_nodes.dat" "$tmp/again/network_nodes.dat" \
+  && cmp -s "$tmp/own/network_links.dat" "$tmp/again/network_links.dat" && [ "$kept" = "$n_fill" ] \
+  && [ "$n_fill" -gt 1000 ]; then
+  ok "the run's own fill as a cloud ($n_fill points, all kept) gives the same network"
+else
+  bad "own fill as a cloud: $kept of $n_fill kept, networks $(cmp "$tmp/own/network_links.dat" "$tmp/again/network_links.dat" 2>&1)"
+fi
 
 # A malformed cloud: the file's line and column, the key's place, exit 1, nothing written.
 sed -i '7s/.*/5,15,abc/' "$tmp/cloud.xyz"
