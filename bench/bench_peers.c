@@ -115,14 +115,6 @@ static int write_ks(const char *path) {
   return write_ks_scene(path, NULL);
 }
 
-/* The shortest of %.15g, %.16g, %.17g that reads back as @p x. */
-static void shortest(char *buf, size_t size, double x) {
-  for (int digits = 15; digits <= 17; digits++) {
-    snprintf(buf, size, "%.*g", digits, x);
-    if (strtod(buf, NULL) == x) return;
-  }
-}
-
 /* Karst-Synthesis's baked Poisson cloud (KS/Data/poissonSamples3d.dat: a size_t count, then
  * that many Vector3 of 3 doubles, y up) as a sampling.points file in karst's frame (x, z, y).
  * Returns the number of points, or -1. */
@@ -154,7 +146,8 @@ static long write_ks_cloud(const char *ks, const char *path) {
     double p[3];
     if (fread(p, sizeof p, 1, f) != 1) break;
     char a[32], b[32], c[32];
-    shortest(a, sizeof a, p[0]), shortest(b, sizeof b, p[2]), shortest(c, sizeof c, p[1]);
+    bench_shortest_double(a, sizeof a, p[0]), bench_shortest_double(b, sizeof b, p[2]),
+        bench_shortest_double(c, sizeof c, p[1]);
     fprintf(o, "%s %s %s\n", a, b, c);
     written++;
   }

@@ -11,24 +11,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-#include <unistd.h>
 
+#include "bench_spawn.h"
 #include "karst.h"
-
-static double now(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return t.tv_sec + 1e-9 * t.tv_nsec;
-}
-
-/* The shortest of %.15g, %.16g, %.17g that reads back as @p x. */
-static void shortest(char *buf, size_t size, double x) {
-  for (int digits = 15; digits <= 17; digits++) {
-    snprintf(buf, size, "%.*g", digits, x);
-    if (strtod(buf, NULL) == x) return;
-  }
-}
 
 static int write_cloud(const char *path, long n, int mm, karst_rng_t *rng) {
   FILE *f = fopen(path, "w");
@@ -42,7 +27,7 @@ static int write_cloud(const char *path, long n, int mm, karst_rng_t *rng) {
       if (mm)
         snprintf(c[a], sizeof c[a], "%.3f", x);
       else
-        shortest(c[a], sizeof c[a], x);
+        bench_shortest_double(c[a], sizeof c[a], x);
     }
     fprintf(f, "%s %s %s\n", c[0], c[1], c[2]);
   }
@@ -64,10 +49,7 @@ int main(int argc, char **argv) {
     return 2;
   }
   char dir[] = "/tmp/karst_bench_points_XXXXXX";
-  if (!mkdtemp(dir)) {
-    perror("bench_points: mkdtemp");
-    return 1;
-  }
+  if (!bench_mkdtemp(dir, "bench_points")) return 1;
   int status = 0;
   karst_rng_t rng;
   karst_rng_init(&rng, 17, 0);
@@ -86,9 +68,9 @@ int main(int argc, char **argv) {
       karst_ctx_init(&ctx);
       double *xyz = NULL;
       karst_int_t got = 0;
-      double t0 = now();
+      double t0 = bench_now_s();
       karst_error_t err = karst_points_load(&ctx, path, &xyz, &got, NULL);
-      double t = now() - t0;
+      double t = bench_now_s() - t0;
       free(xyz);
       if (err != KARST_SUCCESS || got != n) {
         fprintf(stderr, "bench_points: %s: %s (%lld points)\n", path, ctx.errmsg, (long long)got);
@@ -101,8 +83,7 @@ int main(int argc, char **argv) {
     printf("%-34s %.3f s, %.2f M points/s, %.0f ns per coordinate\n",
            mm ? "millimetres (%.3f)" : "shortest round-trip digits", best, n / best / 1e6,
            1e9 * best / (3.0 * (double)n));
-    unlink(path);
   }
-  rmdir(dir);
+  bench_remove_dir(dir, "bench_points");
   return status;
 }

@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -30,6 +31,15 @@ static inline void bench_remove_dir(const char *dir, const char *who) {
   if (system(cmd) != 0) fprintf(stderr, "%s: could not remove %s\n", who, dir);
 }
 
+/* @p x in the shortest of %.15g, %.16g, %.17g that reads back as @p x (round-trip digits, as
+ * Python's repr writes them). */
+static inline void bench_shortest_double(char *buf, size_t size, double x) {
+  for (int digits = 15; digits <= 17; digits++) {
+    snprintf(buf, size, "%.*g", digits, x);
+    if (strtod(buf, NULL) == x) return;
+  }
+}
+
 static inline double bench_now_s(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -40,8 +50,7 @@ static inline double bench_now_s(void) {
  * @p quiet: its wall time in seconds, its peak resident memory (KiB, *rss_kib) and its page
  * faults (*faults, minor and major; may be NULL), or -1 when it could not start or did not exit
  * with 0. */
-static inline double bench_run_counted(char *const argv[], int quiet, long *rss_kib,
-                                       long *faults) {
+static inline double bench_run_counted(char *const argv[], int quiet, long *rss_kib, long *faults) {
   posix_spawn_file_actions_t fa;
   if (posix_spawn_file_actions_init(&fa) != 0) return -1;
   if (quiet) posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);

@@ -2,7 +2,6 @@
  * line, "x y z" in metres, separated by blanks or commas; '#' starts a comment line; blank lines
  * are skipped; a first line "x y z" (any case, same separators) is a header. */
 #include <ctype.h>
-#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -258,7 +257,6 @@ karst_error_t karst_points_load(karst_ctx_t *ctx, const char *path, double **xyz
       memcpy(tok, f[a], fl[a]);
       tok[fl[a]] = '\0';
       char *end;
-      errno = 0;
       x = strtod(tok, &end);
       if (end == tok || *end != '\0') {
         err = karst_set_error(ctx, KARST_EPARSE, "%s:%ld:%ld: field %s: '%s' is not a number", path,

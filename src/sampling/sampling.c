@@ -1235,7 +1235,7 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
     region_t R = {KARST_SAMPLE_PERMEABILITY, NULL, 0.0};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
-  if (sc->sampling.points_xyz) {
+  if (!fill) {
     S.stage = "sampling.points";
     if ((err = sample_points(&S)) != KARST_SUCCESS) goto cleanup;
   } else {
