@@ -105,29 +105,34 @@ for kind in fifo zero dir; do
     "$KARST" generate "$TMP/in/$kind/cloud.yaml" -o "$TMP/out/gen"
 done
 
+# refused WHAT OUT MESSAGE1 MESSAGE2 COMMAND...: exit 1 within the time limit, both messages
+# (MESSAGE2 may be empty) in stderr, OUT not created.
+refused() {
+  local what=$1 out=$2 m1=$3 m2=$4; shift 4
+  timeout $LIMIT "$@" >"$TMP/stdout" 2>"$TMP/stderr"
+  local got=$?
+  if [ $got = 1 ] && grep -qF -- "$m1" "$TMP/stderr" && { [ -z "$m2" ] || grep -qF -- "$m2" "$TMP/stderr"; } \
+    && [ ! -e "$out" ]; then
+    ok "$what"
+  else
+    bad "$what: exit $got"; cat "$TMP/stderr"
+  fi
+}
+
 # A file within its type but over the size cap is refused before it is read: a sparse 600 MiB
 # .pl (the survey cap is 512 MiB) costs no disk and no time.
 truncate -s 600M "$TMP/in/big.pl"
-timeout $LIMIT "$KARST" metrics "$TMP/in/big.pl" -o "$TMP/out/m.csv" >"$TMP/stdout" 2>"$TMP/stderr"
-got=$?
-if [ $got = 1 ] && grep -qF "$TMP/in/big.pl: the GOCAD PLine file is 629145600 bytes, more than the limit of 512 MiB" "$TMP/stderr" \
-  && [ ! -e "$TMP/out/m.csv" ]; then
-  ok "over the size cap"
-else
-  bad "over the size cap: exit $got"; cat "$TMP/stderr"
-fi
+refused "over the size cap" "$TMP/out/m.csv" \
+  "$TMP/in/big.pl: the GOCAD PLine file is 629145600 bytes, more than the limit of 512 MiB" "" \
+  "$KARST" metrics "$TMP/in/big.pl" -o "$TMP/out/m.csv"
 
 # The same for a point cloud over its cap (1 GiB): a sparse 1.1 GiB cloud.xyz.
 truncate -s 1100M "$TMP/in/dir/cloud.xyz.big"
 rm -rf "$TMP/in/dir/cloud.xyz" && mv "$TMP/in/dir/cloud.xyz.big" "$TMP/in/dir/cloud.xyz"
-timeout $LIMIT "$KARST" generate "$TMP/in/dir/cloud.yaml" -o "$TMP/out/gen" >"$TMP/stdout" 2>"$TMP/stderr"
-got=$?
-if [ $got = 1 ] && grep -qF "$TMP/in/dir/cloud.xyz: the point cloud file is 1153433600 bytes, more than the limit of 1 GiB" "$TMP/stderr" \
-  && grep -qF "(the points of sampling.points at $TMP/in/dir/cloud.yaml:" "$TMP/stderr" && [ ! -e "$TMP/out/gen" ]; then
-  ok "point cloud over the size cap"
-else
-  bad "point cloud over the size cap: exit $got"; cat "$TMP/stderr"
-fi
+refused "point cloud over the size cap" "$TMP/out/gen" \
+  "$TMP/in/dir/cloud.xyz: the point cloud file is 1153433600 bytes, more than the limit of 1 GiB" \
+  "(the points of sampling.points at $TMP/in/dir/cloud.yaml:" \
+  "$KARST" generate "$TMP/in/dir/cloud.yaml" -o "$TMP/out/gen"
 
 # An inf coordinate in an ASCII .vtp: the error names the file and the element.
 cat >"$TMP/in/inf.vtp" <<'EOF'
@@ -146,14 +151,8 @@ cat >"$TMP/in/inf.vtp" <<'EOF'
   </PolyData>
 </VTKFile>
 EOF
-timeout $LIMIT "$KARST" metrics "$TMP/in/inf.vtp" -o "$TMP/out/m.csv" >"$TMP/stdout" 2>"$TMP/stderr"
-got=$?
-if [ $got = 1 ] && grep -qF "$TMP/in/inf.vtp: <DataArray Name=\"Points\"> at byte" "$TMP/stderr" \
-  && grep -qF "value 4 ('inf') is not a finite number" "$TMP/stderr" && [ ! -e "$TMP/out/m.csv" ]; then
-  ok "inf coordinate"
-else
-  bad "inf coordinate: exit $got"; cat "$TMP/stderr"
-fi
+refused "inf coordinate" "$TMP/out/m.csv" "$TMP/in/inf.vtp: <DataArray Name=\"Points\"> at byte" \
+  "value 4 ('inf') is not a finite number" "$KARST" metrics "$TMP/in/inf.vtp" -o "$TMP/out/m.csv"
 # The same file with the coordinate repaired loads (the check is not what failed above).
 sed -i 's/1 inf 2/1 1 2/' "$TMP/in/inf.vtp"
 timeout $LIMIT "$KARST" metrics "$TMP/in/inf.vtp" --format csv >"$TMP/stdout" 2>"$TMP/stderr" \
