@@ -52,13 +52,9 @@ double karst_cost_horizon_term(const karst_geology_t *g, const double p[3]) {
  * Fisher distribution (n nᵀ without dispersion). */
 static double fracture_term(const karst_geology_t *g, const double d[3]) {
   const karst_scenario_t *sc = g->sc;
-  double len2 = dot3(d, d), c = 0.0, wmax = 0.0;
+  const double len2 = dot3(d, d), wmax = g->fracture_wmax;
   const int use_min = sc->cost.fracture_combine == KARST_FRACTURE_MIN;
-  if (use_min) {
-    for (int k = 0; k < sc->n_fractures; k++)
-      wmax = fmax(wmax, sc->fractures[k].weight);
-    c = wmax;
-  }
+  double c = use_min ? wmax : 0.0;
   for (int k = 0; k < sc->n_fractures; k++) {
     const double *T = g->fracture_tensor + 9 * k, w = sc->fractures[k].weight;
     double q; /* E[(n·d̂)²] */
@@ -70,9 +66,10 @@ static double fracture_term(const karst_geology_t *g, const double d[3]) {
     } else {
       q = 1.0;
     }
-    if (use_min)
-      c = fmin(c, wmax - w * (1.0 - q));
-    else
+    if (use_min) {
+      const double x = wmax - w * (1.0 - q); /* never NaN: finite weights, q in [0, 1] */
+      c = x < c ? x : c;
+    } else
       c += w * q;
   }
   return c;

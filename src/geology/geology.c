@@ -965,6 +965,7 @@ karst_error_t karst_geology_create(karst_ctx_t *ctx, const karst_scenario_t *sc,
     double mu[3];
     karst_plane_normal(sc->fractures[f].dip_direction, sc->fractures[f].dip, mu);
     karst_i_fisher_tensor(mu, sc->fractures[f].kappa, g->fracture_tensor + 9 * f);
+    g->fracture_wmax = fmax(g->fracture_wmax, sc->fractures[f].weight);
   }
   for (int f = 0; f < sc->n_faults; f++)
     karst_plane_normal(sc->faults[f].dip_direction, sc->faults[f].dip, g->fault_normal + 3 * f);

@@ -70,6 +70,7 @@ struct karst_geology {
   double band; /* routing.water_table_band */
   /* Fracture families: the mean-pole tensors E[n nᵀ] of their Fisher distributions. */
   double *fracture_tensor; /* 9 per family */
+  double fracture_wmax;    /* the largest family weight (fracture_combine: min starts there) */
   /* Realised discs of every discrete fracture network, and a uniform grid over them. */
   karst_disc_t *discs;
   karst_int_t n_discs;
