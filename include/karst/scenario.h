@@ -287,6 +287,24 @@ typedef struct karst_cost_weights {
   int fracture_combine; /**< karst_fracture_combine_t, default KARST_FRACTURE_SUM */
 } karst_cost_weights_t;
 
+/**
+ * Which features sampling.refine samples at feature_radius (docs/scenario.md): bits of
+ * karst_sampling_t.refine. The key points and prescribed paths are always sampled.
+ */
+typedef enum {
+  KARST_REFINE_HORIZONS = 1,     /**< "horizons": a layer ±feature_band around each horizon */
+  KARST_REFINE_WATER_TABLE = 2,  /**< "water_table": a layer around each spring's water table */
+  KARST_REFINE_PERMEABILITY = 4, /**< "permeability": where π < permeable_threshold */
+  KARST_REFINE_ALL = 7           /**< the default */
+} karst_refine_t;
+
+/**
+ * Write the names of the bits of @p refine (karst_refine_t) as the scenario spells them, in
+ * karst_refine_t's order and separated by @p sep, into @p buf (always terminated); e.g.
+ * "horizons, permeability"; "" for none. Returns @p buf. O(1).
+ */
+char *karst_refine_names(unsigned refine, const char *sep, char *buf, size_t size);
+
 typedef struct karst_sampling {
   double fill_radius;    /**< Poisson radius of the fill samples (m), > 0 */
   double feature_radius; /**< Poisson radius on horizons, water table, permeable zones (m), > 0 */
@@ -295,6 +313,7 @@ typedef struct karst_sampling {
   double feature_band; /**< half-thickness of the sampled layer around horizons/water table (m) */
   int k;               /**< neighbours in the kNN graph, >= 1, default 40 */
   int knn;             /**< karst_knn_method_t: grid (default) or flann */
+  unsigned refine;     /**< karst_refine_t bits: the features sampled at feature_radius */
   karst_int_t max_samples; /**< safety cap, default 5e6 */
   char *points;            /**< sampling.points: the point cloud file as resolved, or NULL */
   double *points_xyz;      /**< its points (3 coordinates each), read with the scenario */

@@ -7,7 +7,7 @@
  * (bedrock fraction <= 1); the feature samples by each layer (horizons, water tables) of
  * thickness 2 feature_band + feature_radius over the domain's plan, with a factor 2 for the
  * surfaces' slopes, and by the whole domain when some rock is permeable enough to be sampled
- * at feature_radius. */
+ * at feature_radius; only the features sampling.refine names count. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -36,10 +36,13 @@ void karst_budget_estimate(const karst_scenario_t *sc, int threads, karst_budget
   int springs = 0;
   for (int k = 0; k < sc->n_key_points; k++)
     springs += sc->key_points[k].type == KARST_KEYPOINT_SPRING;
-  double layers = sc->n_horizons + springs + 1; /* horizons, each spring's water table, one more */
+  /* The layers sampling.refine names (horizons, each spring's water table), and one more. */
+  double layers = ((sp->refine & KARST_REFINE_HORIZONS) ? sc->n_horizons : 0) +
+                  ((sp->refine & KARST_REFINE_WATER_TABLE) ? springs : 0) + 1;
   double feature = 2 * layers * packing(L[0], L[1], 2 * sp->feature_band, rf);
   const karst_permeability_t *pm = &sc->permeability;
-  if (pm->root || pm->background < sp->permeable_threshold)
+  if ((sp->refine & KARST_REFINE_PERMEABILITY) &&
+      (pm->root || pm->background < sp->permeable_threshold))
     feature += packing(L[0], L[1], L[2], rf);
   b->feature_samples = feature;
   b->samples_needed = b->fill_samples + b->feature_samples + sc->n_key_points;

@@ -51,10 +51,13 @@ static int run(int argc, char **argv) {
         springs += sc.key_points[k].type == KARST_KEYPOINT_SPRING;
         waypoints += sc.key_points[k].type == KARST_KEYPOINT_WAYPOINT;
       }
-      char cloud[64] = "";
+      char cloud[160] = "", names[64];
       if (sc.sampling.points)
         snprintf(cloud, sizeof cloud, "a cloud of %lld points (sampling.points), ",
                  (long long)sc.sampling.n_points);
+      if (sc.sampling.refine != KARST_REFINE_ALL)
+        snprintf(cloud + strlen(cloud), sizeof cloud - strlen(cloud), "sampling.refine [%s], ",
+                 karst_refine_names(sc.sampling.refine, ", ", names, sizeof names));
       printf("%s: ok: '%s', domain %.6g x %.6g x %.6g m, %d %s, %d %s, %d %s, %d %s, %d %s, "
              "%sgamma %.6g, theta %.6g, seed %llu; needs about %.4g samples, %.4g graph edges, "
              "%.4g path searches, %s of memory\n",

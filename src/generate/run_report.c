@@ -372,6 +372,9 @@ void karst_generate_write_parameters(FILE *fp, const karst_scenario_t *sc) {
   fprintf(fp, ", \"k\": %d, \"knn\": \"%s\", \"max_samples\": %lld, ", sc->sampling.k,
           sc->sampling.knn == KARST_KNN_FLANN ? "flann" : "grid",
           (long long)sc->sampling.max_samples);
+  char refine[64];
+  karst_refine_names(sc->sampling.refine, "\", \"", refine, sizeof refine);
+  fprintf(fp, "\"refine\": [%s%s%s], ", refine[0] ? "\"" : "", refine, refine[0] ? "\"" : "");
   file_json(fp, "points", sc->sampling.points);
   fprintf(fp, ", \"points_count\": %lld},\n", (long long)sc->sampling.n_points);
   kv_num(fp, I, "gamma", sc->gamma, 0);

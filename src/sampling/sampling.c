@@ -1078,6 +1078,8 @@ static karst_error_t check_scenario(karst_ctx_t *ctx, const karst_geology_t *geo
  *     horizon, then of each spring's water table (once per distinct table);
  *  4. feature-radius Poisson samples where the resistance π is below
  *     sampling.permeable_threshold;
+ *     (3 and 4 each only when sampling.refine names them: horizons, water_table,
+ *     permeability; all three by default);
  *  5. fill samples at fill_radius elsewhere; or, with sampling.points, the points of that
  *     file that lie in the bedrock and no closer than min(r_f, r_c) to a feature sample.
  * Within each source the samples are then ordered along a Morton curve
@@ -1216,13 +1218,15 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
     }
   }
 
+  /* sampling.refine names the features sampled at feature_radius (all three by default). */
+  const unsigned refine = sc->sampling.refine;
   S.stage = "horizon";
-  for (int h = 0; h < sc->n_horizons; h++) {
+  for (int h = 0; h < sc->n_horizons && (refine & KARST_REFINE_HORIZONS); h++) {
     region_t R = {KARST_SAMPLE_HORIZON, &geo->horizon[h], sc->sampling.feature_band};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
   S.stage = "water table";
-  for (int w = 0; w < geo->n_springs; w++) {
+  for (int w = 0; w < geo->n_springs && (refine & KARST_REFINE_WATER_TABLE); w++) {
     int seen = 0; /* springs sharing one water table sample it once */
     for (int v = 0; v < w && !seen; v++)
       seen = karst_i_surf_equal(&geo->water_table[v], &geo->water_table[w]);
@@ -1231,7 +1235,7 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }
   S.stage = "permeability";
-  {
+  if (refine & KARST_REFINE_PERMEABILITY) {
     region_t R = {KARST_SAMPLE_PERMEABILITY, NULL, 0.0};
     if ((err = sample_region(&S, &R)) != KARST_SUCCESS) goto cleanup;
   }

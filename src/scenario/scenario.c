@@ -49,6 +49,7 @@ void karst_scenario_init(karst_scenario_t *sc) {
   sc->sampling.feature_radius = 3.0;
   sc->sampling.permeable_threshold = 0.3;
   sc->sampling.feature_band = 1.0;
+  sc->sampling.refine = KARST_REFINE_ALL;
   sc->sampling.k = 40;
   sc->sampling.max_samples = 5000000;
   sc->gamma = 2.0;
@@ -2274,6 +2275,47 @@ static karst_error_t read_points_file(reader_t *r, yaml_node_t *n, void *base, c
   return err;
 }
 
+/* sampling.refine: the names of the features sampled at feature_radius, each bit i of
+ * karst_refine_t named refine_names[i]; [] for none. */
+static const char *const refine_names[] = {"horizons", "water_table", "permeability"};
+
+char *karst_refine_names(unsigned refine, const char *sep, char *buf, size_t size) {
+  size_t len = 0;
+  if (size == 0) return buf;
+  buf[0] = '\0';
+  for (int i = 0; i < 3; i++)
+    if (refine & (1u << i)) {
+      int w = snprintf(buf + len, size - len, "%s%s", len ? sep : "", refine_names[i]);
+      if (w < 0 || (size_t)w >= size - len) break;
+      len += (size_t)w;
+    }
+  return buf;
+}
+
+static karst_error_t read_refine(reader_t *r, yaml_node_t *n, void *base, const char *path) {
+  karst_sampling_t *sp = base;
+  char d[80], sub[PATH_LEN];
+  if (n->type != YAML_SEQUENCE_NODE)
+    return fail_at(r, n, KARST_EINVAL,
+                   "%s must be a list of the names horizons, water_table, permeability "
+                   "([] for none), got %s",
+                   path, describe(n, d, sizeof d));
+  unsigned mask = 0;
+  long m = n->data.sequence.items.top - n->data.sequence.items.start;
+  for (long i = 0; i < m; i++) {
+    yaml_node_t *it = yaml_document_get_node(r->doc, n->data.sequence.items.start[i]);
+    int v = 0;
+    index_path(sub, path, i);
+    karst_error_t err = get_enum(r, it, sub, refine_names, 3, &v);
+    if (err) return err;
+    if (mask & (1u << v))
+      return fail_at(r, it, KARST_EINVAL, "%s: '%s' is listed twice", sub, refine_names[v]);
+    mask |= 1u << v;
+  }
+  sp->refine = mask;
+  return KARST_SUCCESS;
+}
+
 static const field_t sampling_fields[] = {
     {.key = "fill_radius",
      .type = T_NUM,
@@ -2312,8 +2354,9 @@ static const field_t sampling_fields[] = {
      .type = T_FN,
      .fn = read_points_file,
      .pos = offsetof(karst_scenario_t, pos_points)},
+    {.key = "refine", .type = T_FN, .fn = read_refine},
 };
-static const schema_t sampling_schema = {sampling_fields, 8};
+static const schema_t sampling_schema = {sampling_fields, 9};
 
 static const field_t skeleton_fields[] = {
     {.key = "gamma",

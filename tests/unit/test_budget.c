@@ -54,6 +54,24 @@ static void test_counts_of_a_box(void **state) {
   karst_budget_estimate(&sc, 4, &b);
   assert_close(b.bytes,
                96.0 * 1024 * 1024 + 12142.342515331879 * (512 + 40 * 16 + 2 * 40 + 40 * 16));
+  /* sampling.refine without the water table: one layer (the extra one) instead of two, so half
+   * the feature samples, 5556.8117345245...; with no permeable rock, permeability changes
+   * nothing */
+  sc.sampling.refine = KARST_REFINE_HORIZONS | KARST_REFINE_PERMEABILITY;
+  karst_budget_estimate(&sc, 1, &b);
+  assert_close(b.feature_samples, 11113.623469049011 / 2);
+  sc.sampling.refine = 0;
+  karst_budget_estimate(&sc, 1, &b);
+  assert_close(b.feature_samples, 11113.623469049011 / 2);
+  /* rock permeable enough everywhere (background 0.1 < 0.3): the whole box at feature_radius,
+   * sqrt(2) (103)(103)(53) / 27, counted only when refine names permeability */
+  sc.permeability.background = 0.1;
+  karst_budget_estimate(&sc, 1, &b);
+  assert_close(b.feature_samples, 11113.623469049011 / 2);
+  sc.sampling.refine = KARST_REFINE_PERMEABILITY;
+  karst_budget_estimate(&sc, 1, &b);
+  assert_close(b.feature_samples, 11113.623469049011 / 2 + sqrt(2.0) * 103 * 103 * 53 / 27);
+  sc.sampling.refine = KARST_REFINE_ALL, sc.permeability.background = 1;
   /* max_samples caps the samples (sampling refuses more) and then drives the estimate when the
    * file gives it (a key the file gives is named before a defaulted one, here sampling.k) */
   sc.sampling.max_samples = 1000;

@@ -145,6 +145,59 @@ static void test_sampling_rules(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* sampling.refine: a feature left out of the list gets no sample of its own (its room is
+ * filled at fill_radius instead); the named ones are sampled as by default; the key points
+ * are always first; every pair keeps its distance (check_poisson). */
+static void test_sampling_refine(void **state) {
+  (void)state;
+  static const unsigned masks[] = {0,
+                                   KARST_REFINE_HORIZONS,
+                                   KARST_REFINE_WATER_TABLE,
+                                   KARST_REFINE_PERMEABILITY,
+                                   KARST_REFINE_HORIZONS | KARST_REFINE_PERMEABILITY,
+                                   KARST_REFINE_ALL};
+  static const struct {
+    unsigned bit;
+    karst_sample_source_t src;
+    int least; /* named: as test_sampling_rules' lower bounds */
+  } feats[] = {{KARST_REFINE_HORIZONS, KARST_SAMPLE_HORIZON, 490},
+               {KARST_REFINE_WATER_TABLE, KARST_SAMPLE_WATER_TABLE, 490},
+               {KARST_REFINE_PERMEABILITY, KARST_SAMPLE_PERMEABILITY, 10}};
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_int_t n_none = 0, n_all = 0;
+  for (size_t m = 0; m < sizeof masks / sizeof masks[0]; m++) {
+    karst_scenario_t sc;
+    scenario(&sc);
+    sc.sampling.refine = masks[m];
+    karst_rng_t rng;
+    karst_rng_init(&rng, 11, 3);
+    karst_samples_t s;
+    karst_samples_init(&s);
+    assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s), KARST_SUCCESS);
+    int count[KARST_SAMPLE_SOURCE_COUNT] = {0};
+    for (karst_int_t i = 0; i < s.n; i++)
+      count[s.source[i]]++;
+    assert_int_equal(count[KARST_SAMPLE_KEYPOINT], 3);
+    for (int i = 0; i < 3; i++)
+      assert_memory_equal(s.xyz + 3 * i, sc.key_points[i].p, 3 * sizeof(double));
+    for (size_t f = 0; f < 3; f++) {
+      if (masks[m] & feats[f].bit)
+        assert_true(count[feats[f].src] > feats[f].least);
+      else
+        assert_int_equal(count[feats[f].src], 0);
+    }
+    assert_true(count[KARST_SAMPLE_FILL] > 100);
+    check_poisson(&sc, &s);
+    if (masks[m] == 0) n_none = s.n;
+    if (masks[m] == KARST_REFINE_ALL) n_all = s.n;
+    karst_samples_destroy(&s);
+    karst_scenario_destroy(&sc);
+  }
+  /* The fine layers hold more samples than the fill they displace (r_f = 3 against r_c = 8). */
+  assert_true(n_all > n_none + 1000);
+}
+
 /* Same stream: identical samples; another stream: different ones. */
 static void test_sampling_determinism(void **state) {
   (void)state;
@@ -326,6 +379,7 @@ static void test_sampling_degenerate(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_sampling_rules),
+      cmocka_unit_test(test_sampling_refine),
       cmocka_unit_test(test_sampling_determinism),
       cmocka_unit_test(test_sampling_threads),
       cmocka_unit_test(test_sampling_dip_grid_prescribed),

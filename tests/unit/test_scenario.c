@@ -375,6 +375,14 @@ BAD(reach_ratio_zero, KARST_ERANGE, 14, 16,
 BAD(points_ratio_zero, KARST_ERANGE, 14, 17, "amplification.points_ratio must be > 0, got 0")
 BAD(anchor_typo, KARST_EINVAL, 14, 11,
     "amplification.anchor must be one of previous, network, got 'previos'")
+/* sampling.refine: a list of known names, each at most once. */
+BAD(refine_not_list, KARST_EINVAL, 14, 11,
+    "sampling.refine must be a list of the names horizons, water_table, permeability ([] for "
+    "none), got 'water_table'")
+BAD(refine_typo, KARST_EINVAL, 14, 22,
+    "sampling.refine[1] must be one of horizons, water_table, permeability, got 'watertable' "
+    "(did you mean 'water_table'?)")
+BAD(refine_twice, KARST_EINVAL, 14, 39, "sampling.refine[2]: 'water_table' is listed twice")
 /* 1000 × (2^30 − 1) points (by hand: about 1.07e12) are refused before any work is done. */
 BAD(amplification_points_total, KARST_ERANGE, 14, 3,
     "amplification: 30 steps of 1000 points growing by points_ratio 2 make")
@@ -535,6 +543,31 @@ static void test_geology_file(void **state) {
 }
 
 /* Every fixture must fail (none may crash or leak: run under ASan). */
+/* sampling.refine: all three features by default, the named ones, or none; the names written
+ * back as the scenario spells them. */
+static void test_refine_key(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  assert_int_equal(sc.sampling.refine, KARST_REFINE_ALL);
+  char buf[64];
+  assert_string_equal(karst_refine_names(sc.sampling.refine, ", ", buf, sizeof buf),
+                      "horizons, water_table, permeability");
+  assert_string_equal(karst_refine_names(0, ", ", buf, sizeof buf), "");
+  assert_string_equal(karst_refine_names(KARST_REFINE_ALL, "/", buf, 12), "horizons/wa");
+  assert_int_equal(karst_scenario_load(&ctx, DATA "refine_some.yaml", &sc), KARST_SUCCESS);
+  assert_int_equal(sc.sampling.refine, KARST_REFINE_HORIZONS | KARST_REFINE_PERMEABILITY);
+  assert_string_equal(karst_refine_names(sc.sampling.refine, ", ", buf, sizeof buf),
+                      "horizons, permeability");
+  karst_scenario_destroy(&sc);
+  karst_scenario_init(&sc);
+  assert_int_equal(karst_scenario_load(&ctx, DATA "refine_none.yaml", &sc), KARST_SUCCESS);
+  assert_int_equal(sc.sampling.refine, 0);
+  karst_scenario_destroy(&sc);
+}
+
 static void test_all_bad_fail(void **state) {
   (void)state;
   static const char *const files[] = {"above_heightfield",
@@ -605,7 +638,10 @@ static void test_all_bad_fail(void **state) {
                                       "water_table_on_sink",
                                       "vadose_factor",
                                       "stratum_plane_and_file",
-                                      "band_in_classification"};
+                                      "band_in_classification",
+                                      "refine_not_list",
+                                      "refine_typo",
+                                      "refine_twice"};
   for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
     char path[1024];
     snprintf(path, sizeof path, DATA "bad/%s.yaml", files[i]);
@@ -965,6 +1001,10 @@ int main(void) {
       cmocka_unit_test(test_bad_reach_ratio_zero),
       cmocka_unit_test(test_bad_points_ratio_zero),
       cmocka_unit_test(test_bad_anchor_typo),
+      cmocka_unit_test(test_bad_refine_not_list),
+      cmocka_unit_test(test_bad_refine_typo),
+      cmocka_unit_test(test_bad_refine_twice),
+      cmocka_unit_test(test_refine_key),
       cmocka_unit_test(test_bad_amplification_points_total),
       cmocka_unit_test(test_bad_realisations_zero),
       cmocka_unit_test(test_bad_radius_min_max),
