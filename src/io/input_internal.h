@@ -87,9 +87,12 @@ karst_error_t karst_i_vtp_check_buffer(karst_ctx_t *ctx, const char *name,
  * s[0 .. len) exactly, by Clinger's fast path (W. D. Clinger, "How to read floating point
  * numbers accurately", PLDI 1990): when its significant digits make an integer m <= 2^53 and
  * its decimal exponent e is within [-22, 22], m and 10^|e| are exact doubles and one correctly
- * rounded product or quotient is the correctly rounded value, strtod's. Returns 1 with *out
- * set; 0 for anything else (more than 19 significant digits, a larger exponent, hexadecimal,
- * inf, nan, other characters), which the caller hands to strtod.
+ * rounded product or quotient is the correctly rounded value, strtod's. On x86 the same with
+ * m < 2^64 and |e| <= 27 in x87 extended precision (64-bit significand), which then rounds
+ * twice: declined when the extended result lies exactly halfway between two doubles, the only
+ * case where the second rounding can differ from strtod's, or is not a normal double. Returns
+ * 1 with *out set; 0 for anything else (more than 19 significant digits, a larger exponent,
+ * hexadecimal, inf, nan, other characters), which the caller hands to strtod.
  * Time complexity: O(len).
  */
 int karst_i_parse_decimal(const char *s, size_t len, double *out);

@@ -18,6 +18,14 @@ static const double POW10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
                                  1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
                                  1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
+#if LDBL_MANT_DIG == 64 && (defined(__x86_64__) || defined(__i386__))
+/* Exact in the x87 extended format: 5^27 < 2^64. */
+static const long double POW10L[28] = {1e0L,  1e1L,  1e2L,  1e3L,  1e4L,  1e5L,  1e6L,
+                                       1e7L,  1e8L,  1e9L,  1e10L, 1e11L, 1e12L, 1e13L,
+                                       1e14L, 1e15L, 1e16L, 1e17L, 1e18L, 1e19L, 1e20L,
+                                       1e21L, 1e22L, 1e23L, 1e24L, 1e25L, 1e26L, 1e27L};
+#endif
+
 _Static_assert(FLT_EVAL_METHOD == 0, "the fast path needs double arithmetic in double precision");
 
 /* Documented in io/input_internal.h. */
@@ -55,11 +63,30 @@ int karst_i_parse_decimal(const char *s, size_t len, double *out) {
   if (i != len) return 0;
   /* Clinger's fast path: m and 10^|e10| are exact doubles, so one correctly rounded product or
    * quotient is the correctly rounded value (what strtod returns). */
-  if (m > ((uint64_t)1 << 53) || e10 < -22 || e10 > 22) return 0;
-  double v = (double)m;
-  v = e10 >= 0 ? v * POW10[e10] : v / POW10[-e10];
-  *out = neg ? -v : v;
-  return 1;
+  if (m <= ((uint64_t)1 << 53) && e10 >= -22 && e10 <= 22) {
+    double v = (double)m;
+    v = e10 >= 0 ? v * POW10[e10] : v / POW10[-e10];
+    *out = neg ? -v : v;
+    return 1;
+  }
+#if LDBL_MANT_DIG == 64 && (defined(__x86_64__) || defined(__i386__))
+  /* The same in x87 extended precision, for shortest round-trip digits (up to 17 of them) and
+   * any 19: m < 2^64 and 10^|e10| (5^27 < 2^64) are exact, so r is v rounded once to 64 bits.
+   * Rounding r to 53 bits gives v's correctly rounded double unless r is exactly halfway
+   * between two doubles (then v may lie on either side): its 11 low bits are 10000000000.
+   * Only normal doubles: below DBL_MIN fewer bits are kept. */
+  if (e10 >= -27 && e10 <= 27) {
+    long double r = (long double)m;
+    r = e10 >= 0 ? r * POW10L[e10] : r / POW10L[-e10];
+    uint64_t bits;
+    memcpy(&bits, &r, sizeof bits); /* the explicit 64-bit significand */
+    if ((bits & 0x7ff) == 0x400 || (m != 0 && !(r >= DBL_MIN && r <= DBL_MAX))) return 0;
+    double v = (double)r;
+    *out = neg ? -v : v;
+    return 1;
+  }
+#endif
+  return 0;
 }
 
 /* Longest line (bytes, without its newline): three numbers need far fewer. */

@@ -305,29 +305,26 @@ static void same_as_strtod(const char *t) {
 static void test_points_decimal(void **state) {
   (void)state;
   double x;
-  static const char *const taken[] = {"0",
-                                      "-0",
-                                      "+7",
-                                      "1.",
-                                      ".5",
-                                      "-751.7014069032869",
-                                      "1e22",
-                                      "2E-22",
-                                      "1e+5",
-                                      "000012.5000",
-                                      "9007199254740992",
-                                      "0.000123",
-                                      "4.9e-3"};
+  static const char *const taken[] = {"0", "-0", "+7", "1.", ".5", "-751.7014069032869", "1e22",
+                                      "2E-22", "1e+5", "000012.5000", "9007199254740992",
+                                      "0.000123", "4.9e-3",
+                                      /* x87 extended precision: 17 and 19 digits, |e| to 27 */
+                                      "-751.70140690328693", "18014398509481985",
+                                      "1234567890123456789", "1e24", "1e-23", "4.5e-26", "0e25"};
   for (size_t i = 0; i < sizeof taken / sizeof *taken; i++) {
     assert_true(karst_i_parse_decimal(taken[i], strlen(taken[i]), &x));
     same_as_strtod(taken[i]);
   }
   assert_true(karst_i_parse_decimal("-0", 2, &x) && signbit(x) && x == 0);
-  /* Left to strtod: beyond 2^53, beyond 10^22, more than 19 digits, other spellings, and
-   * whatever is not a number at all. */
+  /* Left to strtod: exactly halfway between two doubles (by hand: 2^53 + 1 lies halfway
+   * between 2^53 and 2^53 + 2, where the extended result is exact and its 11 low bits are
+   * 10000000000; 10^23 = 2^23 5^23 with 5^23 odd and 54 bits long, the classic hard case),
+   * beyond 10^27, more than 19 digits, other spellings, and whatever is not a
+   * number at all. */
   static const char *const declined[] = {"9007199254740993",
                                          "1e23",
-                                         "1e-23",
+                                         "1e28",
+                                         "1e-28",
                                          "12345678901234567890",
                                          "0x10",
                                          "inf",
@@ -370,6 +367,29 @@ static void test_points_decimal(void **state) {
     same_as_strtod(buf);
   }
   assert_true(taken_n > N / 2); /* the fast path is what runs */
+  /* Shortest round-trip digits of random doubles (what bench_peers and most exporters write) and
+   * the exact halfway points between neighbouring doubles, written with 17 to 19 digits (so
+   * within a unit of the 19th digit of a tie: the hardest inputs for the double rounding). */
+  int halfway = 0;
+  for (int t = 0; t < N; t++) {
+    char buf[80];
+    double d = ldexp(karst_rng_uniform_range(&rng, 1, 2), (int)karst_rng_below(&rng, 80) - 40);
+    snprintf(buf, sizeof buf, "%.17g", d);
+    for (int p = 1; p <= 17; p++) { /* the shortest of them that reads back as d */
+      char sh[80];
+      snprintf(sh, sizeof sh, "%.*g", p, d);
+      if (strtod(sh, NULL) == d) {
+        memcpy(buf, sh, sizeof sh);
+        break;
+      }
+    }
+    same_as_strtod(buf);
+    long double mid = ((long double)d + (long double)nextafter(d, INFINITY)) / 2;
+    snprintf(buf, sizeof buf, "%.*Le", 16 + (int)karst_rng_below(&rng, 3), mid);
+    halfway += !karst_i_parse_decimal(buf, strlen(buf), &x);
+    same_as_strtod(buf);
+  }
+  assert_true(halfway > 0); /* some ties reach the check that declines them */
 }
 
 int main(void) {
