@@ -7,7 +7,9 @@
  *      rectilinear scene (Code/Source/main.cpp, RectilinearMazeNetwork): about 23 450 samples in
  *      2000 x 2000 x 250 m, k = 32, the scene's 7 sinks, 5 springs and the 10 waypoints that lie
  *      in the sampled slab, three axis-aligned fracture directions of weight 10, gamma 2, plain
- *      union of the least-cost paths, 10 amplification points (half dead ends).
+ *      union of the least-cost paths, 10 amplification points (half dead ends); one uniform
+ *      cloud, as the peer's, with no layer sampled finely around the springs' water tables
+ *      (sampling.refine: [], since the peer has no water table).
  *   2. KarstNSim (Gouy et al. 2024, ISSKA/KarstNSim_Public at fd31889), its shipped example
  *      (Input_files/instructions.txt): about 115 000 samples, k = 100, 5 sinks all draining to
  *      spring 1 (its connectivity matrix), 2 springs each with its own water table, 2 inception
@@ -104,7 +106,8 @@ static int write_ks_scene(const char *path, const char *points) {
             KS_WAYPOINTS[i][0], KS_WAYPOINTS[i][1], KS_WAYPOINTS[i][2]);
   fprintf(f,
           "cost: {w0: 1, fracture: 10, fracture_combine: min}\n"
-          "sampling: {fill_radius: %g, feature_radius: %g, k: 32%s%s}\n"
+          "# Karst-Synthesis samples (or loads) one uniform cloud: no water-table layer\n"
+          "sampling: {fill_radius: %g, feature_radius: %g, k: 32, refine: []%s%s}\n"
           "skeleton: {gamma: 2, reuse: 1}\n"
           "amplification: {steps: 1, points: 10, dead_end_fraction: 0.5}\n",
           KS_FILL_RADIUS, KS_FILL_RADIUS, points ? ", points: " : "", points ? points : "");
