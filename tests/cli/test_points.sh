@@ -3,7 +3,7 @@
 # 10 m lattice, so the counts are known by hand), what validate and run.json say about it, that
 # a realisation is reproducible, that a run's own fill given back reproduces its network, and a
 # malformed cloud refused with FILE:LINE:COLUMN, the key's place in the scenario, exit 1 and no
-# output.
+# output; and sampling.refine: [] on the cloud (the key points and the cloud alone).
 set -u
 KARST=$1
 SRC=$(cd "$2" && pwd)
@@ -54,6 +54,61 @@ if not (0 < c["points_kept"] < 24000): errs.append("points_kept %r" % c["points_
 if not (c["samples"] > c["points_kept"] + c["key_points"]): errs.append("samples %r" % c["samples"])
 for e in errs: print("FAIL: run.json:", e)
 if not errs: print("ok: run.json records the cloud (%d of 24000 points kept)" % c["points_kept"])
+sys.exit(1 if errs else 0)
+EOF
+
+# sampling.refine: [] with the cloud: no layer is sampled finely, so the samples are the key points
+# and the kept lattice points alone, and a point is dropped only within min(feature_radius 6,
+# fill_radius 10) = 6 m of a key point. The expected count comes from the key points' positions
+# in samples.vtp and the lattice, by brute force in Python (an independent computation).
+sed 's/^  points: cloud.xyz$/  points: cloud.xyz\n  refine: []/' "$tmp/s.yaml" >"$tmp/bare.yaml"
+"$KARST" validate "$tmp/bare.yaml" >"$tmp/out" 2>&1 && grep -q "sampling.refine \[\], " "$tmp/out" \
+  && ok "validate names sampling.refine" || bad "validate with refine: $(cat "$tmp/out")"
+# First the key points (samples.vtp of a run on the lattice), then a cloud of the lattice plus, for
+# each key point k, k + (3, 0, 0), which the rule drops, and k - (0, 0, 7), which it keeps when no
+# key point lies within 6 m and it is inside the domain (z > 0): that run is the one checked.
+"$KARST" generate "$tmp/bare.yaml" -o "$tmp/bare0" --samples --quiet >"$tmp/gen.log" 2>&1 \
+  || { bad "generate with refine: []: exit $?"; cat "$tmp/gen.log"; }
+$PY - "$tmp/bare0/samples.vtp" "$tmp/cloud.xyz" "$tmp/cloud2.xyz" <<'EOF' || bad "writing the second cloud"
+import sys, vtk
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update()
+pd = r.GetOutput()
+names = pd.GetFieldData().GetAbstractArray("source_names")
+names = [names.GetValue(i) for i in range(names.GetNumberOfValues())]
+src = pd.GetPointData().GetArray("source")
+keys = [pd.GetPoint(i) for i in range(pd.GetNumberOfPoints()) if names[src.GetValue(i)] == "key_point"]
+with open(sys.argv[3], "w") as f:
+    f.write(open(sys.argv[2]).read())
+    for k in keys:
+        f.write("%r %r %r\n%r %r %r\n" % (k[0] + 3, k[1], k[2], k[0], k[1], k[2] - 7))
+EOF
+sed 's#^  points: cloud.xyz$#  points: cloud2.xyz#' "$tmp/bare.yaml" >"$tmp/bare2.yaml"
+"$KARST" generate "$tmp/bare2.yaml" -o "$tmp/bare" --samples --quiet >"$tmp/gen.log" 2>&1 \
+  || { bad "generate with refine: [] on the second cloud: exit $?"; cat "$tmp/gen.log"; }
+$PY - "$tmp/bare/run.json" "$tmp/bare/samples.vtp" <<'EOF' || fail=1
+import json, sys, vtk
+d = json.load(open(sys.argv[1]))
+c = d["counts"]
+r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[2]); r.Update()
+pd = r.GetOutput()
+names = pd.GetFieldData().GetAbstractArray("source_names")
+names = [names.GetValue(i) for i in range(names.GetNumberOfValues())]
+src = pd.GetPointData().GetArray("source")
+keys = [pd.GetPoint(i) for i in range(pd.GetNumberOfPoints()) if names[src.GetValue(i)] == "key_point"]
+kinds = sorted(set(names[src.GetValue(i)] for i in range(pd.GetNumberOfPoints())))
+far = lambda p: all((p[0] - k[0]) ** 2 + (p[1] - k[1]) ** 2 + (p[2] - k[2]) ** 2 >= 36 for k in keys)
+lattice = sum(far((x, y, z)) for z in range(5, 100, 10) for y in range(5, 600, 10) for x in range(5, 400, 10))
+below = sum(far((k[0], k[1], k[2] - 7)) and k[2] - 7 > 0 for k in keys)
+expect = lattice + below
+errs = []
+if d["parameters"]["sampling"]["refine"] != []: errs.append("refine %r" % d["parameters"]["sampling"]["refine"])
+if set(kinds) & {"horizon", "water_table", "permeability", "fill"} or "points" not in kinds: errs.append("sources %r" % kinds)
+if d["parameters"]["sampling"]["points_count"] != 24000 + 2 * len(keys): errs.append("points_count")
+if below == 0: errs.append("no point below a key point is kept: the check proves nothing")
+if c["points_kept"] != expect: errs.append("points_kept %d, expected %d" % (c["points_kept"], expect))
+if c["samples"] != c["key_points"] + expect: errs.append("samples %d" % c["samples"])
+for e in errs: print("FAIL: refine: []:", e)
+if not errs: print("ok: refine: [] runs on the %d key points and %d cloud points (%d of the lattice, %d of %d below a key point; none beside one), as counted" % (len(keys), expect, lattice, below, len(keys)))
 sys.exit(1 if errs else 0)
 EOF
 
