@@ -71,6 +71,10 @@ int cli_parse_int(const char *s, int *out);
 int cli_parse_double(const char *s, double *out);
 /* Non-zero when argv[i] is -h or --help. */
 int cli_is_help(const char *arg);
+
+/* The process's heap policy, set once before a command runs (cli_memory.c): allocations below
+ * 32 MiB stay in a heap backed by transparent huge pages and are reused from stage to stage. */
+void cli_memory_policy(void);
 /* Print the usage text of a command on stdout. */
 void cli_print_help(const cli_command_t *cmd);
 

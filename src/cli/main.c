@@ -125,6 +125,7 @@ int main(int argc, char **argv) {
       cli_print_help(c);
       return stdout_status(c->name);
     }
+  cli_memory_policy();
   int status = c->run(argc - 1, argv + 1);
   int out = stdout_status(c->name);
   return out ? out : status;
