@@ -51,12 +51,13 @@ static int run(int argc, char **argv) {
         springs += sc.key_points[k].type == KARST_KEYPOINT_SPRING;
         waypoints += sc.key_points[k].type == KARST_KEYPOINT_WAYPOINT;
       }
-      char cloud[160] = "", names[64];
+      char sampling[160] = "", names[64]; /* what the summary says of sampling.points and .refine */
       if (sc.sampling.points)
-        snprintf(cloud, sizeof cloud, "a cloud of %lld points (sampling.points), ",
+        snprintf(sampling, sizeof sampling, "a cloud of %lld points (sampling.points), ",
                  (long long)sc.sampling.n_points);
       if (sc.sampling.refine != KARST_REFINE_ALL)
-        snprintf(cloud + strlen(cloud), sizeof cloud - strlen(cloud), "sampling.refine [%s], ",
+        snprintf(sampling + strlen(sampling), sizeof sampling - strlen(sampling),
+                 "sampling.refine [%s], ",
                  karst_refine_names(sc.sampling.refine, ", ", names, sizeof names));
       printf("%s: ok: '%s', domain %.6g x %.6g x %.6g m, %d %s, %d %s, %d %s, %d %s, %d %s, "
              "%sgamma %.6g, theta %.6g, seed %llu; needs about %.4g samples, %.4g graph edges, "
@@ -66,7 +67,7 @@ static int run(int argc, char **argv) {
              plural(sinks, "sink", "sinks"), springs, plural(springs, "spring", "springs"),
              waypoints, plural(waypoints, "waypoint", "waypoints"), sc.n_horizons,
              plural(sc.n_horizons, "horizon", "horizons"), sc.n_fractures,
-             plural(sc.n_fractures, "fracture family", "fracture families"), cloud, sc.gamma,
+             plural(sc.n_fractures, "fracture family", "fracture families"), sampling, sc.gamma,
              sc.tortuosity, (unsigned long long)sc.seed, budget.samples, budget.edges,
              budget.searches, karst_budget_format_size(budget.bytes, mem, sizeof mem));
     }
