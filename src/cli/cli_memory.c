@@ -1,4 +1,4 @@
-/* The karst process's heap policy (docs/performance.md, "Page faults"). On the project's
+/* The karst process's heap policy (docs/performance.md, "The CLI's heap"). On the project's
  * machine type a 4 KiB page fault costs about 14 µs, and a small run such as Karst-Synthesis's
  * scene takes about 1 400 of them after start-up: its arrays of 0.1–30 MB are mapped, freed and
  * mapped again from stage to stage, each time touched afresh. So the CLI, before a command runs:
