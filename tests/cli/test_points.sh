@@ -13,6 +13,18 @@ fail=0
 ok() { echo "ok: $1"; }
 bad() { echo "FAIL: $1"; fail=1; }
 PY=/usr/bin/python3
+# The points of a samples.vtp and the name of each one's source (Debian's VTK), for the checks below.
+cat >"$tmp/samples_of.py" <<'EOF'
+import vtk
+def samples_of(path):
+    r = vtk.vtkXMLPolyDataReader(); r.SetFileName(path); r.Update()
+    pd = r.GetOutput()
+    a = pd.GetFieldData().GetAbstractArray("source_names")
+    names = [a.GetValue(i) for i in range(a.GetNumberOfValues())]
+    src = pd.GetPointData().GetArray("source")
+    return [(pd.GetPoint(i), names[src.GetValue(i)]) for i in range(pd.GetNumberOfPoints())]
+EOF
+export PYTHONPATH="$tmp"
 
 # The lattice x = 5, 15, ..., 395; y = 5, ..., 595; z = 5, ..., 95: 40 x 60 x 10 = 24 000 points,
 # all inside the 400 x 600 x 100 m domain and below the terrain at 100 m.
@@ -70,13 +82,9 @@ sed 's/^  points: cloud.xyz$/  points: cloud.xyz\n  refine: []/' "$tmp/s.yaml" >
 "$KARST" generate "$tmp/bare.yaml" -o "$tmp/bare0" --samples --quiet >"$tmp/gen.log" 2>&1 \
   || { bad "generate with refine: []: exit $?"; cat "$tmp/gen.log"; }
 $PY - "$tmp/bare0/samples.vtp" "$tmp/cloud.xyz" "$tmp/cloud2.xyz" <<'EOF' || bad "writing the second cloud"
-import sys, vtk
-r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update()
-pd = r.GetOutput()
-names = pd.GetFieldData().GetAbstractArray("source_names")
-names = [names.GetValue(i) for i in range(names.GetNumberOfValues())]
-src = pd.GetPointData().GetArray("source")
-keys = [pd.GetPoint(i) for i in range(pd.GetNumberOfPoints()) if names[src.GetValue(i)] == "key_point"]
+import sys
+from samples_of import samples_of
+keys = [p for p, s in samples_of(sys.argv[1]) if s == "key_point"]
 with open(sys.argv[3], "w") as f:
     f.write(open(sys.argv[2]).read())
     for k in keys:
@@ -86,16 +94,13 @@ sed 's#^  points: cloud.xyz$#  points: cloud2.xyz#' "$tmp/bare.yaml" >"$tmp/bare
 "$KARST" generate "$tmp/bare2.yaml" -o "$tmp/bare" --samples --quiet >"$tmp/gen.log" 2>&1 \
   || { bad "generate with refine: [] on the second cloud: exit $?"; cat "$tmp/gen.log"; }
 $PY - "$tmp/bare/run.json" "$tmp/bare/samples.vtp" <<'EOF' || fail=1
-import json, sys, vtk
+import json, sys
+from samples_of import samples_of
 d = json.load(open(sys.argv[1]))
 c = d["counts"]
-r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[2]); r.Update()
-pd = r.GetOutput()
-names = pd.GetFieldData().GetAbstractArray("source_names")
-names = [names.GetValue(i) for i in range(names.GetNumberOfValues())]
-src = pd.GetPointData().GetArray("source")
-keys = [pd.GetPoint(i) for i in range(pd.GetNumberOfPoints()) if names[src.GetValue(i)] == "key_point"]
-kinds = sorted(set(names[src.GetValue(i)] for i in range(pd.GetNumberOfPoints())))
+samples = samples_of(sys.argv[2])
+keys = [p for p, s in samples if s == "key_point"]
+kinds = sorted(set(s for p, s in samples))
 far = lambda p: all((p[0] - k[0]) ** 2 + (p[1] - k[1]) ** 2 + (p[2] - k[2]) ** 2 >= 36 for k in keys)
 lattice = sum(far((x, y, z)) for z in range(5, 100, 10) for y in range(5, 600, 10) for x in range(5, 400, 10))
 below = sum(far((k[0], k[1], k[2] - 7)) and k[2] - 7 > 0 for k in keys)
@@ -119,17 +124,13 @@ EOF
 "$KARST" generate "$SRC/datasets/scenarios/branchwork.yaml" -o "$tmp/own" --samples --quiet \
   >"$tmp/gen.log" 2>&1 || { bad "generate with --samples: exit $?"; cat "$tmp/gen.log"; }
 $PY - "$tmp/own/samples.vtp" "$tmp/own_fill.xyz" <<'EOF' || bad "extracting the fill from samples.vtp"
-import sys, vtk
-r = vtk.vtkXMLPolyDataReader(); r.SetFileName(sys.argv[1]); r.Update()
-pd = r.GetOutput()
-names = pd.GetFieldData().GetAbstractArray("source_names")
-fill = [names.GetValue(i) for i in range(names.GetNumberOfValues())].index("fill")
-src = pd.GetPointData().GetArray("source")
+import sys
+from samples_of import samples_of
 with open(sys.argv[2], "w") as f:
     f.write("x y z\n")
-    for i in range(pd.GetNumberOfPoints()):
-        if src.GetValue(i) == fill:
-            f.write("%r %r %r\n" % pd.GetPoint(i))
+    for p, s in samples_of(sys.argv[1]):
+        if s == "fill":
+            f.write("%r %r %r\n" % p)
 EOF
 sed "s#^sampling:\$#sampling:\n  points: $tmp/own_fill.xyz#" "$SRC/datasets/scenarios/branchwork.yaml" \
   >"$tmp/own.yaml"
