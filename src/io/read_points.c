@@ -18,7 +18,14 @@ static const double POW10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
                                  1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
                                  1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
 
+/* The x87 extended format (a 64-bit significand) is there for the second fast path. */
 #if LDBL_MANT_DIG == 64 && (defined(__x86_64__) || defined(__i386__))
+#define KARST_X87_DECIMAL 1
+#else
+#define KARST_X87_DECIMAL 0
+#endif
+
+#if KARST_X87_DECIMAL
 /* Exact in the x87 extended format: 5^27 < 2^64. */
 static const long double POW10L[28] = {1e0L,  1e1L,  1e2L,  1e3L,  1e4L,  1e5L,  1e6L,
                                        1e7L,  1e8L,  1e9L,  1e10L, 1e11L, 1e12L, 1e13L,
@@ -69,7 +76,7 @@ int karst_i_parse_decimal(const char *s, size_t len, double *out) {
     *out = neg ? -v : v;
     return 1;
   }
-#if LDBL_MANT_DIG == 64 && (defined(__x86_64__) || defined(__i386__))
+#if KARST_X87_DECIMAL
   /* The same in x87 extended precision, for shortest round-trip digits (up to 17 of them) and
    * any 19: m < 2^64 and 10^|e10| (5^27 < 2^64) are exact, so r is v rounded once to 64 bits.
    * Rounding r to 53 bits gives v's correctly rounded double unless r is exactly halfway
@@ -278,7 +285,7 @@ karst_error_t karst_points_load(karst_ctx_t *ctx, const char *path, double **xyz
       }
       double x;
       if (karst_i_parse_decimal(f[a], fl[a], &x)) {
-        v[3 * m + a] = x; /* finite: at most 19 digits times 10^22 */
+        v[3 * m + a] = x; /* finite: at most 19 digits times 10^27 */
         continue;
       }
       memcpy(tok, f[a], fl[a]);
