@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/math_internal.h"
 #include "cost/cost_internal.h"
 #include "geology/geology_internal.h"
 
@@ -166,9 +167,9 @@ static double horizon_integral(const karst_i_cost_model_t *m, const double a[3],
   if (!m->horizons_planar) { /* folded horizons: the offset is not linear along the edge */
     /* An edge that stays farther than every horizon's radius from it has cL = 1 all along: the
      * horizon's exact range over the edge's x-y box decides (most edges are far from any). */
-    double zlo_e = fmin(a[2], b[2]), zhi_e = fmax(a[2], b[2]);
-    double x0 = fmin(a[0], b[0]), x1 = fmax(a[0], b[0]), y0 = fmin(a[1], b[1]),
-           y1 = fmax(a[1], b[1]);
+    double zlo_e = karst_i_fmin(a[2], b[2]), zhi_e = karst_i_fmax(a[2], b[2]);
+    double x0 = karst_i_fmin(a[0], b[0]), x1 = karst_i_fmax(a[0], b[0]),
+           y0 = karst_i_fmin(a[1], b[1]), y1 = karst_i_fmax(a[1], b[1]);
     int near = 0;
     for (int h = 0; h < sc->n_horizons && !near; h++) {
       double lo, hi, r = sc->horizons[h].radius;
@@ -198,10 +199,10 @@ static double horizon_integral(const karst_i_cost_model_t *m, const double a[3],
     const karst_horizon_t *H = &sc->horizons[h];
     double ua = a[2] - plane_elevation(m, h, a[0], a[1]);
     double ub = b[2] - plane_elevation(m, h, b[0], b[1]);
-    int touches =
-        (ua <= 0 && ub >= 0) || (ua >= 0 && ub <= 0) || fmin(fabs(ua), fabs(ub)) < H->radius;
+    int touches = (ua <= 0 && ub >= 0) || (ua >= 0 && ub <= 0) ||
+                  karst_i_fmin(fabs(ua), fabs(ub)) < H->radius;
     if (!touches) continue;
-    rmin = fmin(rmin, H->radius);
+    rmin = karst_i_fmin(rmin, H->radius);
     if (n_active < MAX_EXACT_HORIZONS)
       al[n_active] = ua, be[n_active] = ub - ua, r[n_active] = H->radius;
     n_active++;
@@ -245,11 +246,11 @@ static double horizon_integral(const karst_i_cost_model_t *m, const double a[3],
   br[nb] = 1.0; /* 1 + A^2 + 2A <= 64 = MAX_BREAKS break points: none was dropped */
   double sum = 0.0, xprev = INFINITY;
   for (int i = 0; i < n_active; i++)
-    xprev = fmin(xprev, fabs(al[i]) / r[i]);
+    xprev = karst_i_fmin(xprev, fabs(al[i]) / r[i]);
   for (int p = 0; p < nb; p++) {
     double s1 = br[p + 1], x1 = INFINITY;
     for (int i = 0; i < n_active; i++)
-      x1 = fmin(x1, fabs(al[i] + be[i] * s1) / r[i]);
+      x1 = karst_i_fmin(x1, fabs(al[i] + be[i] * s1) / r[i]);
     sum += (s1 - br[p]) * mean_g_linear(xprev, x1);
     xprev = x1;
   }
@@ -266,7 +267,7 @@ static int perm_constant(const karst_perm_node_t *n, const double a[3], const do
     double bc[3] = {b[0] - n->center[0], b[1] - n->center[1], b[2] - n->center[2]};
     double dd = dot3(d, d), s = dd > 0 ? clampd(-dot3(ac, d) / dd, 0.0, 1.0) : 0.0;
     double c[3] = {ac[0] + s * d[0], ac[1] + s * d[1], ac[2] + s * d[2]};
-    double dmin = sqrt(dot3(c, c)), dmax = fmax(sqrt(dot3(ac, ac)), sqrt(dot3(bc, bc)));
+    double dmin = sqrt(dot3(c, c)), dmax = karst_i_fmax(sqrt(dot3(ac, ac)), sqrt(dot3(bc, bc)));
     if (dmax <= n->radius) return 1; /* entirely inside: resistance */
     if (n->falloff > 0) return dmin >= n->radius + n->falloff;
     return dmin > n->radius; /* entirely outside: background */
@@ -439,7 +440,7 @@ static karst_error_t perm_support_boxes(karst_ctx_t *ctx, karst_i_cost_model_t *
    * tree combines the same values the same way there. */
   double far[3] = {0.0, 0.0, -INFINITY};
   for (int i = 0; i < n; i++)
-    far[2] = fmax(far[2], m->perm_boxes[6 * i + 5]);
+    far[2] = karst_i_fmax(far[2], m->perm_boxes[6 * i + 5]);
   far[2] = n > 0 ? far[2] + 1.0 + fabs(far[2]) : 0.0; /* strictly above */
   if (!isfinite(far[2])) goto unknown;
   m->perm_far = karst_permeability_eval(&m->sc->permeability, far);
@@ -462,7 +463,7 @@ karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
   m->horizon_rmin = INFINITY;
   for (int h = 0; h < sc->n_horizons; h++) {
     m->horizons_planar &= geo->horizon[h].kind == KARST_I_SURF_PLANE;
-    m->horizon_rmin = fmin(m->horizon_rmin, sc->horizons[h].radius);
+    m->horizon_rmin = karst_i_fmin(m->horizon_rmin, sc->horizons[h].radius);
   }
   m->n_dfn = 0;
   for (int k = 0; k < sc->n_fractures; k++)
@@ -475,16 +476,16 @@ karst_error_t karst_i_cost_model_init(karst_ctx_t *ctx, karst_i_cost_model_t *m,
   while (top > 0) {
     const karst_perm_node_t *n = stack[--top];
     if (n->kind == KARST_PERM_SPHERE) {
-      if (n->radius > 0) fmin_size = fmin(fmin_size, n->radius);
-      if (n->falloff > 0) fmin_size = fmin(fmin_size, n->falloff);
+      if (n->radius > 0) fmin_size = karst_i_fmin(fmin_size, n->radius);
+      if (n->falloff > 0) fmin_size = karst_i_fmin(fmin_size, n->falloff);
     } else if (n->kind == KARST_PERM_STRATUM) {
-      if (n->top > n->bottom) fmin_size = fmin(fmin_size, n->top - n->bottom);
+      if (n->top > n->bottom) fmin_size = karst_i_fmin(fmin_size, n->top - n->bottom);
     }
     for (int i = 0; i < n->n_children; i++) {
       if (top < 64)
         stack[top++] = &n->children[i];
       else
-        fmin_size = fmin(
+        fmin_size = karst_i_fmin(
             fmin_size, sc->sampling.feature_radius); /* tree too large to walk here: be cautious */
     }
   }
@@ -572,7 +573,7 @@ static void fault_terms(const karst_i_cost_model_t *m, const double a[3], const 
         double w = u;
         u = v, v = w;
       }
-      t0 = fmax(t0, u), t1 = fmin(t1, v);
+      t0 = karst_i_fmax(t0, u), t1 = karst_i_fmin(t1, v);
       if (!(t1 > t0)) continue;
     }
     if (isfinite(F->radius)) {
@@ -583,14 +584,14 @@ static void fault_terms(const karst_i_cost_model_t *m, const double a[3], const 
       if (!(dot3(x, x) - h * h <= F->radius * F->radius)) continue;
     }
     double f = plane_factor(F->factor, n, d, len);
-    *factor = fmin(*factor, 1.0 - (t1 - t0) * (1.0 - f));
+    *factor = karst_i_fmin(*factor, 1.0 - (t1 - t0) * (1.0 - f));
   }
 }
 
 double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3],
                                 const double b[3]) {
   const karst_scenario_t *sc = m->sc;
-  if (!karst_geology_segment_in_bedrock(m->geo, a, b)) return INFINITY;
+  if (!karst_i_geology_segment_between(m->geo, a, b)) return INFINITY;
   double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   double len = sqrt(dot3(d, d));
   if (len == 0.0) return 0.0;
@@ -609,7 +610,7 @@ double karst_i_cost_edge_inside(const karst_i_cost_model_t *m, const double a[3]
   if (sc->n_faults > 0) {
     double f;
     fault_terms(m, a, b, d, len, &f, &added);
-    factor = fmin(factor, f); /* the smallest factor applies (see the lower bound) */
+    factor = karst_i_fmin(factor, f); /* the smallest factor applies (see the lower bound) */
   }
   c = c * factor + added;
   if (sc->n_prescribed > 0 && on_prescribed_path(m, a, b, len)) c *= w->prescribed;
@@ -673,7 +674,7 @@ static double sym3_min_eigenvalue(double A[3][3]) {
         A[p][q] = A[q][p] = 0.0;
       }
   }
-  return fmin(A[0][0], fmin(A[1][1], A[2][2]));
+  return karst_i_fmin(A[0][0], karst_i_fmin(A[1][1], A[2][2]));
 }
 
 /**
@@ -714,7 +715,7 @@ double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
   const karst_cost_weights_t *w = &sc->cost;
   double M[3][3] = {{0}}, W = 0.0;
   for (int k = 0; k < sc->n_fractures; k++)
-    W = fmax(W, sc->fractures[k].weight);
+    W = karst_i_fmax(W, sc->fractures[k].weight);
   double cf_min = sc->n_fractures > 0 ? W : 0.0;
   for (int k = 0; k < sc->n_fractures; k++) {
     double n[3], T[9], wk = sc->fractures[k].weight;
@@ -725,12 +726,12 @@ double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
         M[i][j] += wk * T[3 * i + j];
     double c = T[0] * n[0] * n[0] + T[4] * n[1] * n[1] + T[8] * n[2] * n[2] +
                2 * (T[1] * n[0] * n[1] + T[2] * n[0] * n[2] + T[5] * n[1] * n[2]);
-    double lam = fmax(0.0, fmin(c, 0.5 * (1.0 - c)));
-    cf_min = fmin(cf_min, W - wk + wk * lam);
+    double lam = karst_i_fmax(0.0, karst_i_fmin(c, 0.5 * (1.0 - c)));
+    cf_min = karst_i_fmin(cf_min, W - wk + wk * lam);
   }
   if (sc->cost.fracture_combine != KARST_FRACTURE_MIN)
-    cf_min = sc->n_fractures > 0 ? fmax(0.0, sym3_min_eigenvalue(M)) : 0.0;
-  cf_min = fmax(0.0, cf_min);
+    cf_min = sc->n_fractures > 0 ? karst_i_fmax(0.0, sym3_min_eigenvalue(M)) : 0.0;
+  cf_min = karst_i_fmax(0.0, cf_min);
   double pi_min = sc->permeability.background;
   const karst_perm_node_t *stack[64];
   int top = 0;
@@ -738,7 +739,7 @@ double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
   while (top > 0) {
     const karst_perm_node_t *n = stack[--top];
     if (n->kind == KARST_PERM_SPHERE || n->kind == KARST_PERM_STRATUM)
-      pi_min = fmin(pi_min, n->resistance);
+      pi_min = karst_i_fmin(pi_min, n->resistance);
     for (int i = 0; i < n->n_children; i++) {
       if (top < 64)
         stack[top++] = &n->children[i];
@@ -751,9 +752,9 @@ double karst_cost_lower_bound_per_metre(const karst_scenario_t *sc) {
               w->permeability * pi_min;
   double fmin_edge = 1.0;
   for (int k = 0; k < sc->n_fractures; k++)
-    if (sc->fractures[k].dfn) fmin_edge = fmin(fmin_edge, sc->fractures[k].factor);
+    if (sc->fractures[k].dfn) fmin_edge = karst_i_fmin(fmin_edge, sc->fractures[k].factor);
   for (int i = 0; i < sc->n_faults; i++)
-    if (!sc->faults[i].barrier) fmin_edge = fmin(fmin_edge, sc->faults[i].factor);
+    if (!sc->faults[i].barrier) fmin_edge = karst_i_fmin(fmin_edge, sc->faults[i].factor);
   lb *= clampd(fmin_edge, 0.0, 1.0);
   if (sc->n_prescribed > 0 && w->prescribed < 1.0) lb *= w->prescribed;
   lb *= 1.0 - KARST_COST_LB_MARGIN;

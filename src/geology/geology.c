@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/math_internal.h"
 #include "geology/geology_internal.h"
 #include "geology/surface_internal.h"
 #include "karst/surface.h"
@@ -124,7 +125,7 @@ static double perm_node(const karst_perm_node_t *n, double bg, const double p[3]
     double v = perm_node(&n->children[0], bg, p);
     for (int i = 1; i < n->n_children; i++) {
       double c = perm_node(&n->children[i], bg, p);
-      v = n->kind == KARST_PERM_UNION ? fmin(v, c) : fmax(v, c);
+      v = n->kind == KARST_PERM_UNION ? karst_i_fmin(v, c) : karst_i_fmax(v, c);
     }
     return v;
   }
@@ -227,8 +228,8 @@ void karst_i_surf_range(const karst_i_surf_t *s, double x0, double x1, double y0
                         double *zlo, double *zhi) {
   if (s->kind == KARST_I_SURF_PLANE) { /* a plane: the extremes are at corners */
     double z[4] = {plane_z(s, x0, y0), plane_z(s, x1, y0), plane_z(s, x0, y1), plane_z(s, x1, y1)};
-    *zlo = fmin(fmin(z[0], z[1]), fmin(z[2], z[3]));
-    *zhi = fmax(fmax(z[0], z[1]), fmax(z[2], z[3]));
+    *zlo = karst_i_fmin(karst_i_fmin(z[0], z[1]), karst_i_fmin(z[2], z[3]));
+    *zhi = karst_i_fmax(karst_i_fmax(z[0], z[1]), karst_i_fmax(z[2], z[3]));
   } else if (s->kind == KARST_I_SURF_FILE && s->file) {
     *zlo = karst_surface_min_rect(s->file, x0, x1, y0, y1);
     *zhi = karst_surface_max_rect(s->file, x0, x1, y0, y1);
@@ -290,7 +291,8 @@ static int point_in_polygon(const double *poly, int n, double x, double y) {
     double xi = poly[2 * i], yi = poly[2 * i + 1], xj = poly[2 * j], yj = poly[2 * j + 1];
     /* on the edge: collinear and within its box */
     double cr = (xj - xi) * (y - yi) - (yj - yi) * (x - xi);
-    if (cr == 0 && x >= fmin(xi, xj) && x <= fmax(xi, xj) && y >= fmin(yi, yj) && y <= fmax(yi, yj))
+    if (cr == 0 && x >= karst_i_fmin(xi, xj) && x <= karst_i_fmax(xi, xj) &&
+        y >= karst_i_fmin(yi, yj) && y <= karst_i_fmax(yi, yj))
       return 1;
     if ((yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi) inside = !inside;
   }
@@ -309,7 +311,8 @@ static int segments_meet(double px, double py, double qx, double qy, double rx, 
   if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0)))
     return 1;
 #define ON(ax, ay, bx, by, cx, cy)                                                                 \
-  (cx >= fmin(ax, bx) && cx <= fmax(ax, bx) && cy >= fmin(ay, by) && cy <= fmax(ay, by))
+  (cx >= karst_i_fmin(ax, bx) && cx <= karst_i_fmax(ax, bx) && cy >= karst_i_fmin(ay, by) &&       \
+   cy <= karst_i_fmax(ay, by))
   if (d1 == 0 && ON(rx, ry, sx, sy, px, py)) return 1;
   if (d2 == 0 && ON(rx, ry, sx, sy, qx, qy)) return 1;
   if (d3 == 0 && ON(px, py, qx, qy, rx, ry)) return 1;
@@ -442,7 +445,7 @@ void karst_i_fisher_draw(karst_rng_t *rng, const double mu[3], double kappa, dou
   double w;
   w = 1.0 + log(u1 + (1.0 - u1) * exp(-2.0 * kappa)) / kappa;
   w = clamp(w, -1.0, 1.0);
-  double s = sqrt(fmax(0.0, 1.0 - w * w)), phi = 2.0 * M_PI * u2, u[3], v[3];
+  double s = sqrt(karst_i_fmax(0.0, 1.0 - w * w)), phi = 2.0 * M_PI * u2, u[3], v[3];
   complete_frame(mu, u, v);
   for (int k = 0; k < 3; k++)
     n[k] = w * mu[k] + s * (cos(phi) * u[k] + sin(phi) * v[k]);
@@ -546,7 +549,14 @@ static int segment_avoids_stratum(const karst_geology_t *g, int i, const double 
  */
 int karst_geology_segment_in_bedrock(const karst_geology_t *g, const double a[3],
                                      const double b[3]) {
-  if (!karst_geology_in_bedrock(g, a) || !karst_geology_in_bedrock(g, b)) return 0;
+  return karst_geology_in_bedrock(g, a) && karst_geology_in_bedrock(g, b) &&
+         karst_i_geology_segment_between(g, a, b);
+}
+
+/* The segment tests of karst_geology_segment_in_bedrock once both ends are in the bedrock (the
+ * graph knows it of every sample: the edge costs skip the two end tests, about 2 % of a run). */
+int karst_i_geology_segment_between(const karst_geology_t *g, const double a[3],
+                                    const double b[3]) {
   if (!karst_i_surf_segment_side(&g->terrain, a, b, 0, 1)) return 0;
   const karst_scenario_t *sc = g->sc;
   for (int i = 0; i < sc->n_exclusions; i++)
@@ -567,7 +577,7 @@ double karst_geology_horizon_term(const karst_geology_t *g, const double p[3]) {
   for (int h = 0; h < g->n_horizons; h++) {
     double z = karst_i_surf_z(&g->horizon[h], p[0], p[1]);
     if (!isfinite(z)) continue;
-    c = fmin(c, smoothstep(fabs(p[2] - z) / g->sc->horizons[h].radius));
+    c = karst_i_fmin(c, smoothstep(fabs(p[2] - z) / g->sc->horizons[h].radius));
   }
   return c;
 }
@@ -715,7 +725,7 @@ static karst_error_t realise_dfn(karst_ctx_t *ctx, karst_geology_t *g, uint64_t 
 
 /* Half-extent, along axis k, of a disc of radius r and normal n (its bounding box). */
 static double disc_half_extent(const karst_disc_t *d, int k) {
-  return d->r * sqrt(fmax(0.0, 1.0 - d->n[k] * d->n[k]));
+  return d->r * sqrt(karst_i_fmax(0.0, 1.0 - d->n[k] * d->n[k]));
 }
 
 /* A uniform grid over the domain whose cells list the discs whose box, grown by the family's
@@ -729,11 +739,11 @@ static karst_error_t index_discs(karst_ctx_t *ctx, karst_geology_t *g) {
   for (karst_int_t i = 0; i < g->n_discs; i++)
     rsum += g->discs[i].r;
   /* Cells about the mean radius, but no more than DISC_GRID_MAX_CELLS of them. */
-  double cell = fmax(rsum / (double)g->n_discs, cbrt(vol / DISC_GRID_MAX_CELLS));
+  double cell = karst_i_fmax(rsum / (double)g->n_discs, cbrt(vol / DISC_GRID_MAX_CELLS));
   size_t cells = 1;
   for (int k = 0; k < 3; k++) {
     g->disc_origin[k] = sc->domain_min[k];
-    g->disc_dims[k] = (int64_t)fmax(1.0, ceil(ext[k] / cell));
+    g->disc_dims[k] = (int64_t)karst_i_fmax(1.0, ceil(ext[k] / cell));
     cells *= (size_t)g->disc_dims[k];
   }
   g->disc_cell = cell;
@@ -749,8 +759,8 @@ static karst_error_t index_discs(karst_ctx_t *ctx, karst_geology_t *g) {
         double e = disc_half_extent(d, k) + infl;
         double l = floor((d->c[k] - e - g->disc_origin[k]) / cell),
                h = floor((d->c[k] + e - g->disc_origin[k]) / cell);
-        lo[k] = (int64_t)fmax(0.0, l);
-        hi[k] = (int64_t)fmin((double)(g->disc_dims[k] - 1), h);
+        lo[k] = (int64_t)karst_i_fmax(0.0, l);
+        hi[k] = (int64_t)karst_i_fmin((double)(g->disc_dims[k] - 1), h);
         if (lo[k] > hi[k]) goto next;
       }
       for (int64_t z = lo[2]; z <= hi[2]; z++)
@@ -965,7 +975,7 @@ karst_error_t karst_geology_create(karst_ctx_t *ctx, const karst_scenario_t *sc,
     double mu[3];
     karst_plane_normal(sc->fractures[f].dip_direction, sc->fractures[f].dip, mu);
     karst_i_fisher_tensor(mu, sc->fractures[f].kappa, g->fracture_tensor + 9 * f);
-    g->fracture_wmax = fmax(g->fracture_wmax, sc->fractures[f].weight);
+    g->fracture_wmax = karst_i_fmax(g->fracture_wmax, sc->fractures[f].weight);
   }
   for (int f = 0; f < sc->n_faults; f++)
     karst_plane_normal(sc->faults[f].dip_direction, sc->faults[f].dip, g->fault_normal + 3 * f);

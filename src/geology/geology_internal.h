@@ -88,6 +88,10 @@ int karst_i_segment_hits_exclusion(const karst_exclusion_t *e, const double a[3]
 /** Whether p lies in the closed exclusion zone. */
 int karst_i_point_in_exclusion(const karst_exclusion_t *e, const double p[3]);
 
+/** karst_geology_segment_in_bedrock for end points already known to be in the bedrock
+ *  (karst_geology_in_bedrock of each is 1): the tests of the segment's interior alone. */
+int karst_i_geology_segment_between(const karst_geology_t *g, const double a[3], const double b[3]);
+
 /** Mean-pole tensor E[n nᵀ] (row-major 3 x 3) of a Fisher distribution of concentration κ about
  *  the unit pole @p mu; κ = 0 (no dispersion) or INFINITY gives mu muᵀ. */
 void karst_i_fisher_tensor(const double mu[3], double kappa, double T[9]);

@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/math_internal.h"
 #include "core/memory_internal.h"
 #include "core/parallel_internal.h"
 #include "graph/graph_internal.h"
@@ -82,7 +83,7 @@ static double cells_for(const double ext[3], double h) {
 
 /* Cell size giving at most `target` cells over the extents (bisection on h). */
 static double cell_size(const double ext[3], double target) {
-  double emax = fmax(ext[0], fmax(ext[1], ext[2]));
+  double emax = karst_i_fmax(ext[0], karst_i_fmax(ext[1], ext[2]));
   if (!(emax > 0)) return 1.0;
   double hl = emax / (target + 1), hr = 2 * emax; /* cells(hl) > target >= cells(hr) = 1 */
   for (int it = 0; it < 60; it++) {
@@ -105,11 +106,12 @@ static karst_error_t grid_build(karst_ctx_t *ctx, grid_t *g, const double *xyz, 
     g->lo[a] = INFINITY, hi[a] = -INFINITY;
   for (karst_int_t i = 0; i < n; i++)
     for (int a = 0; a < 3; a++)
-      g->lo[a] = fmin(g->lo[a], xyz[3 * i + a]), hi[a] = fmax(hi[a], xyz[3 * i + a]);
+      g->lo[a] = karst_i_fmin(g->lo[a], xyz[3 * i + a]),
+      hi[a] = karst_i_fmax(hi[a], xyz[3 * i + a]);
   for (int a = 0; a < 3; a++)
     ext[a] = hi[a] - g->lo[a];
-  double q = fmax(KNN_MIN_OCCUPANCY, k * KNN_OCCUPANCY_PER_NEIGHBOUR);
-  double target = fmax(1.0, (double)n / q);
+  double q = karst_i_fmax(KNN_MIN_OCCUPANCY, k * KNN_OCCUPANCY_PER_NEIGHBOUR);
+  double target = karst_i_fmax(1.0, (double)n / q);
   for (int it = 0;; it++) {
     g->h = cell_size(ext, target);
     g->ncells = 1;
@@ -132,7 +134,7 @@ static karst_error_t grid_build(karst_ctx_t *ctx, grid_t *g, const double *xyz, 
     double mean = (double)n / (double)occupied;
     double cap = KNN_MAX_CELLS_PER_POINT * (double)n;
     if (it == KNN_REFINEMENTS || mean <= 2 * q || target >= cap) break;
-    target = fmin(cap, target * mean / q);
+    target = karst_i_fmin(cap, target * mean / q);
   }
   for (karst_int_t c = 0; c < g->ncells; c++)
     g->start[c + 1] += g->start[c];
@@ -156,8 +158,8 @@ static karst_error_t grid_build(karst_ctx_t *ctx, grid_t *g, const double *xyz, 
             ca[3] = {c % g->dims[0], c / g->dims[0] % g->dims[1], c / g->dims[0] / g->dims[1]};
     for (int a = 0; a < 3; a++) {
       double x = xyz[3 * i + a];
-      g->smin[a][ca[a]] = fmin(g->smin[a][ca[a]], x);
-      g->smax[a][ca[a]] = fmax(g->smax[a][ca[a]], x);
+      g->smin[a][ca[a]] = karst_i_fmin(g->smin[a][ca[a]], x);
+      g->smax[a][ca[a]] = karst_i_fmax(g->smax[a][ca[a]], x);
     }
   }
   for (karst_int_t c = g->ncells; c > 0; c--)
@@ -167,10 +169,10 @@ static karst_error_t grid_build(karst_ctx_t *ctx, grid_t *g, const double *xyz, 
     int64_t d = g->dims[a];
     g->upto_max[a][0] = g->smax[a][0];
     for (int64_t i = 1; i < d; i++)
-      g->upto_max[a][i] = fmax(g->upto_max[a][i - 1], g->smax[a][i]);
+      g->upto_max[a][i] = karst_i_fmax(g->upto_max[a][i - 1], g->smax[a][i]);
     g->from_min[a][d - 1] = g->smin[a][d - 1];
     for (int64_t i = d - 2; i >= 0; i--)
-      g->from_min[a][i] = fmin(g->from_min[a][i + 1], g->smin[a][i]);
+      g->from_min[a][i] = karst_i_fmin(g->from_min[a][i + 1], g->smin[a][i]);
   }
   goto cleanup;
 nomem:

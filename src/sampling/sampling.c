@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/math_internal.h"
 #include "core/memory_internal.h"
 #include "core/parallel_internal.h"
 #include "geology/geology_internal.h"
@@ -341,7 +342,7 @@ static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
     if (n->kind == KARST_PERM_INTERSECTION) { /* max < t iff all children < t */
       if (acc.empty || c.empty) return aabb_none();
       for (int a = 0; a < 3; a++)
-        acc.lo[a] = fmax(acc.lo[a], c.lo[a]), acc.hi[a] = fmin(acc.hi[a], c.hi[a]);
+        acc.lo[a] = karst_i_fmax(acc.lo[a], c.lo[a]), acc.hi[a] = karst_i_fmin(acc.hi[a], c.hi[a]);
       for (int a = 0; a < 3; a++)
         if (acc.lo[a] > acc.hi[a]) return aabb_none();
     } else { /* min (union) or weighted mean (blend) < t needs some child < t */
@@ -351,7 +352,7 @@ static aabb_t perm_region(const karst_perm_node_t *n, double bg, double t) {
         continue;
       }
       for (int a = 0; a < 3; a++)
-        acc.lo[a] = fmin(acc.lo[a], c.lo[a]), acc.hi[a] = fmax(acc.hi[a], c.hi[a]);
+        acc.lo[a] = karst_i_fmin(acc.lo[a], c.lo[a]), acc.hi[a] = karst_i_fmax(acc.hi[a], c.hi[a]);
     }
   }
   return acc;
@@ -384,7 +385,7 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out,
   }
   int64_t lo[3], hi[3];
   for (int a = 0; a < 3; a++) {
-    double l = fmax(box.lo[a], S->lo[a]), h = fmin(box.hi[a], S->hi[a]);
+    double l = karst_i_fmax(box.lo[a], S->lo[a]), h = karst_i_fmin(box.hi[a], S->hi[a]);
     if (l > h) return KARST_SUCCESS;
     lo[a] = cgrid_coord(g, l, a), hi[a] = cgrid_coord(g, h, a);
   }
@@ -400,18 +401,19 @@ static karst_error_t region_cells(sampler_t *S, const region_t *R, cells_t *out,
     int64_t ti = lo[0] + t % nti * FILL_TILE, tj = lo[1] + t / nti * FILL_TILE;
     for (int64_t j = tj; j < tj + FILL_TILE && j <= hi[1]; j++)
       for (int64_t i = ti; i < ti + FILL_TILE && i <= hi[0]; i++) {
-        double x0 = fmax(S->lo[0], g->origin[0] + i * g->cell);
-        double x1 = fmin(S->hi[0], g->origin[0] + (i + 1) * g->cell);
-        double y0 = fmax(S->lo[1], g->origin[1] + j * g->cell);
-        double y1 = fmin(S->hi[1], g->origin[1] + (j + 1) * g->cell);
+        double x0 = karst_i_fmax(S->lo[0], g->origin[0] + i * g->cell);
+        double x1 = karst_i_fmin(S->hi[0], g->origin[0] + (i + 1) * g->cell);
+        double y0 = karst_i_fmax(S->lo[1], g->origin[1] + j * g->cell);
+        double y1 = karst_i_fmin(S->hi[1], g->origin[1] + (j + 1) * g->cell);
         double tlo, ztop;
         karst_i_surf_range(&S->geo->terrain, x0, x1, y0, y1, &tlo, &ztop);
-        double zlo = fmax(S->lo[2], box.lo[2]), zhi = fmin(fmin(S->hi[2], box.hi[2]), ztop);
+        double zlo = karst_i_fmax(S->lo[2], box.lo[2]),
+               zhi = karst_i_fmin(karst_i_fmin(S->hi[2], box.hi[2]), ztop);
         if (R->layer) {
           double llo, lhi;
           karst_i_surf_range_bound(R->layer, x0, x1, y0, y1, &llo, &lhi);
           if (!isfinite(llo) || !isfinite(lhi)) continue;
-          zlo = fmax(zlo, llo - R->band), zhi = fmin(zhi, lhi + R->band);
+          zlo = karst_i_fmax(zlo, llo - R->band), zhi = karst_i_fmin(zhi, lhi + R->band);
         }
         if (zlo > zhi) continue;
         for (int64_t k = cgrid_coord(g, zlo, 2); k <= cgrid_coord(g, zhi, 2); k++) {
@@ -795,11 +797,11 @@ static karst_error_t sample_fill(sampler_t *S) {
   double total = 0;
   for (int64_t j = 0; j < S->cd[1]; j++)
     for (int64_t i = 0; i < S->cd[0]; i++) {
-      double x0 = S->lo[0] + i * S->cc, x1 = fmin(S->hi[0], x0 + S->cc);
-      double y0 = S->lo[1] + j * S->cc, y1 = fmin(S->hi[1], y0 + S->cc);
+      double x0 = S->lo[0] + i * S->cc, x1 = karst_i_fmin(S->hi[0], x0 + S->cc);
+      double y0 = S->lo[1] + j * S->cc, y1 = karst_i_fmin(S->hi[1], y0 + S->cc);
       double tlo, ttop;
       karst_i_surf_range(&S->geo->terrain, x0, x1, y0, y1, &tlo, &ttop);
-      double ztop = fmin(S->hi[2], ttop);
+      double ztop = karst_i_fmin(S->hi[2], ttop);
       int64_t k = 0;
       while (k < S->cd[2] && S->lo[2] + k * S->cc < ztop)
         k++;
@@ -979,7 +981,7 @@ static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc,
       uint64_t c = 0;
       for (int a = 0; a < 3; a++) {
         double f = (p[a] - sc->domain_min[a]) / (sc->domain_max[a] - sc->domain_min[a]);
-        c |= spread3((uint64_t)(fmin(fmax(f, 0.0), 1.0) * scale)) << a;
+        c |= spread3((uint64_t)(karst_i_fmin(karst_i_fmax(f, 0.0), 1.0) * scale)) << a;
       }
       key[i] = c, idx[i] = (int32_t)(b + i);
     }
@@ -1113,7 +1115,7 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
   S.excluding = sc->n_exclusions > 0 || geo->n_insoluble > 0;
   S.rf = sc->sampling.feature_radius;
   S.rc = sc->sampling.fill_radius;
-  S.rm = fmin(S.rf, S.rc);
+  S.rm = karst_i_fmin(S.rf, S.rc);
   memcpy(S.lo, sc->domain_min, sizeof S.lo);
   memcpy(S.hi, sc->domain_max, sizeof S.hi);
 
@@ -1124,9 +1126,9 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
   double fcell = S.rf / sqrt(3.0);
   for (int a = 0; a < 3; a++) {
     double ext = S.hi[a] - S.lo[a];
-    double nc = fmax(1.0, ceil(ext / S.cc)), nf = fmax(1.0, ceil(ext / fcell));
+    double nc = karst_i_fmax(1.0, ceil(ext / S.cc)), nf = karst_i_fmax(1.0, ceil(ext / fcell));
     ncells_fill *= nc + 4, ncells_feat *= nf;
-    S.cd[a] = (int64_t)fmin(nc, 1e18), fd[a] = (int64_t)fmin(nf, 1e18);
+    S.cd[a] = (int64_t)karst_i_fmin(nc, 1e18), fd[a] = (int64_t)karst_i_fmin(nf, 1e18);
     S.pd[a] = S.cd[a] + 4;
   }
   /* A point cloud (sampling.points) replaces the fill: no fill grid then. */

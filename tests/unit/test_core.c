@@ -1,8 +1,10 @@
 /* Core conventions: error list, context, random streams, atomic output, network storage. */
+#include <float.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,6 +12,7 @@
 
 #include <cmocka.h>
 
+#include "core/math_internal.h"
 #include "karst.h"
 #include "test_util.h"
 
@@ -76,7 +79,8 @@ static void test_rng_moments(void **state) {
     assert_true(k < 6);
     cnt[k]++;
   }
-  for (int k = 0; k < 6; k++) assert_true(fabs(cnt[k] - 10000.0) < 5 * sqrt(60000 * (1 / 6.0) * (5 / 6.0)));
+  for (int k = 0; k < 6; k++)
+    assert_true(fabs(cnt[k] - 10000.0) < 5 * sqrt(60000 * (1 / 6.0) * (5 / 6.0)));
   /* unit vectors have norm 1 */
   for (int i = 0; i < 100; i++) {
     double v[3];
@@ -91,7 +95,8 @@ static void test_network_storage(void **state) {
   karst_network_init(&net);
   double *radius;
   assert_int_equal(karst_network_attr_add(&net, KARST_ATTR_EDGE, "radius", 1, 0, &radius), 0);
-  for (int i = 0; i < 200; i++) assert_int_equal(karst_network_add_node(&net, i, 0, 0, NULL), 0);
+  for (int i = 0; i < 200; i++)
+    assert_int_equal(karst_network_add_node(&net, i, 0, 0, NULL), 0);
   for (int i = 0; i < 199; i++) {
     karst_int_t e;
     assert_int_equal(karst_network_add_edge(&net, i, i + 1, &e), 0);
@@ -278,11 +283,59 @@ static void test_fileset(void **state) {
   assert_int_equal(system(cmd), 0);
 }
 
+static uint64_t double_bits(double x) {
+  uint64_t u;
+  memcpy(&u, &x, sizeof u);
+  return u;
+}
+
+/* karst_i_fmin / karst_i_fmax against libm's fmin / fmax, bit for bit (src/core/math_internal.h):
+ * every pair of special values (signed zeros, infinities, quiet NaNs of both signs, the smallest
+ * subnormals, the largest finite value), then 2 million random bit patterns, a third of them a
+ * value against itself or its negation (ties of equal magnitude). Signalling NaNs are left out
+ * (libm quiets them); for two NaNs both must give a NaN. */
+static void test_fminmax(void **state) {
+  (void)state;
+  const double special[] = {0.0,  -0.0,   1.0,     -1.0,    INFINITY, -INFINITY, NAN,
+                            -NAN, 5e-324, -5e-324, DBL_MAX, -DBL_MAX, 3.5};
+  const int ns = (int)(sizeof special / sizeof special[0]);
+  for (int i = 0; i < ns; i++)
+    for (int j = 0; j < ns; j++) {
+      volatile double a = special[i], b = special[j];
+      if (isnan(a) && isnan(b)) {
+        assert_true(isnan(karst_i_fmin(a, b)) && isnan(karst_i_fmax(a, b)));
+        continue;
+      }
+      assert_true(double_bits(karst_i_fmin(a, b)) == double_bits(fmin(a, b)));
+      assert_true(double_bits(karst_i_fmax(a, b)) == double_bits(fmax(a, b)));
+    }
+  karst_rng_t rng;
+  karst_rng_init(&rng, 2026, 12);
+  int compared = 0;
+  for (int i = 0; i < 2000000; i++) {
+    uint64_t x = karst_rng_u64(&rng), y = karst_rng_u64(&rng);
+    if (i % 3 == 0) y = x ^ (y & 1 ? 0x8000000000000000ull : 0);
+    double a, b;
+    memcpy(&a, &x, sizeof a), memcpy(&b, &y, sizeof b);
+    if ((isnan(a) && !(x >> 51 & 1)) || (isnan(b) && !(y >> 51 & 1))) continue; /* signalling */
+    volatile double va = a, vb = b;
+    if (isnan(a) && isnan(b)) {
+      assert_true(isnan(karst_i_fmin(va, vb)) && isnan(karst_i_fmax(va, vb)));
+      continue;
+    }
+    assert_true(double_bits(karst_i_fmin(va, vb)) == double_bits(fmin(va, vb)));
+    assert_true(double_bits(karst_i_fmax(va, vb)) == double_bits(fmax(va, vb)));
+    compared++;
+  }
+  assert_true(compared > 1990000);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_error_list),     cmocka_unit_test(test_rng_streams),
-      cmocka_unit_test(test_rng_moments),    cmocka_unit_test(test_network_storage),
-      cmocka_unit_test(test_atomic_file),   cmocka_unit_test(test_fileset),
+      cmocka_unit_test(test_error_list),  cmocka_unit_test(test_rng_streams),
+      cmocka_unit_test(test_rng_moments), cmocka_unit_test(test_network_storage),
+      cmocka_unit_test(test_atomic_file), cmocka_unit_test(test_fileset),
+      cmocka_unit_test(test_fminmax),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
