@@ -126,6 +126,11 @@ int main(int argc, char **argv) {
       return stdout_status(c->name);
     }
   cli_memory_policy();
+  /* VTK's own threads (vtkSMPTools, TBB in Debian's VTK 9.1) only compute the ranges of the
+   * arrays a file writer stores; with TBB every command that wrote a .vtp started a TBB worker
+   * thread, so `--threads 1` ran two threads, and `karst ensemble -j N` N + 1. Sequential keeps
+   * the thread counts the user asked for; a VTK_SMP_BACKEND_IN_USE set by the user wins. */
+  setenv("VTK_SMP_BACKEND_IN_USE", "Sequential", 0);
   int status = c->run(argc - 1, argv + 1);
   int out = stdout_status(c->name);
   return out ? out : status;
