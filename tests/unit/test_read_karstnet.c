@@ -7,6 +7,7 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -14,6 +15,7 @@
 
 #include <cmocka.h>
 
+#include "io/format_internal.h"
 #include "karst.h"
 #include "test_util.h"
 
@@ -323,12 +325,80 @@ static void test_observed(void **state) {
   assert_non_null(strstr(ctx.errmsg, "quote.csv:2: unterminated"));
 }
 
+/* karst_i_format_g17 against snprintf's "%.17g", string for string (src/io/format_internal.h):
+ * special values, powers of ten and their neighbours, then 600 000 rounds of a random bit
+ * pattern, a random significand at a random decimal scale (both signs), a random integer, a value
+ * rounded to millimetres and a multiple of 1/8 (exact ties of the 18th digit come from these). */
+static void check_g17(double v, int *compared) {
+  char want[64], got[KARST_I_G17_SIZE];
+  snprintf(want, sizeof want, "%.17g", v);
+  size_t n = karst_i_format_g17(v, got);
+  if (strcmp(want, got) != 0)
+    fail_msg("%a: %%.17g gives '%s', karst_i_format_g17 '%s'", v, want, got);
+  assert_int_equal(n, strlen(want));
+  (*compared)++;
+}
+
+static void test_format_g17(void **state) {
+  (void)state;
+  int compared = 0;
+  const double special[] = {0.0,
+                            -0.0,
+                            1.0,
+                            -1.0,
+                            0.1,
+                            0.5,
+                            1e-6,
+                            9.9999999999999995e-7,
+                            1e16,
+                            1e17,
+                            1e22,
+                            1e23,
+                            40.0,
+                            2.5,
+                            9.5,
+                            0.30000000000000004,
+                            1e300,
+                            1e-300,
+                            5e-324,
+                            INFINITY,
+                            -INFINITY,
+                            NAN,
+                            0x1p127,
+                            0x1.fffffffffffffp126,
+                            99999999999999999.0,
+                            123456789012345678.0};
+  for (size_t i = 0; i < sizeof special / sizeof special[0]; i++)
+    check_g17(special[i], &compared);
+  for (int k = -30; k < 40; k++) {
+    double p = pow(10.0, k);
+    check_g17(p, &compared), check_g17(nextafter(p, 0.0), &compared);
+    check_g17(nextafter(p, INFINITY), &compared);
+  }
+  karst_rng_t rng;
+  karst_rng_init(&rng, 17, 17);
+  for (int i = 0; i < 600000; i++) {
+    uint64_t u = karst_rng_u64(&rng);
+    double v;
+    memcpy(&v, &u, sizeof v);
+    check_g17(v, &compared);
+    double w = ldexp((double)(karst_rng_u64(&rng) >> 11), -53) *
+               pow(10.0, (int)(karst_rng_u64(&rng) % 50) - 20);
+    check_g17(w, &compared), check_g17(-w, &compared);
+    check_g17((double)(int64_t)(karst_rng_u64(&rng) >> (karst_rng_u64(&rng) % 64)), &compared);
+    check_g17(round(w * 1000.0) / 1000.0, &compared);
+    check_g17((double)(karst_rng_u64(&rng) % 100000) / 8.0, &compared);
+  }
+  assert_true(compared > 3600000);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_shipped_pairs),   cmocka_unit_test(test_karstnet_features),
       cmocka_unit_test(test_karstnet_errors), cmocka_unit_test(test_pline),
       cmocka_unit_test(test_pline_errors),    cmocka_unit_test(test_dispatch),
       cmocka_unit_test(test_write_roundtrip), cmocka_unit_test(test_observed),
+      cmocka_unit_test(test_format_g17),
   };
   return cmocka_run_group_tests(tests, setup, NULL);
 }
