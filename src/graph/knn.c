@@ -53,9 +53,9 @@ typedef struct grid {
   double lo[3], h;
   int64_t dims[3];
   karst_int_t ncells;
-  karst_int_t *start; /* ncells + 1: points of cell c are [start[c], start[c + 1]) */
-  double *sxyz;       /* coordinates in cell order */
-  int32_t *sidx;      /* original index of each sorted point */
+  karst_int_t *start;   /* ncells + 1: points of cell c are [start[c], start[c + 1]) */
+  double *sx, *sy, *sz; /* coordinates in cell order, one array per axis (see gather) */
+  int32_t *sidx;        /* original index of each sorted point */
   /* Per axis and slab: the coordinates' bounds (+inf / -inf when empty),
    * the largest coordinate of the slabs up to i and the smallest of the
    * slabs from i on (bounds for the outward walks of gather). */
@@ -63,7 +63,7 @@ typedef struct grid {
 } grid_t;
 
 static void grid_destroy(grid_t *g) {
-  free(g->start), free(g->sxyz), free(g->sidx);
+  free(g->start), free(g->sx), free(g->sy), free(g->sz), free(g->sidx);
   for (int a = 0; a < 3; a++)
     free(g->smin[a]), free(g->smax[a]), free(g->upto_max[a]), free(g->from_min[a]);
   memset(g, 0, sizeof *g);
@@ -138,9 +138,11 @@ static karst_error_t grid_build(karst_ctx_t *ctx, grid_t *g, const double *xyz, 
   }
   for (karst_int_t c = 0; c < g->ncells; c++)
     g->start[c + 1] += g->start[c];
-  g->sxyz = karst_i_alloc_large(sizeof(double) * 3 * (size_t)n);
+  g->sx = karst_i_alloc_large(sizeof(double) * (size_t)n);
+  g->sy = karst_i_alloc_large(sizeof(double) * (size_t)n);
+  g->sz = karst_i_alloc_large(sizeof(double) * (size_t)n);
   g->sidx = karst_i_alloc_large(sizeof(int32_t) * (size_t)n);
-  if (!g->sxyz || !g->sidx) goto nomem;
+  if (!g->sx || !g->sy || !g->sz || !g->sidx) goto nomem;
   for (int a = 0; a < 3; a++) {
     size_t d = (size_t)g->dims[a];
     g->smin[a] = malloc(sizeof(double) * d), g->smax[a] = malloc(sizeof(double) * d);
@@ -152,7 +154,7 @@ static karst_error_t grid_build(karst_ctx_t *ctx, grid_t *g, const double *xyz, 
   /* Stable counting sort: within a cell, points keep increasing index. */
   for (karst_int_t i = 0; i < n; i++) {
     karst_int_t s = g->start[cid[i]]++;
-    memcpy(g->sxyz + 3 * s, xyz + 3 * i, 3 * sizeof(double));
+    g->sx[s] = xyz[3 * i], g->sy[s] = xyz[3 * i + 1], g->sz[s] = xyz[3 * i + 2];
     g->sidx[s] = (int32_t)i;
     int64_t c = cid[i],
             ca[3] = {c % g->dims[0], c / g->dims[0] % g->dims[1], c / g->dims[0] / g->dims[1]};
@@ -248,6 +250,7 @@ typedef struct search {
 typedef struct buffer {
   cand_t *v;
   karst_int_t n, cap;
+  double *d; /* squared distances of one run of cells (cap entries) */
 } buffer_t;
 
 /* Lower bound of |x − q| for every slab from s outwards on the side of s
@@ -267,7 +270,7 @@ static double outer_gap(const grid_t *g, int a, int64_t s, int64_t c, double x) 
  * comment). bx2 is scratch of dims[0] entries. */
 static int gather(const grid_t *g, karst_int_t s, const int64_t cc[3], double T, buffer_t *b,
                   double *bx2) {
-  const double *q = g->sxyz + 3 * s;
+  const double q[3] = {g->sx[s], g->sy[s], g->sz[s]};
   int64_t lo[3], hi[3];
   for (int a = 0; a < 3; a++) {
     lo[a] = cc[a], hi[a] = cc[a];
@@ -300,14 +303,31 @@ static int gather(const grid_t *g, karst_int_t s, const int64_t cc[3], double T,
         karst_int_t nc = 2 * (m + (p1 - p0));
         cand_t *v = realloc(b->v, sizeof(cand_t) * (size_t)nc);
         if (!v) return 0;
-        b->v = v, b->cap = nc;
+        b->v = v;
+        double *d = realloc(b->d, sizeof(double) * (size_t)nc);
+        if (!d) return 0;
+        b->d = d, b->cap = nc;
+      }
+      /* The distances of the run first, in a loop the compiler vectorises (the coordinates are
+       * one array per axis), with karst_i_dist2's very operations: ((dx² + dy²) + dz²). */
+      double *restrict dr = b->d;
+      const double *restrict px = g->sx + p0, *restrict py = g->sy + p0, *restrict pz = g->sz + p0;
+      const karst_int_t len = p1 - p0;
+      for (karst_int_t t = 0; t < len; t++) {
+        double dx = px[t] - q[0], dy = py[t] - q[1], dz = pz[t] - q[2];
+        dr[t] = (dx * dx + dy * dy) + dz * dz;
       }
       cand_t *out = b->v;
-      for (karst_int_t p = p0; p < p1; p++) {
-        double d = karst_i_dist2(g->sxyz + 3 * p, q);
-        out[m].d = d, out[m].i = g->sidx[p];
-        m += (d <= T) & (p != s);
-      }
+      const int32_t *restrict idx = g->sidx + p0;
+      for (karst_int_t t = 0; t < len; t++)
+        if (dr[t] <= T) out[m].d = dr[t], out[m].i = idx[t], m++;
+      if (s >= p0 && s < p1) /* the query itself, at d = 0 <= T: drop it, keeping the order */
+        for (karst_int_t t = m - 1;; t--)
+          if (out[t].i == g->sidx[s]) {
+            memmove(out + t, out + t + 1, sizeof(cand_t) * (size_t)(m - 1 - t));
+            m--;
+            break;
+          }
     }
   }
   b->n = m;
@@ -325,7 +345,7 @@ static void task_search(void *arg, int tid, int nth) {
   search_t *S = arg;
   const grid_t *g = S->g;
   int k = S->k;
-  buffer_t b = {NULL, 0, 0};
+  buffer_t b = {NULL, 0, 0, NULL};
   double T = S->t0, *bx2 = malloc(sizeof(double) * (size_t)g->dims[0]);
   if (!bx2) {
     S->failed[tid] = 1;
@@ -364,6 +384,7 @@ static void task_search(void *arg, int tid, int nth) {
   }
 cleanup:
   free(b.v);
+  free(b.d);
   free(bx2);
 }
 
