@@ -57,7 +57,18 @@ typedef struct cgrid {
   double *xyz;   /* entries */
   int32_t *next;
   size_t n, ncap;
+  /* t[a][i], 0 < i < dims[a] (a = 0, 1): the least coordinate x with cgrid_coord(x, a) >= i, so
+   * that a coordinate's column near a known one is found by comparisons (cgrid_coord_near); NULL
+   * when the grid has more than CGRID_MAX_THRESHOLDS columns along the axis */
+  double *t[2];
 } cgrid_t;
+
+#define CGRID_MAX_THRESHOLDS ((int64_t)1 << 22)
+
+static int64_t cgrid_coord(const cgrid_t *g, double x, int a) {
+  double f = floor((x - g->origin[a]) / g->cell);
+  return f < 0 ? 0 : (f >= (double)g->dims[a] ? g->dims[a] - 1 : (int64_t)f);
+}
 
 static int cgrid_init(cgrid_t *g, double cell, const double origin[3], const int64_t dims[3]) {
   memset(g, 0, sizeof *g);
@@ -68,17 +79,46 @@ static int cgrid_init(cgrid_t *g, double cell, const double origin[3], const int
   g->head = malloc(sizeof(int32_t) * cols);
   if (!g->head) return 0;
   memset(g->head, 0xff, sizeof(int32_t) * cols);
+  /* cgrid_coord(x, a) is nondecreasing in x (rounded subtraction and division by a positive
+   * number are monotone, and so are floor and the clamps), so it is the number of thresholds at
+   * or below x: each is found from the nominal boundary origin + i cell, a few ulps off at most,
+   * by stepping to the neighbouring doubles until the column changes. */
+  for (int a = 0; a < 2; a++) {
+    if (dims[a] > CGRID_MAX_THRESHOLDS) continue;
+    double *t = malloc(sizeof(double) * (size_t)dims[a]);
+    if (!t) continue; /* cgrid_coord_near then divides */
+    t[0] = -INFINITY;
+    for (int64_t i = 1; i < dims[a]; i++) {
+      double x = origin[a] + (double)i * cell;
+      while (cgrid_coord(g, x, a) < i)
+        x = nextafter(x, INFINITY);
+      for (double y; (y = nextafter(x, -INFINITY), cgrid_coord(g, y, a) >= i);)
+        x = y;
+      t[i] = x;
+    }
+    g->t[a] = t;
+  }
   return 1;
 }
 
 static void cgrid_destroy(cgrid_t *g) {
-  free(g->head), free(g->xyz), free(g->next);
+  free(g->head), free(g->xyz), free(g->next), free(g->t[0]), free(g->t[1]);
   memset(g, 0, sizeof *g);
 }
 
-static int64_t cgrid_coord(const cgrid_t *g, double x, int a) {
-  double f = floor((x - g->origin[a]) / g->cell);
-  return f < 0 ? 0 : (f >= (double)g->dims[a] ? g->dims[a] - 1 : (int64_t)f);
+/* cgrid_coord(x, a) for a = 0, 1, found from column `near` by comparing x with the thresholds
+ * (the same value: see cgrid_init). The sampler's darts ask for columns within two of their
+ * own, where this takes two or three comparisons instead of a division (about 40 instructions
+ * a dart fewer in the feature layers, callgrind). */
+static inline int64_t cgrid_coord_near(const cgrid_t *g, double x, int a, int64_t near) {
+  const double *t = g->t[a];
+  if (!t) return cgrid_coord(g, x, a);
+  int64_t i = near;
+  while (i > 0 && x < t[i])
+    i--;
+  while (i < g->dims[a] - 1 && x >= t[i + 1])
+    i++;
+  return i;
 }
 
 static int cgrid_insert(cgrid_t *g, const double p[3]) {
@@ -128,11 +168,13 @@ static int cgrid_occupied(const cgrid_t *g, int64_t i, int64_t j, int64_t k) {
   return 0;
 }
 
-/* An entry closer than r to p, or NULL. */
-static const double *cgrid_conflict(const cgrid_t *g, const double p[3], double r) {
+/* An entry closer than r to p, or NULL; p lies in or near column (ci, cj), which only speeds
+ * up finding the columns of p ± r (cgrid_coord_near). */
+static const double *cgrid_conflict_near(const cgrid_t *g, const double p[3], double r, int64_t ci,
+                                         int64_t cj) {
   if (g->n == 0) return NULL;
-  int64_t i0 = cgrid_coord(g, p[0] - r, 0), i1 = cgrid_coord(g, p[0] + r, 0);
-  int64_t j0 = cgrid_coord(g, p[1] - r, 1), j1 = cgrid_coord(g, p[1] + r, 1);
+  int64_t i0 = cgrid_coord_near(g, p[0] - r, 0, ci), i1 = cgrid_coord_near(g, p[0] + r, 0, ci);
+  int64_t j0 = cgrid_coord_near(g, p[1] - r, 1, cj), j1 = cgrid_coord_near(g, p[1] + r, 1, cj);
   double r2 = r * r;
   for (int64_t j = j0; j <= j1; j++)
     for (int64_t i = i0; i <= i1; i++)
@@ -144,6 +186,11 @@ static const double *cgrid_conflict(const cgrid_t *g, const double p[3], double 
         if (dx * dx + dy * dy + dz * dz < r2) return q;
       }
   return NULL;
+}
+
+/* An entry closer than r to p, or NULL. */
+static const double *cgrid_conflict(const cgrid_t *g, const double p[3], double r) {
+  return cgrid_conflict_near(g, p, r, cgrid_coord(g, p[0], 0), cgrid_coord(g, p[1], 1));
 }
 
 /* The feature samples sorted by column (a CSR snapshot of the grid), for the fill: the feature
@@ -502,6 +549,7 @@ typedef struct region_job {
   uint64_t seed;
   int pass; /* -1: shuffle the cell lists */
   int interrupted;
+  int keys32; /* every cell key is below 2^32 */
 } region_job_t;
 
 static void region_tile_pass(region_job_t *J, size_t t) {
@@ -518,8 +566,14 @@ static void region_tile_pass(region_job_t *J, size_t t) {
   }
   size_t w = 0;
   for (size_t q = 0; q < T->n; q++) {
-    int64_t key = cells[q];
-    int64_t c[3] = {key % g->dims[0], key / g->dims[0] % g->dims[1], key / g->dims[0] / g->dims[1]};
+    int64_t key = cells[q], c[3];
+    if (J->keys32) { /* 32-bit divisions, several times faster than 64-bit ones */
+      uint32_t u = (uint32_t)key, d0 = (uint32_t)g->dims[0], d1 = (uint32_t)g->dims[1], jk = u / d0;
+      c[0] = (int64_t)(u - jk * d0), c[1] = (int64_t)(jk % d1), c[2] = (int64_t)(jk / d1);
+    } else {
+      c[0] = key % g->dims[0], c[1] = key / g->dims[0] % g->dims[1];
+      c[2] = key / g->dims[0] / g->dims[1];
+    }
     if (cgrid_occupied(g, c[0], c[1], c[2])) continue; /* at most one feature sample per cell */
     double zlo = -INFINITY, zhi = INFINITY, p[3];
     if (R->layer) {
@@ -534,7 +588,7 @@ static void region_tile_pass(region_job_t *J, size_t t) {
     for (int a = 0; a < 3; a++)
       p[a] = karst_rng_uniform_range(&rng, blo[a], bhi[a]);
     if (!region_contains(S, R, p) || !karst_geology_in_bedrock(S->geo, p)) continue;
-    const double *e = cgrid_conflict(g, p, S->rf);
+    const double *e = cgrid_conflict_near(g, p, S->rf, c[0], c[1]);
     if (e) {
       if (box_covered(blo, bhi, e, S->rf)) w--; /* never again */
       continue;
@@ -576,8 +630,17 @@ static karst_error_t sample_region(sampler_t *S, const region_t *R) {
       if (tiles[t].colour == col) group[ng++] = t;
   }
   gstart[4] = ng;
-  region_job_t J = {S,  R, tiles, cells.v, group, ntiles, (int32_t)g->n, karst_rng_u64(S->rng),
-                    -1, 0};
+  region_job_t J = {S,
+                    R,
+                    tiles,
+                    cells.v,
+                    group,
+                    ntiles,
+                    (int32_t)g->n,
+                    karst_rng_u64(S->rng),
+                    -1,
+                    0,
+                    (double)g->dims[0] * (double)g->dims[1] * (double)g->dims[2] <= 4294967295.0};
   /* The reserved slots belong to the grid from now on (unused ones are
    * never linked into a column). */
   g->n += cells.n;
