@@ -9,15 +9,20 @@
 #include "karst/common.h"
 
 /**
- * Squared Euclidean distance, always evaluated as ((dx² + dy²) + dz²) with
+ * Squared Euclidean distance |a − b|², always evaluated as ((dx² + dy²) + dz²) with
  * d = a − b. The neighbour search orders points by this exact double and the
  * symmetrisation decides "is u among v's neighbours" by comparing it with v's
  * k-th value, so both must use this one function (rounding is symmetric:
  * (a − b)² = (b − a)² exactly in IEEE arithmetic).
  */
-static inline double karst_i_dist2(const double *a, const double *b) {
-  double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+static inline double karst_i_dist2_xyz(double ax, double ay, double az, const double *b) {
+  double dx = ax - b[0], dy = ay - b[1], dz = az - b[2];
   return (dx * dx + dy * dy) + dz * dz;
+}
+
+/** karst_i_dist2_xyz with a's coordinates as an array. */
+static inline double karst_i_dist2(const double *a, const double *b) {
+  return karst_i_dist2_xyz(a[0], a[1], a[2], b);
 }
 
 /** (d, i) < (e, j) in the lexicographic order that breaks distance ties by index. */

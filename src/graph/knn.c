@@ -309,14 +309,12 @@ static int gather(const grid_t *g, karst_int_t s, const int64_t cc[3], double T,
         b->d = d, b->cap = nc;
       }
       /* The distances of the run first, in a loop the compiler vectorises (the coordinates are
-       * one array per axis), with karst_i_dist2's very operations: ((dx² + dy²) + dz²). */
+       * one array per axis). */
       double *restrict dr = b->d;
       const double *restrict px = g->sx + p0, *restrict py = g->sy + p0, *restrict pz = g->sz + p0;
       const karst_int_t len = p1 - p0;
-      for (karst_int_t t = 0; t < len; t++) {
-        double dx = px[t] - q[0], dy = py[t] - q[1], dz = pz[t] - q[2];
-        dr[t] = (dx * dx + dy * dy) + dz * dz;
-      }
+      for (karst_int_t t = 0; t < len; t++)
+        dr[t] = karst_i_dist2_xyz(px[t], py[t], pz[t], q);
       cand_t *out = b->v;
       const int32_t *restrict idx = g->sidx + p0;
       for (karst_int_t t = 0; t < len; t++)

@@ -392,7 +392,6 @@ run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
   const karst_arc_cost_t *restrict tab =
       route ? (backward ? route->arc_bwd : route->arc_fwd) : NULL;
   const karst_arc_cost_t *restrict arc_cost = tab ? tab : cost;
-  if (tab) route = NULL;
   node_t *restrict node = s->node;
   double *restrict hh = s->h;
   int32_t *restrict pred = s->pred;

@@ -491,12 +491,11 @@ cleanup:
   return err;
 }
 
-/* fmax / fmin for numbers that are never NaN, without a call into libm. */
-static inline double dmax(double a, double b) {
-  return a > b ? a : b;
-}
-static inline double dmin(double a, double b) {
-  return a < b ? a : b;
+/* (i, j, k) of the linear key u = i + d0 (j + d1 k) of a grid of fewer than 2^32 cells, by 32-bit
+ * divisions, several times faster than 64-bit ones (the feature layers' darts, the fill's). */
+static inline void key_cell32(uint32_t u, uint32_t d0, uint32_t d1, int64_t c[3]) {
+  uint32_t jk = u / d0;
+  c[0] = (int64_t)(u - jk * d0), c[1] = (int64_t)(jk % d1), c[2] = (int64_t)(jk / d1);
 }
 
 /* The part of cell (i, j, k) of a grid within [zlo, zhi] and the box, where
@@ -506,10 +505,10 @@ static inline __attribute__((always_inline)) int cell_box(const sampler_t *S,
                                                           const int64_t c[3], double zlo,
                                                           double zhi, double lo[3], double hi[3]) {
   for (int a = 0; a < 3; a++) {
-    lo[a] = dmax(S->lo[a], origin[a] + c[a] * cell);
-    hi[a] = dmin(S->hi[a], origin[a] + (c[a] + 1) * cell);
+    lo[a] = karst_i_fmax(S->lo[a], origin[a] + c[a] * cell);
+    hi[a] = karst_i_fmin(S->hi[a], origin[a] + (c[a] + 1) * cell);
   }
-  lo[2] = dmax(lo[2], zlo), hi[2] = dmin(hi[2], zhi);
+  lo[2] = karst_i_fmax(lo[2], zlo), hi[2] = karst_i_fmin(hi[2], zhi);
   for (int a = 0; a < 3; a++)
     if (lo[a] > hi[a]) return 0;
   return 1;
@@ -567,9 +566,8 @@ static void region_tile_pass(region_job_t *J, size_t t) {
   size_t w = 0;
   for (size_t q = 0; q < T->n; q++) {
     int64_t key = cells[q], c[3];
-    if (J->keys32) { /* 32-bit divisions, several times faster than 64-bit ones */
-      uint32_t u = (uint32_t)key, d0 = (uint32_t)g->dims[0], d1 = (uint32_t)g->dims[1], jk = u / d0;
-      c[0] = (int64_t)(u - jk * d0), c[1] = (int64_t)(jk % d1), c[2] = (int64_t)(jk / d1);
+    if (J->keys32) {
+      key_cell32((uint32_t)key, (uint32_t)g->dims[0], (uint32_t)g->dims[1], c);
     } else {
       c[0] = key % g->dims[0], c[1] = key / g->dims[0] % g->dims[1];
       c[2] = key / g->dims[0] / g->dims[1];
@@ -798,8 +796,10 @@ static void fill_tile_pass(fill_job_t *J, int64_t t) {
   for (size_t q = 0; q < T->n; q++) {
     int64_t id = cells[q];
     /* ids and dimensions are below 2^31 (MAX_GRID_CELLS): 32-bit divisions */
-    uint32_t u = (uint32_t)id, p0 = (uint32_t)S->pd[0], p1 = (uint32_t)S->pd[1], jk = u / p0;
-    int64_t c[3] = {(int64_t)(u - jk * p0) - 2, (int64_t)(jk % p1) - 2, (int64_t)(jk / p1) - 2};
+    int64_t c[3];
+    key_cell32((uint32_t)id, (uint32_t)S->pd[0], (uint32_t)S->pd[1], c);
+    for (int a = 0; a < 3; a++)
+      c[a] -= 2; /* the border */
     double p[3];
     if (S->clo[0][c[0]] > S->chi[0][c[0]] || S->clo[1][c[1]] > S->chi[1][c[1]] ||
         S->clo[2][c[2]] > S->chi[2][c[2]])
@@ -1233,7 +1233,8 @@ karst_error_t karst_sampling_run(karst_ctx_t *ctx, const karst_geology_t *geo, k
     for (int64_t i = 0; i <= S.cd[a]; i++) /* the expressions of cell_box and cell_covered */
       S.corner[a][i] = S.lo[a] + (double)i * S.cc;
     for (int64_t i = 0; i < S.cd[a]; i++)
-      S.clo[a][i] = dmax(S.lo[a], S.corner[a][i]), S.chi[a][i] = dmin(S.hi[a], S.corner[a][i + 1]);
+      S.clo[a][i] = karst_i_fmax(S.lo[a], S.corner[a][i]),
+      S.chi[a][i] = karst_i_fmin(S.hi[a], S.corner[a][i + 1]);
   }
   /* Offsets (di, dj, dk) in [-2, 2]^3 whose cells come closer than r_c to
    * the centre cell: the gap along an axis is (|d| − 1)+ cells, so at most
