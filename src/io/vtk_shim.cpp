@@ -26,6 +26,7 @@
 #include "karst/palette.h"
 #include "karst/version.h"
 #include "karst/vtk.h"
+#include "io/vtk_reference_internal.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -1093,7 +1094,7 @@ extern "C" int karst_i_vtk_uncompress(int compressor, const unsigned char *in, s
  * Time complexity: O(n_nodes + n_edges) times the number of attribute components.
  * Format: VTK File Formats, XML PolyData (VTK User's Guide, 11th ed., §19.3).
  */
-extern "C" karst_error_t karst_vtk_write_network(karst_ctx_t *ctx, const char *path,
+extern "C" karst_error_t karst_i_vtkref_write_network(karst_ctx_t *ctx, const char *path,
                                                  const karst_network_t *net) {
   return guarded(ctx, path, [&] { return write_network(ctx, path, net); });
 }
@@ -1137,7 +1138,7 @@ extern "C" karst_error_t karst_vtk_read_network(karst_ctx_t *ctx, const char *pa
  * @return KARST_SUCCESS, KARST_EINVAL (bad coordinates or source tags) or KARST_EIO.
  * Time complexity: O(n).
  */
-extern "C" karst_error_t karst_vtk_write_samples(karst_ctx_t *ctx, const char *path,
+extern "C" karst_error_t karst_i_vtkref_write_samples(karst_ctx_t *ctx, const char *path,
                                                  const karst_samples_t *s) {
   return guarded(ctx, path, [&] { return write_samples(ctx, path, s); });
 }
@@ -1155,7 +1156,7 @@ extern "C" karst_error_t karst_vtk_write_samples(karst_ctx_t *ctx, const char *p
  * @return KARST_SUCCESS, KARST_EINVAL (bad coordinates or indices) or KARST_EIO.
  * Time complexity: O(n_vertices + n_triangles).
  */
-extern "C" karst_error_t karst_vtk_write_mesh(karst_ctx_t *ctx, const char *path,
+extern "C" karst_error_t karst_i_vtkref_write_mesh(karst_ctx_t *ctx, const char *path,
                                               const karst_mesh_t *m) {
   return guarded(ctx, path, [&] { return write_mesh(ctx, path, m); });
 }
@@ -1167,7 +1168,7 @@ extern "C" karst_error_t karst_vtk_write_mesh(karst_ctx_t *ctx, const char *path
  * @return KARST_SUCCESS, KARST_EINVAL (a nameless or missing array), KARST_EIO.
  * Time complexity: O(vertices + triangles × arrays).
  */
-extern "C" karst_error_t karst_vtk_write_mesh_arrays(karst_ctx_t *ctx, const char *path,
+extern "C" karst_error_t karst_i_vtkref_write_mesh_arrays(karst_ctx_t *ctx, const char *path,
                                                      const karst_mesh_t *m, int n_arrays,
                                                      const char *const *names,
                                                      const int *const *arrays) {
@@ -1181,7 +1182,7 @@ extern "C" karst_error_t karst_vtk_write_mesh_arrays(karst_ctx_t *ctx, const cha
  *         that does not exist, non-finite coordinates) or KARST_EIO.
  * Time complexity: O(points + polygon vertices + arrays x polygons).
  */
-extern "C" karst_error_t karst_vtk_write_polydata(karst_ctx_t *ctx, const char *path,
+extern "C" karst_error_t karst_i_vtkref_write_polydata(karst_ctx_t *ctx, const char *path,
                                                   const karst_polydata_t *m) {
   return guarded(ctx, path, [&] { return write_polydata(ctx, path, m); });
 }
