@@ -1,9 +1,11 @@
 /**
  * @file vtk.h
- * @brief VTK XML files for ParaView (thin C interface over VTK in
- *        src/io/vtk_shim.cpp). Files are written with inline binary data
- *        (ParaView 5.11 on Debian reads 0 points from appended mode), to a
- *        temporary name and renamed into place.
+ * @brief VTK XML files for ParaView. The PolyData files (.vtp) are written by
+ *        karst itself (src/io/write_vtp.c: the bytes VTK 9.1's writer makes);
+ *        reading them, and the .vti and .pvd writers, go through VTK
+ *        (src/io/vtk_shim.cpp, a plugin opened on first use). Files are
+ *        written with inline binary data (ParaView 5.11 on Debian reads 0
+ *        points from appended mode), to a temporary name and renamed into place.
  */
 #ifndef KARST_VTK_H
 #define KARST_VTK_H

@@ -1,8 +1,10 @@
 /* Shared libraries opened on first use (library_internal.h). */
+#define _GNU_SOURCE /* dladdr */
 #include "core/library_internal.h"
 
 #include <dlfcn.h>
 #include <stdio.h>
+#include <string.h>
 
 int karst_i_library_open(const char *file, int global, const char *const *names, void **syms,
                          size_t n, char *why, size_t why_size) {
@@ -24,4 +26,24 @@ int karst_i_library_open(const char *file, int global, const char *const *names,
     }
   }
   return 0;
+}
+
+int karst_i_library_open_plugin(const char *file, int global, const char *const *names,
+                                void **syms, size_t n, char *why, size_t why_size) {
+  Dl_info info;
+  char path[4096];
+  for (size_t i = 0; i < n; i++)
+    syms[i] = NULL;
+  if (!dladdr((void *)karst_i_library_open_plugin, &info) || !info.dli_fname) {
+    snprintf(why, why_size, "cannot tell where libkarst is (dladdr)");
+    return -1;
+  }
+  const char *slash = strrchr(info.dli_fname, '/');
+  int dir = slash ? (int)(slash - info.dli_fname) : 0;
+  if (snprintf(path, sizeof path, "%.*s%s%s", dir, info.dli_fname, slash ? "/" : "", file) >=
+      (int)sizeof path) {
+    snprintf(why, why_size, "the path of %s is too long", file);
+    return -1;
+  }
+  return karst_i_library_open(slash ? path : file, global, names, syms, n, why, why_size);
 }

@@ -1,5 +1,6 @@
 /* Shared libraries opened on first use (PROJ, GDAL, FLANN: src/crs/proj_api.c,
- * src/export/gdal_api.c, src/graph/flann_api.c; karst's own MPI plugin: src/ensemble/mpi_api.c).
+ * src/export/gdal_api.c, src/graph/flann_api.c; karst's own plugins: src/ensemble/mpi_api.c,
+ * src/io/vtk_api.c).
  * Each loader lists the symbols it needs (the first three with an X-macro), opens the library
  * once per process (pthread_once) and copies the addresses into its table of typed pointers. */
 #ifndef KARST_LIBRARY_INTERNAL_H
@@ -19,5 +20,14 @@
  */
 int karst_i_library_open(const char *file, int global, const char *const *names, void **syms,
                          size_t n, char *why, size_t why_size);
+
+/**
+ * karst_i_library_open for one of karst's own plugins (libkarst_mpi.so, libkarst_vtk.so), built
+ * and installed next to libkarst: @p file is looked up in the directory of libkarst's own file
+ * (found with dladdr from an address inside it), the build tree and an installed tree alike.
+ * @return 0 on success, -1 on failure with the reason in @p why.
+ */
+int karst_i_library_open_plugin(const char *file, int global, const char *const *names,
+                                void **syms, size_t n, char *why, size_t why_size);
 
 #endif

@@ -1,8 +1,6 @@
 /* The MPI plugin loaded on first use (src/ensemble/mpi_api_internal.h). */
-#define _GNU_SOURCE /* dladdr */
 #include "ensemble/mpi_api_internal.h"
 
-#include <dlfcn.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
@@ -14,33 +12,18 @@ static const karst_i_mpi_api_t *loaded;
 static char load_error[1024]; /* why the load failed; empty when it succeeded */
 
 static void load(void) {
-  /* The plugin sits next to libkarst (build tree and installed tree alike): find libkarst's own
-   * file from an address inside it. */
-  Dl_info info;
-  char path[4096];
-  if (!dladdr((void *)karst_i_mpi_load, &info) || !info.dli_fname) {
-    snprintf(load_error, sizeof load_error, "cannot tell where libkarst is (dladdr)");
-    return;
-  }
-  const char *slash = strrchr(info.dli_fname, '/');
-  int dir = slash ? (int)(slash - info.dli_fname) : 0;
-  if (snprintf(path, sizeof path, "%.*s%s" KARST_I_MPI_PLUGIN, dir, info.dli_fname,
-               slash ? "/" : "") >= (int)sizeof path) {
-    snprintf(load_error, sizeof load_error, "the path of %s is too long", KARST_I_MPI_PLUGIN);
-    return;
-  }
   /* Global: Open MPI's own components, which it opens later, resolve MPI's symbols. */
   static const char *const names[] = {KARST_I_MPI_ENTRY};
   void *sym;
-  if (karst_i_library_open(slash ? path : KARST_I_MPI_PLUGIN, 1, names, &sym, 1, load_error,
-                           sizeof load_error) != 0)
+  if (karst_i_library_open_plugin(KARST_I_MPI_PLUGIN, 1, names, &sym, 1, load_error,
+                                  sizeof load_error) != 0)
     return;
   const karst_i_mpi_api_t *(*entry)(void);
   memcpy(&entry, &sym, sizeof sym);
   const karst_i_mpi_api_t *api = entry();
   if (!api || api->version != KARST_I_MPI_API_VERSION) {
     snprintf(load_error, sizeof load_error,
-             "%.900s is of another karst (interface %d, expected %d)", path,
+             "%s is of another karst (interface %d, expected %d)", KARST_I_MPI_PLUGIN,
              api ? api->version : -1, KARST_I_MPI_API_VERSION);
     return;
   }

@@ -1,6 +1,9 @@
 /*
- * VTK XML files for ParaView (include/karst/vtk.h): a thin extern "C" shim
- * over VTK 9.1 (CommonCore, CommonDataModel, IOXML).
+ * What karst does with VTK 9.1 (CommonCore, CommonDataModel, IOXML), in a thin extern "C" shim
+ * built as the plugin libkarst_vtk.so (io/vtk_api_internal.h: libkarst opens it on first use,
+ * so that a process that never reads a .vtp does not pay VTK's ~20 ms start-up): reading .vtp
+ * files, writing .vti images and .pvd collections, and VTK's own writers of the PolyData files
+ * that karst writes itself (src/io/write_vtp.c), kept as the reference its test compares with.
  *
  * Formats: "VTK File Formats", VTK User's Guide 11th ed., ch. 19 (XML
  * PolyData .vtp, ImageData .vti, and the ParaView collection .pvd).
@@ -26,7 +29,7 @@
 #include "karst/palette.h"
 #include "karst/version.h"
 #include "karst/vtk.h"
-#include "io/vtk_reference_internal.h"
+#include "io/vtk_api_internal.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -86,8 +89,8 @@ namespace {
 /* VTK creates its registry of object factories on the first object made (vtkObjectFactory::Init),
  * with no lock: the first two files of an ensemble's workers, written at once, can both create
  * it, and one copy leaks (LeakSanitizer found it in 1 of about 12 two-thread ensembles under
- * ASan, tests/cli/test_conditioning.sh). Made here, when the library is loaded and before any
- * thread exists, it is created once. */
+ * ASan, tests/cli/test_conditioning.sh). Made here, when the plugin is loaded (once, under the
+ * loader's pthread_once, before any of its functions can run), it is created once. */
 const struct FactoryRegistry {
   FactoryRegistry() { vtkObjectFactory::GetRegisteredFactories(); }
 } factory_registry;
@@ -1051,7 +1054,7 @@ template <class F> karst_error_t guarded(karst_ctx_t *ctx, const char *path, F b
  * block header declares (already bounded by the compressor's ratio).
  * @return 0 when the block decompresses to exactly @p out_len bytes.
  */
-extern "C" int karst_i_vtk_uncompress(int compressor, const unsigned char *in, size_t in_len,
+static int plug_uncompress(int compressor, const unsigned char *in, size_t in_len,
                                       unsigned char *out, size_t out_len) {
   try {
     vtkSmartPointer<vtkDataCompressor> c;
@@ -1094,7 +1097,7 @@ extern "C" int karst_i_vtk_uncompress(int compressor, const unsigned char *in, s
  * Time complexity: O(n_nodes + n_edges) times the number of attribute components.
  * Format: VTK File Formats, XML PolyData (VTK User's Guide, 11th ed., §19.3).
  */
-extern "C" karst_error_t karst_i_vtkref_write_network(karst_ctx_t *ctx, const char *path,
+static karst_error_t ref_write_network(karst_ctx_t *ctx, const char *path,
                                                  const karst_network_t *net) {
   return guarded(ctx, path, [&] { return write_network(ctx, path, net); });
 }
@@ -1121,7 +1124,7 @@ extern "C" karst_error_t karst_i_vtkref_write_network(karst_ctx_t *ctx, const ch
  *         KARST_EUNSUPPORTED for array names longer than 47 characters.
  * Time complexity: O(points + line points) times the number of array components.
  */
-extern "C" karst_error_t karst_vtk_read_network(karst_ctx_t *ctx, const char *path,
+static karst_error_t plug_read_network(karst_ctx_t *ctx, const char *path,
                                                 karst_network_t *net) {
   return guarded(ctx, path, [&] { return read_network(ctx, path, net); });
 }
@@ -1138,7 +1141,7 @@ extern "C" karst_error_t karst_vtk_read_network(karst_ctx_t *ctx, const char *pa
  * @return KARST_SUCCESS, KARST_EINVAL (bad coordinates or source tags) or KARST_EIO.
  * Time complexity: O(n).
  */
-extern "C" karst_error_t karst_i_vtkref_write_samples(karst_ctx_t *ctx, const char *path,
+static karst_error_t ref_write_samples(karst_ctx_t *ctx, const char *path,
                                                  const karst_samples_t *s) {
   return guarded(ctx, path, [&] { return write_samples(ctx, path, s); });
 }
@@ -1156,7 +1159,7 @@ extern "C" karst_error_t karst_i_vtkref_write_samples(karst_ctx_t *ctx, const ch
  * @return KARST_SUCCESS, KARST_EINVAL (bad coordinates or indices) or KARST_EIO.
  * Time complexity: O(n_vertices + n_triangles).
  */
-extern "C" karst_error_t karst_i_vtkref_write_mesh(karst_ctx_t *ctx, const char *path,
+static karst_error_t ref_write_mesh(karst_ctx_t *ctx, const char *path,
                                               const karst_mesh_t *m) {
   return guarded(ctx, path, [&] { return write_mesh(ctx, path, m); });
 }
@@ -1168,7 +1171,7 @@ extern "C" karst_error_t karst_i_vtkref_write_mesh(karst_ctx_t *ctx, const char 
  * @return KARST_SUCCESS, KARST_EINVAL (a nameless or missing array), KARST_EIO.
  * Time complexity: O(vertices + triangles × arrays).
  */
-extern "C" karst_error_t karst_i_vtkref_write_mesh_arrays(karst_ctx_t *ctx, const char *path,
+static karst_error_t ref_write_mesh_arrays(karst_ctx_t *ctx, const char *path,
                                                      const karst_mesh_t *m, int n_arrays,
                                                      const char *const *names,
                                                      const int *const *arrays) {
@@ -1182,7 +1185,7 @@ extern "C" karst_error_t karst_i_vtkref_write_mesh_arrays(karst_ctx_t *ctx, cons
  *         that does not exist, non-finite coordinates) or KARST_EIO.
  * Time complexity: O(points + polygon vertices + arrays x polygons).
  */
-extern "C" karst_error_t karst_i_vtkref_write_polydata(karst_ctx_t *ctx, const char *path,
+static karst_error_t ref_write_polydata(karst_ctx_t *ctx, const char *path,
                                                   const karst_polydata_t *m) {
   return guarded(ctx, path, [&] { return write_polydata(ctx, path, m); });
 }
@@ -1202,7 +1205,7 @@ extern "C" karst_error_t karst_i_vtkref_write_polydata(karst_ctx_t *ctx, const c
  * @return KARST_SUCCESS, KARST_EINVAL, KARST_ERANGE (more than 2^40 points) or KARST_EIO.
  * Time complexity: O(dims[0] dims[1] dims[2]).
  */
-extern "C" karst_error_t karst_vtk_write_image(karst_ctx_t *ctx, const char *path,
+static karst_error_t plug_write_image(karst_ctx_t *ctx, const char *path,
                                                const int dims[3], const double origin[3],
                                                const double spacing[3], const float *values,
                                                const char *name) {
@@ -1224,7 +1227,18 @@ extern "C" karst_error_t karst_vtk_write_image(karst_ctx_t *ctx, const char *pat
  *         characters) or KARST_EIO.
  * Time complexity: O(total length of the names).
  */
-extern "C" karst_error_t karst_vtk_write_pvd(karst_ctx_t *ctx, const char *path, int n,
+static karst_error_t plug_write_pvd(karst_ctx_t *ctx, const char *path, int n,
                                              const char *const *files) {
   return guarded(ctx, path, [&] { return write_pvd(ctx, path, n, files); });
+}
+
+/** The plugin's table (io/vtk_api_internal.h): its one exported symbol. */
+extern "C" __attribute__((visibility("default"))) const karst_i_vtk_api_t *
+karst_i_vtk_plugin_api(void) {
+  static const karst_i_vtk_api_t api = {
+      KARST_I_VTK_API_VERSION, plug_read_network,  plug_write_image,      plug_write_pvd,
+      plug_uncompress,         ref_write_network,  ref_write_samples,     ref_write_mesh,
+      ref_write_mesh_arrays,   ref_write_polydata,
+  };
+  return &api;
 }

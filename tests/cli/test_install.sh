@@ -66,6 +66,20 @@ if [ -e "$BUILD/libkarst_mpi.so" ]; then
   echo "ok: the installed karst runs under mpirun -np 2 with the installed MPI plugin"
 fi
 
+# The VTK plugin (libkarst_vtk.so) is installed beside libkarst. The installed karst writes its
+# .vtp files without it and without VTK loaded, and opens it from there to read one back.
+[ -e "$T/prefix/lib/libkarst_vtk.so" ] || fail "libkarst_vtk.so not installed beside libkarst"
+LD_LIBRARY_PATH="$T/prefix/lib" LD_DEBUG=files "$T/prefix/bin/karst" generate \
+  "$SRC/datasets/scenarios/branchwork.yaml" -o "$T/gen" --quiet >"$T/gen.log" 2>&1 \
+  || { tail -5 "$T/gen.log"; fail "installed karst generate"; }
+if grep -q "libvtk" "$T/gen.log"; then fail "karst generate loaded VTK"; fi
+LD_LIBRARY_PATH="$T/prefix/lib" LD_DEBUG=files "$T/prefix/bin/karst" metrics "$T/gen/network.vtp" \
+  --format csv -o "$T/gen/metrics.csv" --quiet >"$T/read.log" 2>&1 \
+  || { tail -5 "$T/read.log"; fail "installed karst metrics on a .vtp"; }
+grep -q "$T/prefix/lib/libkarst_vtk.so" "$T/read.log" || fail "the installed plugin was not the one loaded"
+[ -s "$T/gen/metrics.csv" ] || fail "installed karst metrics wrote nothing"
+echo "ok: the installed karst writes .vtp without VTK and reads one with the installed plugin"
+
 # --- DESTDIR install of everything -------------------------------------------------------
 cache() { sed -n "s/^$1:[A-Z]*=//p" "$BUILD/CMakeCache.txt"; }
 PREFIX=$(cache CMAKE_INSTALL_PREFIX)
