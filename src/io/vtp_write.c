@@ -5,7 +5,9 @@
  * last partial block, then each block's compressed size), followed, as a second base64 text,
  * by the blocks, each compressed on its own with zlib. The layout details below (element and
  * attribute order, indentation, ranges, information keys) are those of VTK 9.1's
- * vtkXMLPolyDataWriter, checked byte for byte by tests/unit/test_vtp_write.c. */
+ * vtkXMLPolyDataWriter, checked byte for byte by tests/unit/test_vtp_write.c. Like VTK's
+ * writer it streams: an array's header is written as a placeholder and filled in once its
+ * blocks are compressed, so a file needs the memory of one block, not of the file. */
 #include "io/vtp_write_internal.h"
 
 #include <errno.h>
@@ -27,20 +29,44 @@
 #define VTP_EMPTY_RANGE 1.0e+299
 
 /* ------------------------------------------------------------------------ */
-/* A growing text buffer                                                     */
+/* The file, written through a buffer                                         */
 /* ------------------------------------------------------------------------ */
+
+/** The buffer is written out when full: a file's memory is that of one array's data, not the
+ *  whole file's (a mesh of 19 M triangles writes a 500 MB .vtp). */
+#define VB_CAPACITY ((size_t)1 << 20)
 
 typedef struct {
   char *p;
   size_t n, cap;
-  int failed;
+  int fd;
+  uint64_t off; /* file offset of p[0] */
+  int failed;   /* 1: out of memory, 2: write error (errno in err) */
+  int err;
 } vbuf_t;
+
+static void vb_flush(vbuf_t *b) {
+  for (size_t at = 0; at < b->n && !b->failed;) {
+    ssize_t w = pwrite(b->fd, b->p + at, b->n - at, (off_t)(b->off + at));
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) {
+      b->failed = 2, b->err = w < 0 ? errno : EIO;
+      return;
+    }
+    at += (size_t)w;
+  }
+  b->off += b->n;
+  b->n = 0;
+}
 
 static int vb_reserve(vbuf_t *b, size_t more) {
   if (b->failed) return -1;
   if (b->n + more <= b->cap) return 0;
-  size_t cap = b->cap ? b->cap : 1 << 16;
-  while (cap < b->n + more) {
+  if (b->n > 0) vb_flush(b);
+  if (b->failed) return -1;
+  if (more <= b->cap) return 0;
+  size_t cap = b->cap > VB_CAPACITY ? b->cap : VB_CAPACITY;
+  while (cap < more) {
     if (cap > SIZE_MAX / 2) {
       b->failed = 1;
       return -1;
@@ -60,6 +86,25 @@ static void vb_put(vbuf_t *b, const char *s, size_t n) {
   if (vb_reserve(b, n)) return;
   memcpy(b->p + b->n, s, n);
   b->n += n;
+}
+
+/* Overwrite @p n bytes at file offset @p pos (written earlier: in the file, in the buffer, or
+ * partly in each). */
+static void vb_patch(vbuf_t *b, uint64_t pos, const char *s, size_t n) {
+  while (n > 0 && !b->failed) {
+    if (pos >= b->off) {
+      memcpy(b->p + (pos - b->off), s, n);
+      return;
+    }
+    size_t k = (size_t)(b->off - pos) < n ? (size_t)(b->off - pos) : n;
+    ssize_t w = pwrite(b->fd, s, k, (off_t)pos);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) {
+      b->failed = 2, b->err = w < 0 ? errno : EIO;
+      return;
+    }
+    s += w, n -= (size_t)w, pos += (uint64_t)w;
+  }
 }
 
 static void vb_str(vbuf_t *b, const char *s) { vb_put(b, s, strlen(s)); }
@@ -207,9 +252,8 @@ int karst_i_vtp_format_shortest(double v, char *buf) {
 
 static const char b64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
 
-static void vb_base64(vbuf_t *b, const unsigned char *s, size_t n) {
-  if (vb_reserve(b, (n + 2) / 3 * 4)) return;
-  char *o = b->p + b->n;
+/* Base64 of @p n bytes into @p o (4 ceil(n / 3) characters, '=' padded). @return the end. */
+static char *base64(char *o, const unsigned char *s, size_t n) {
   size_t i = 0;
   for (; i + 3 <= n; i += 3) {
     uint32_t w = (uint32_t)s[i] << 16 | (uint32_t)s[i + 1] << 8 | s[i + 2];
@@ -222,72 +266,113 @@ static void vb_base64(vbuf_t *b, const unsigned char *s, size_t n) {
     *o++ = i + 1 < n ? b64[(w >> 6) & 63] : '=';
     *o++ = '=';
   }
-  b->n = (size_t)(o - b->p);
+  return o;
 }
 
-/* The raw bytes of one array, compressed in VTK's blocks and written as base64 (header, then
- * blocks). @return 0, or -1 out of memory. */
+/* The blocks' base64 is one text across the blocks: 0 to 2 bytes wait for the next block. */
+typedef struct {
+  unsigned char carry[2];
+  int n_carry;
+} b64_stream_t;
+
+static void vb_base64_stream(vbuf_t *b, b64_stream_t *st, const unsigned char *s, size_t n) {
+  unsigned char head[3];
+  int h = st->n_carry;
+  memcpy(head, st->carry, (size_t)h);
+  while (h < 3 && n > 0)
+    head[h++] = *s++, n--;
+  if (h < 3) { /* still not a whole group */
+    memcpy(st->carry, head, (size_t)h);
+    st->n_carry = h;
+    return;
+  }
+  size_t whole = n / 3 * 3;
+  if (vb_reserve(b, 4 + whole / 3 * 4)) return;
+  char *o = base64(b->p + b->n, head, 3);
+  o = base64(o, s, whole);
+  b->n = (size_t)(o - b->p);
+  st->n_carry = (int)(n - whole);
+  memcpy(st->carry, s + whole, (size_t)st->n_carry);
+}
+
+static void vb_base64_end(vbuf_t *b, b64_stream_t *st) {
+  if (st->n_carry == 0 || vb_reserve(b, 4)) return;
+  b->n = (size_t)(base64(b->p + b->n, st->carry, (size_t)st->n_carry) - b->p);
+  st->n_carry = 0;
+}
+
+/* The raw bytes of one array, compressed in VTK's blocks and written as base64: the header
+ * (number of blocks, block size, last partial block's size, each block's compressed size) is
+ * written as a placeholder of its final length, the blocks are compressed and written one by
+ * one, and the header is then filled in. @return 0, or -1 on failure (b->failed set). */
 static int vb_binary(vbuf_t *b, const unsigned char *raw, size_t n) {
   size_t nb = n / VTP_BLOCK + (n % VTP_BLOCK ? 1 : 0);
-  uint64_t *hdr = malloc((3 + nb) * sizeof *hdr);
-  size_t bound = nb ? compressBound(VTP_BLOCK) * nb : 1;
+  size_t hbytes = 8 * (3 + nb), hlen = (hbytes + 2) / 3 * 4;
+  uint64_t *hdr = malloc(hbytes);
+  char *htext = malloc(hlen);
+  uLong bound = compressBound(VTP_BLOCK);
   unsigned char *z = malloc(bound);
-  if (!hdr || !z) {
-    free(hdr), free(z);
-    b->failed = 1;
+  if (!hdr || !htext || !z || vb_reserve(b, hlen)) {
+    free(hdr), free(htext), free(z);
+    if (!b->failed) b->failed = 1;
     return -1;
   }
+  const uint64_t hpos = b->off + b->n;
+  memset(b->p + b->n, 'A', hlen);
+  b->n += hlen;
   hdr[0] = nb, hdr[1] = VTP_BLOCK, hdr[2] = n % VTP_BLOCK;
-  size_t zn = 0;
-  for (size_t k = 0; k < nb; k++) {
+  b64_stream_t st = {{0, 0}, 0};
+  for (size_t k = 0; k < nb && !b->failed; k++) {
     size_t len = k + 1 < nb || n % VTP_BLOCK == 0 ? VTP_BLOCK : n % VTP_BLOCK;
-    uLongf out = (uLongf)(bound - zn);
-    if (compress2(z + zn, &out, raw + k * VTP_BLOCK, (uLong)len, KARST_I_VTP_ZLIB_LEVEL) != Z_OK) {
-      free(hdr), free(z);
+    uLongf out = bound;
+    if (compress2(z, &out, raw + k * VTP_BLOCK, (uLong)len, KARST_I_VTP_ZLIB_LEVEL) != Z_OK) {
       b->failed = 1;
-      return -1;
+      break;
     }
     hdr[3 + k] = out;
-    zn += out;
+    vb_base64_stream(b, &st, z, out);
   }
-  /* little-endian words (the file says byte_order="LittleEndian") */
-  unsigned char *h = (unsigned char *)hdr;
+  vb_base64_end(b, &st);
+  /* the header's words, little-endian (the file says byte_order="LittleEndian") */
+  unsigned char *hb = (unsigned char *)hdr;
   for (size_t i = 0; i < 3 + nb; i++) {
     uint64_t w = hdr[i];
     for (int j = 0; j < 8; j++)
-      h[8 * i + (size_t)j] = (unsigned char)(w >> (8 * j));
+      hb[8 * i + (size_t)j] = (unsigned char)(w >> (8 * j));
   }
-  vb_base64(b, h, 8 * (3 + nb));
-  vb_base64(b, z, zn);
-  free(hdr), free(z);
+  base64(htext, hb, hbytes);
+  vb_patch(b, hpos, htext, hlen);
+  free(hdr), free(htext), free(z);
   return b->failed ? -1 : 0;
 }
 
-/* The array's bytes as the file stores them (little-endian, the machine's order here: the
- * build refuses big-endian machines below), or strings each followed by a NUL. */
-static unsigned char *array_bytes(const karst_i_vtp_array_t *a, size_t *n) {
+/* An array's bytes as the file stores them: the values themselves (little-endian, the
+ * machine's order: the build refuses other machines below), or for strings a copy of each
+ * followed by a NUL (*copy set, to be freed). */
+static const unsigned char *array_bytes(const karst_i_vtp_array_t *a, size_t *n,
+                                        unsigned char **copy) {
   size_t count = (size_t)a->n * (size_t)a->ncomp;
-  if (a->type == KARST_I_VTP_STRING) {
-    const char *const *s = a->data;
-    size_t len = 0;
-    for (size_t i = 0; i < count; i++)
-      len += (s && s[i] ? strlen(s[i]) : 0) + 1;
-    unsigned char *r = malloc(len ? len : 1);
-    if (!r) return NULL;
-    size_t at = 0;
-    for (size_t i = 0; i < count; i++) {
-      size_t l = s && s[i] ? strlen(s[i]) : 0;
-      if (l) memcpy(r + at, s[i], l);
-      at += l;
-      r[at++] = 0;
-    }
-    *n = len;
-    return r;
+  *copy = NULL;
+  if (a->type != KARST_I_VTP_STRING) {
+    static const unsigned char none[1] = {0};
+    *n = count * (a->type == KARST_I_VTP_INT32 ? 4 : 8);
+    return *n ? (const unsigned char *)a->data : none;
   }
-  size_t w = a->type == KARST_I_VTP_INT32 ? 4 : 8;
-  *n = count * w;
-  unsigned char *r = malloc(*n ? *n : 1);
-  if (r && *n) memcpy(r, a->data, *n);
+  const char *const *s = a->data;
+  size_t len = 0;
+  for (size_t i = 0; i < count; i++)
+    len += (s && s[i] ? strlen(s[i]) : 0) + 1;
+  unsigned char *r = malloc(len ? len : 1);
+  if (!r) return NULL;
+  size_t at = 0;
+  for (size_t i = 0; i < count; i++) {
+    size_t l = s && s[i] ? strlen(s[i]) : 0;
+    if (l) memcpy(r + at, s[i], l);
+    at += l;
+    r[at++] = 0;
+  }
+  *n = len;
+  *copy = r;
   return r;
 }
 
@@ -368,14 +453,15 @@ static int put_array(vbuf_t *b, int indent, const karst_i_vtp_array_t *a, int in
   }
   vb_str(b, ">\n");
   size_t n = 0;
-  unsigned char *raw = array_bytes(a, &n);
+  unsigned char *copy;
+  const unsigned char *raw = array_bytes(a, &n, &copy);
   if (!raw) {
     b->failed = 1;
     return -1;
   }
   vb_indent(b, indent + 2);
   vb_binary(b, raw, n);
-  free(raw);
+  free(copy);
   vb_str(b, "\n");
   if (!str && a->units) {
     vb_indent(b, indent + 2);
@@ -423,40 +509,19 @@ static void put_data(vbuf_t *b, const char *tag, int n, const karst_i_vtp_array_
 
 static const char *const cell_tags[4] = {"Verts", "Lines", "Strips", "Polys"};
 
-static karst_error_t write_file(karst_ctx_t *ctx, const char *path, const vbuf_t *b) {
-  char *tmp = karst_temp_name(path);
-  if (!tmp) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
-  int fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd < 0) {
-    int e = errno;
-    free(tmp);
-    return karst_set_error(ctx, KARST_EIO, "%s: cannot write: %s", path, strerror(e));
-  }
-  int e = 0;
-  for (size_t at = 0; at < b->n && !e;) {
-    ssize_t w = write(fd, b->p + at, b->n - at);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0)
-      e = w < 0 ? errno : EIO;
-    else
-      at += (size_t)w;
-  }
-  if (close(fd) != 0 && e == 0) e = errno;
-  if (e) {
-    remove(tmp);
-    free(tmp);
-    return karst_set_error(ctx, KARST_EIO, "%s: cannot write: %s", path, strerror(e));
-  }
-  karst_error_t err = karst_rename_into_place(ctx, tmp, path);
-  free(tmp);
-  return err;
-}
-
 karst_error_t karst_i_vtp_write(karst_ctx_t *ctx, const char *path,
                                 const karst_i_vtp_polydata_t *pd) {
   if (karst_interrupted(ctx))
     return karst_set_error(ctx, KARST_EINTERRUPTED, "%s: interrupted before writing", path);
+  char *tmp = karst_temp_name(path);
+  if (!tmp) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
   vbuf_t b = {0};
+  b.fd = open(tmp, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (b.fd < 0) {
+    int e = errno;
+    free(tmp);
+    return karst_set_error(ctx, KARST_EIO, "%s: cannot write: %s", path, strerror(e));
+  }
   vb_str(&b, "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"1.0\" "
              "byte_order=\"LittleEndian\" header_type=\"UInt64\" "
              "compressor=\"vtkZLibDataCompressor\">\n  <PolyData>\n");
@@ -491,11 +556,19 @@ karst_error_t karst_i_vtp_write(karst_ctx_t *ctx, const char *path,
     vb_printf(&b, "</%s>\n", cell_tags[k]);
   }
   vb_str(&b, "    </Piece>\n  </PolyData>\n</VTKFile>\n");
-  karst_error_t err;
-  if (b.failed)
-    err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory for the file's data", path);
-  else
-    err = write_file(ctx, path, &b);
+  vb_flush(&b);
+  if (close(b.fd) != 0 && !b.failed) b.failed = 2, b.err = errno;
   free(b.p);
+  karst_error_t err;
+  if (b.failed == 1)
+    err = karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory for the file's data", path);
+  else if (b.failed)
+    err = karst_set_error(ctx, KARST_EIO, "%s: cannot write: %s", path, strerror(b.err));
+  if (b.failed) {
+    remove(tmp);
+  } else {
+    err = karst_rename_into_place(ctx, tmp, path);
+  }
+  free(tmp);
   return err;
 }
