@@ -47,3 +47,21 @@ int karst_i_library_open_plugin(const char *file, int global, const char *const 
   }
   return karst_i_library_open(slash ? path : file, global, names, syms, n, why, why_size);
 }
+
+const void *karst_i_plugin_table(const char *file, const char *entry, int global, int version,
+                                 char *why, size_t why_size) {
+  const char *const names[] = {entry};
+  void *sym;
+  if (karst_i_library_open_plugin(file, global, names, &sym, 1, why, why_size) != 0) return NULL;
+  const void *(*get)(void);
+  memcpy(&get, &sym, sizeof sym);
+  const void *table = get();
+  int got = -1;
+  if (table) memcpy(&got, table, sizeof got);
+  if (got != version) {
+    snprintf(why, why_size, "%s is of another karst (interface %d, expected %d)", file, got,
+             version);
+    return NULL;
+  }
+  return table;
+}

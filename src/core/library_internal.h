@@ -30,4 +30,14 @@ int karst_i_library_open(const char *file, int global, const char *const *names,
 int karst_i_library_open_plugin(const char *file, int global, const char *const *names,
                                 void **syms, size_t n, char *why, size_t why_size);
 
+/**
+ * One of karst's plugins, whose one exported symbol @p entry is a function returning its table
+ * of functions, the table starting with an int: its interface version. Opens @p file as
+ * karst_i_library_open_plugin does, calls the entry, and checks the version.
+ * @return the table, or NULL with the reason in @p why (dlopen's, or "FILE is of another karst"
+ *         when the version is not @p version).
+ */
+const void *karst_i_plugin_table(const char *file, const char *entry, int global, int version,
+                                 char *why, size_t why_size);
+
 #endif

@@ -3,7 +3,6 @@
 
 #include <pthread.h>
 #include <stdio.h>
-#include <string.h>
 
 #include "core/library_internal.h"
 
@@ -13,21 +12,8 @@ static char load_error[1024]; /* why the load failed; empty when it succeeded */
 
 static void load(void) {
   /* Global: Open MPI's own components, which it opens later, resolve MPI's symbols. */
-  static const char *const names[] = {KARST_I_MPI_ENTRY};
-  void *sym;
-  if (karst_i_library_open_plugin(KARST_I_MPI_PLUGIN, 1, names, &sym, 1, load_error,
-                                  sizeof load_error) != 0)
-    return;
-  const karst_i_mpi_api_t *(*entry)(void);
-  memcpy(&entry, &sym, sizeof sym);
-  const karst_i_mpi_api_t *api = entry();
-  if (!api || api->version != KARST_I_MPI_API_VERSION) {
-    snprintf(load_error, sizeof load_error,
-             "%s is of another karst (interface %d, expected %d)", KARST_I_MPI_PLUGIN,
-             api ? api->version : -1, KARST_I_MPI_API_VERSION);
-    return;
-  }
-  loaded = api;
+  loaded = karst_i_plugin_table(KARST_I_MPI_PLUGIN, KARST_I_MPI_ENTRY, 1, KARST_I_MPI_API_VERSION,
+                                load_error, sizeof load_error);
 }
 
 const karst_i_mpi_api_t *karst_i_mpi_load(char *why, size_t why_size) {

@@ -4,7 +4,6 @@
 
 #include <pthread.h>
 #include <stdio.h>
-#include <string.h>
 
 #include "core/library_internal.h"
 #include "io/vtk_reference_internal.h"
@@ -19,23 +18,11 @@ static char load_error[1024]; /* why the load failed; empty when it succeeded */
 
 static void load(void) {
 #if KARST_VTK_PLUGIN
-  static const char *const names[] = {KARST_I_VTK_ENTRY};
-  void *sym;
-  if (karst_i_library_open_plugin(KARST_I_VTK_PLUGIN, 0, names, &sym, 1, load_error,
-                                  sizeof load_error) != 0)
-    return;
-  const karst_i_vtk_api_t *(*entry)(void);
-  memcpy(&entry, &sym, sizeof sym);
-  const karst_i_vtk_api_t *api = entry();
+  loaded = karst_i_plugin_table(KARST_I_VTK_PLUGIN, KARST_I_VTK_ENTRY, 0, KARST_I_VTK_API_VERSION,
+                                load_error, sizeof load_error);
 #else
-  const karst_i_vtk_api_t *api = karst_i_vtk_plugin_api();
+  loaded = karst_i_vtk_plugin_api(); /* a static libkarst holds the shim */
 #endif
-  if (!api || api->version != KARST_I_VTK_API_VERSION) {
-    snprintf(load_error, sizeof load_error, "%s is of another karst (interface %d, expected %d)",
-             KARST_I_VTK_PLUGIN, api ? api->version : -1, KARST_I_VTK_API_VERSION);
-    return;
-  }
-  loaded = api;
 }
 
 const karst_i_vtk_api_t *karst_i_vtk_load(char *why, size_t why_size) {

@@ -18,22 +18,6 @@
 /* What a file holds besides its geometry                                    */
 /* ------------------------------------------------------------------------ */
 
-static const char *const tunnel_type_names[] = {
-#define KARST_X_NAME(code, name) name,
-    KARST_TUNNEL_TYPE_LIST(KARST_X_NAME)
-#undef KARST_X_NAME
-};
-static const char *const node_kind_names[] = {
-#define KARST_X_NAME(code, name) name,
-    KARST_NODE_KIND_LIST(KARST_X_NAME)
-#undef KARST_X_NAME
-};
-static const char *const sample_source_names[] = {
-#define KARST_X_NAME(code, name) name,
-    KARST_SAMPLE_SOURCE_LIST(KARST_X_NAME)
-#undef KARST_X_NAME
-};
-
 /* A file being assembled: its arrays and the memory they borrow. */
 typedef struct {
   karst_i_vtp_array_t *field, *point, *cell;
@@ -109,10 +93,27 @@ static karst_i_vtp_array_t int32s(const char *name, karst_int_t n, const int32_t
   return a;
 }
 
+/* The names of codes 0 .. n - 1 (owned by @p f), from the function that names one code. */
+static const char *const *code_names(file_t *f, int n, const char *(*name)(int)) {
+  const char **v = own(f, calloc((size_t)n + 1, sizeof *v));
+  if (v)
+    for (int i = 0; i < n; i++)
+      v[i] = name(i);
+  return v;
+}
+
+static const char *tunnel_type_name(int i) { return karst_tunnel_type_name((karst_tunnel_type_t)i); }
+static const char *node_kind_name(int i) { return karst_node_kind_name((karst_node_kind_t)i); }
+static const char *sample_source_name(int i) {
+  return karst_sample_source_name((karst_sample_source_t)i);
+}
+
 /* Which tunnel type and node kind each code names (include/karst/vtk.h). */
 static void add_lookup_tables(file_t *f) {
-  add_field(f, strings("tunnel_type_names", KARST_TUNNEL_TYPE_COUNT, tunnel_type_names));
-  add_field(f, strings("node_kind_names", KARST_NODE_KIND_COUNT, node_kind_names));
+  add_field(f, strings("tunnel_type_names", KARST_TUNNEL_TYPE_COUNT,
+                       code_names(f, KARST_TUNNEL_TYPE_COUNT, tunnel_type_name)));
+  add_field(f, strings("node_kind_names", KARST_NODE_KIND_COUNT,
+                       code_names(f, KARST_NODE_KIND_COUNT, node_kind_name)));
 }
 
 /* "versions": one "name version" string per component (karst_versions). */
@@ -368,7 +369,8 @@ static karst_error_t write_samples(karst_ctx_t *ctx, const char *path, const kar
   }
   add_point(f, int32s("source", s->n, src));
   pd.point_scalars = "source";
-  add_field(f, strings("source_names", KARST_SAMPLE_SOURCE_COUNT, sample_source_names));
+  add_field(f, strings("source_names", KARST_SAMPLE_SOURCE_COUNT,
+                       code_names(f, KARST_SAMPLE_SOURCE_COUNT, sample_source_name)));
   int64_t *nkey = own(f, malloc(sizeof *nkey));
   if (!nkey) return karst_set_error(ctx, KARST_ENOMEM, "%s: out of memory", path);
   *nkey = s->n_key_points;

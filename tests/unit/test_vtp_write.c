@@ -68,7 +68,17 @@ static void assert_same_file(const char *ours, const char *vtk) {
   free(a), free(b);
 }
 
-typedef karst_error_t (*network_writer_t)(karst_ctx_t *, const char *, const karst_network_t *);
+/* karst's writer karst_vtk_write_WHAT and VTK's karst_i_vtkref_write_WHAT on the same data
+ * (the arguments after the path), into NAME.vtp and NAME.vtk.vtp: both succeed, same bytes. */
+#define COMPARE_WRITERS(name, what, ...)                                                           \
+  do {                                                                                             \
+    char o_[256], v_[256];                                                                         \
+    snprintf(o_, sizeof o_, "%s/%s.vtp", dir, name);                                               \
+    snprintf(v_, sizeof v_, "%s/%s.vtk.vtp", dir, name);                                           \
+    assert_int_equal(karst_vtk_write_##what(NULL, o_, __VA_ARGS__), KARST_SUCCESS);                \
+    assert_int_equal(karst_i_vtkref_write_##what(NULL, v_, __VA_ARGS__), KARST_SUCCESS);           \
+    assert_same_file(o_, v_);                                                                      \
+  } while (0)
 
 /* Write @p net with both writers; same result code, same message, same bytes. */
 static void compare_network(const char *name, const karst_network_t *net) {
@@ -248,12 +258,9 @@ static void test_samples(void **state) {
     }
     smp.n_key_points = sizes[s] / 10;
     smp.crs = s % 2 ? "EPSG:2154" : NULL;
-    char ours[256], vtk[256];
-    snprintf(ours, sizeof ours, "%s/samples_%zu.vtp", dir, s);
-    snprintf(vtk, sizeof vtk, "%s/samples_%zu.vtk.vtp", dir, s);
-    assert_int_equal(karst_vtk_write_samples(NULL, ours, &smp), KARST_SUCCESS);
-    assert_int_equal(karst_i_vtkref_write_samples(NULL, vtk, &smp), KARST_SUCCESS);
-    assert_same_file(ours, vtk);
+    char name[64];
+    snprintf(name, sizeof name, "samples_%zu", s);
+    COMPARE_WRITERS(name, samples, &smp);
     karst_samples_destroy(&smp);
   }
 }
@@ -284,18 +291,14 @@ static void compare_meshes(int nv, int nt) {
     if (nt > 100000 && v != 4) continue;
     karst_mesh_t m = {nv, nt, xyz, tri, v >= 1 ? label : NULL, v == 2 ? "tunnel_type" : NULL,
                       v >= 3 ? feat : NULL};
-    char ours[256], vtk[256];
-    snprintf(ours, sizeof ours, "%s/mesh_%d_%d.vtp", dir, nt, v);
-    snprintf(vtk, sizeof vtk, "%s/mesh_%d_%d.vtk.vtp", dir, nt, v);
+    char name[64];
+    snprintf(name, sizeof name, "mesh_%d_%d", nt, v);
     if (v == 4) {
       m.tri_label = NULL;
-      assert_int_equal(karst_vtk_write_mesh_arrays(NULL, ours, &m, 2, names, arrays), 0);
-      assert_int_equal(karst_i_vtkref_write_mesh_arrays(NULL, vtk, &m, 2, names, arrays), 0);
+      COMPARE_WRITERS(name, mesh_arrays, &m, 2, names, arrays);
     } else {
-      assert_int_equal(karst_vtk_write_mesh(NULL, ours, &m), KARST_SUCCESS);
-      assert_int_equal(karst_i_vtkref_write_mesh(NULL, vtk, &m), KARST_SUCCESS);
+      COMPARE_WRITERS(name, mesh, &m);
     }
-    assert_same_file(ours, vtk);
   }
   /* polygons of 3 to 6 points, as the geology's surfaces */
   karst_int_t *off = malloc(((size_t)nt + 1) * sizeof *off), *conn = malloc(6 * (size_t)nt * sizeof *conn);
@@ -312,12 +315,9 @@ static void compare_meshes(int nv, int nt) {
   const char *cnames[] = {"feature", "feature_id"};
   const int *carr[] = {feat, id};
   karst_polydata_t pd = {nv, xyz, nt, off, conn, 2, cnames, carr, 2, strs, "geology"};
-  char ours[256], vtk[256];
-  snprintf(ours, sizeof ours, "%s/poly_%d.vtp", dir, nt);
-  snprintf(vtk, sizeof vtk, "%s/poly_%d.vtk.vtp", dir, nt);
-  assert_int_equal(karst_vtk_write_polydata(NULL, ours, &pd), KARST_SUCCESS);
-  assert_int_equal(karst_i_vtkref_write_polydata(NULL, vtk, &pd), KARST_SUCCESS);
-  assert_same_file(ours, vtk);
+  char name[64];
+  snprintf(name, sizeof name, "poly_%d", nt);
+  COMPARE_WRITERS(name, polydata, &pd);
   free(xyz), free(tri), free(label), free(feat), free(id), free(off), free(conn);
 }
 
