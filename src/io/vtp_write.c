@@ -463,16 +463,8 @@ static int put_array(vbuf_t *b, int indent, const karst_i_vtp_array_t *a, int in
   vb_binary(b, raw, n);
   free(copy);
   vb_str(b, "\n");
-  if (!str && a->units) {
-    vb_indent(b, indent + 2);
-    vb_str(b, "<InformationKey name=\"UNITS_LABEL\" location=\"vtkDataArray\">\n");
-    vb_indent(b, indent + 4);
-    vb_attr_text(b, a->units);
-    vb_str(b, "\n");
-    vb_indent(b, indent + 2);
-    vb_str(b, "</InformationKey>\n");
-  }
-  if (!str && a->ncomp > 1) { /* GetRange(-1) caches the norms' range in the array */
+  if (!str && a->ncomp > 1) { /* GetRange(-1) caches the norms' range in the array;
+                                VTK writes this key before UNITS_LABEL */
     vb_indent(b, indent + 2);
     vb_str(b, "<InformationKey name=\"L2_NORM_RANGE\" location=\"vtkDataArray\" length=\"2\">\n");
     for (int i = 0; i < 2; i++) {
@@ -483,6 +475,15 @@ static int put_array(vbuf_t *b, int indent, const karst_i_vtp_array_t *a, int in
       vb_indent(b, indent + 4);
       vb_str(b, "</Value>\n");
     }
+    vb_indent(b, indent + 2);
+    vb_str(b, "</InformationKey>\n");
+  }
+  if (!str && a->units) {
+    vb_indent(b, indent + 2);
+    vb_str(b, "<InformationKey name=\"UNITS_LABEL\" location=\"vtkDataArray\">\n");
+    vb_indent(b, indent + 4);
+    vb_attr_text(b, a->units);
+    vb_str(b, "\n");
     vb_indent(b, indent + 2);
     vb_str(b, "</InformationKey>\n");
   }

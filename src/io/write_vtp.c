@@ -1,7 +1,8 @@
 /* The PolyData files of include/karst/vtk.h (networks, samples, meshes, polygons), written by
  * vtp_write.c without VTK: the same files, byte for byte, as VTK 9.1's writer made from the same
  * data (tests/unit/test_vtp_write.c), the same checks and the same messages. Only the .vti
- * images and the reading of .vtp files still go through VTK (src/io/vtk_shim.cpp). */
+ * images, the .pvd collections and the reading of .vtp files still go through VTK
+ * (src/io/vtk_shim.cpp, a plugin: io/vtk_api_internal.h). */
 #include <inttypes.h>
 #include <math.h>
 #include <stdio.h>

@@ -172,6 +172,19 @@ static void test_networks(void **state) {
       karst_network_destroy(&net);
     }
   }
+  /* a 3-component attribute: its range is of the tuples' norms, and VTK adds the information
+   * key L2_NORM_RANGE after UNITS_LABEL */
+  for (int ints = 0; ints < 2; ints++) {
+    karst_network_t net;
+    make_network(&net, &r, 50, 70, NULL, 0);
+    double *d;
+    assert_int_equal(karst_network_attr_add(&net, KARST_ATTR_NODE, "direction", 3, ints, &d),
+                     KARST_SUCCESS);
+    for (int i = 0; i < 3 * 50; i++)
+      d[i] = ints ? (double)(int)(karst_rng_u64(&r) % 2001) - 1000 : karst_rng_gaussian(&r);
+    compare_network(ints ? "vector_int" : "vector", &net);
+    karst_network_destroy(&net);
+  }
   /* one value per special, alone: its range printed on its own */
   for (size_t k = 0; k < sizeof specials / sizeof specials[0]; k++) {
     karst_network_t net;
