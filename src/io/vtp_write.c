@@ -33,8 +33,11 @@
 /* ------------------------------------------------------------------------ */
 
 /** The buffer is written out when full: a file's memory is that of one array's data, not the
- *  whole file's (a mesh of 19 M triangles writes a 500 MB .vtp). */
-#define VB_CAPACITY ((size_t)1 << 20)
+ *  whole file's (a mesh of 19 M triangles writes a 500 MB .vtp). 64 KiB, as the stream karst
+ *  gave VTK's writer: with 1 MiB, an ensemble of 100 branchwork members on 2 threads peaked at
+ *  194–214 MiB resident, with 64 KiB at 178–188 MiB (VTK's writer: 135–143 MiB; the heap's own
+ *  peak is the same, docs/performance.md). */
+#define VB_CAPACITY ((size_t)1 << 16)
 
 typedef struct {
   char *p;
