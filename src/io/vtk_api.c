@@ -7,6 +7,7 @@
 
 #include "core/library_internal.h"
 #include "io/vtk_reference_internal.h"
+#include "io/vtp_write_internal.h"
 
 #ifndef KARST_VTK_PLUGIN
 #define KARST_VTK_PLUGIN 1

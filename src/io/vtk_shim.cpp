@@ -30,6 +30,7 @@
 #include "karst/version.h"
 #include "karst/vtk.h"
 #include "io/vtk_api_internal.h"
+#include "io/vtp_write_internal.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -79,10 +80,6 @@
 #include <vtkXMLPolyDataWriter.h>
 #include <vtkZLibDataCompressor.h>
 
-/* zlib level of every file written (VTK's default is 5). At level 5 compression took about a
- * tenth of a small run (Karst-Synthesis's rectilinear scene, bench_peers); level 1 makes the
- * files about 3 % larger (looping cave network.vtp 733 -> 751 kB) with the same data. */
-#define KARST_VTK_ZLIB_LEVEL 1
 
 namespace {
 
@@ -477,7 +474,7 @@ karst_error_t write_atomically(karst_ctx_t *ctx, const char *path, StreamedWrite
     writer->UseStream(&os);
     writer->SetDataModeToBinary(); /* inline binary; see the file comment */
     writer->SetCompressorTypeToZLib();
-    writer->SetCompressionLevel(KARST_VTK_ZLIB_LEVEL);
+    writer->SetCompressionLevel(KARST_I_VTP_ZLIB_LEVEL);
     writer->SetHeaderTypeToUInt64(); /* arrays larger than 4 GiB stay readable */
     catcher->watch(writer->GetCompressor());
     int ok = writer->Write();

@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "io/input_internal.h"
+#include "io/vtp_write_internal.h"
 
 /** Largest NumberOfComponents accepted (karst's widest array has a few dozen). */
 #define VTP_MAX_COMPONENTS 1024
@@ -72,9 +73,6 @@ typedef struct {
   size_t app, app_len;
 } vc_t;
 
-/* Implemented in vtk_shim.cpp with VTK's own decompressors. */
-int karst_i_vtk_uncompress(int compressor, const unsigned char *in, size_t in_len,
-                           unsigned char *out, size_t out_len);
 
 /* ------------------------------------------------------------------------ */
 /* Messages                                                                 */

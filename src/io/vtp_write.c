@@ -187,8 +187,8 @@ int karst_i_vtp_format_shortest(double v, char *buf) {
   double d = neg ? -v : v;
   /* The shortest digit string that reads back as d; of two such strings of that length, the
    * nearer. The nearest p-digit string is tried first; at a power of two the interval of
-   * values reading back as d is lopsided, and a neighbour of the nearest may lie within it
-   * when the nearest does not. */
+   * values reading back as d is lopsided, and the neighbour of the nearest on the other side
+   * of d may lie within it when the nearest does not. */
   uint64_t m = 0;
   int e = 0;
   for (int p = 1; p <= 17; p++) {
@@ -200,14 +200,11 @@ int karst_i_vtp_format_shortest(double v, char *buf) {
       m = mn, e = x;
       break;
     }
-    double best = INFINITY;
-    for (int s = -1; s <= 1; s += 2) {
+    /* The interval holds d, and the nearest lies outside it on one side: a neighbour further
+     * out on that side cannot lie inside, so at most one of the two reads back. */
+    for (int s = -1; s <= 1 && !m; s += 2) {
       uint64_t mc = s < 0 ? mn - 1 : mn + 1;
-      if (mc == 0) continue;
-      if (digits_value(mc, x) == d) {
-        double dist = fabs(digits_value(mc, x) - d);
-        if (dist < best) best = dist, m = mc, e = x;
-      }
+      if (mc != 0 && digits_value(mc, x) == d) m = mc, e = x;
     }
     if (m) break;
   }

@@ -14,8 +14,14 @@
 
 #include "karst/common.h"
 
-/** The zlib level of every file karst writes (VTK's default, 5, is about 3 % smaller and
- *  several times slower on the networks' double arrays). */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** The zlib level of every file karst writes, by its writer and by VTK's (src/io/vtk_shim.cpp).
+ *  VTK's default is 5: at level 5 compression took about a tenth of a small run
+ *  (Karst-Synthesis's rectilinear scene, bench_peers); level 1 makes the files about 3 % larger
+ *  (looping cave network.vtp 733 -> 751 kB) with the same data. */
 #define KARST_I_VTP_ZLIB_LEVEL 1
 
 typedef enum {
@@ -68,4 +74,15 @@ karst_error_t karst_i_vtp_write(karst_ctx_t *ctx, const char *path,
  */
 int karst_i_vtp_format_shortest(double v, char *buf);
 
+/**
+ * Decompress one block of a VTK XML file with VTK's own decompressors (compressor 1: zlib,
+ * 2: LZ4, 3: LZMA), for the check of vtp_check.c: through the VTK plugin
+ * (io/vtk_api_internal.h). @return 0 when the block gives exactly @p out_len bytes, else -1.
+ */
+int karst_i_vtk_uncompress(int compressor, const unsigned char *in, size_t in_len,
+                           unsigned char *out, size_t out_len);
+
+#ifdef __cplusplus
+}
+#endif
 #endif
