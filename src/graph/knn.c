@@ -198,35 +198,34 @@ static int cand_less(const cand_t *a, const cand_t *b) {
 }
 
 /* Move the k smallest of v[0 .. m) (k <= m) to v[0 .. k), the k-th smallest
- * to v[k − 1] (Hoare's selection with a median-of-three pivot; the keys are
- * distinct because the indices are). Expected O(m). */
+ * to v[k − 1]: Hoare's selection (median-of-three pivot) with Lomuto's
+ * partition written without branches on the comparison (the swap is always
+ * made, the boundary advances by the comparison's 0 or 1), since at a few
+ * dozen candidates a mispredicted branch per element costs more than the
+ * stores. The keys are distinct because the indices are. Expected O(m). */
 static void select_k(cand_t *v, karst_int_t m, karst_int_t k) {
   karst_int_t lo = 0, hi = m - 1, t = k - 1;
   while (hi - lo >= 16) {
-    karst_int_t mid = lo + (hi - lo) / 2;
-    cand_t a = v[lo], b = v[mid], c = v[hi], p;
-    if (cand_less(&a, &b))
-      p = cand_less(&b, &c) ? b : (cand_less(&a, &c) ? c : a);
+    karst_int_t mid = lo + (hi - lo) / 2, pi;
+    if (cand_less(&v[lo], &v[mid]))
+      pi = cand_less(&v[mid], &v[hi]) ? mid : (cand_less(&v[lo], &v[hi]) ? hi : lo);
     else
-      p = cand_less(&a, &c) ? a : (cand_less(&b, &c) ? c : b);
-    karst_int_t i = lo, j = hi;
-    while (i <= j) {
-      while (cand_less(&v[i], &p))
-        i++;
-      while (cand_less(&p, &v[j]))
-        j--;
-      if (i <= j) {
-        cand_t x = v[i];
-        v[i] = v[j], v[j] = x;
-        i++, j--;
-      }
+      pi = cand_less(&v[lo], &v[hi]) ? lo : (cand_less(&v[mid], &v[hi]) ? hi : mid);
+    cand_t p = v[pi];
+    v[pi] = v[hi], v[hi] = p;
+    karst_int_t j = lo;
+    for (karst_int_t i = lo; i < hi; i++) {
+      cand_t x = v[i];
+      int lt = (x.d < p.d) | ((x.d == p.d) & (x.i < p.i));
+      v[i] = v[j], v[j] = x;
+      j += lt;
     }
-    if (t <= j)
-      hi = j;
-    else if (t >= i)
-      lo = i;
+    v[hi] = v[j], v[j] = p; /* v[lo .. j) < p = v[j] < v(j .. hi] */
+    if (t == j) return;
+    if (t < j)
+      hi = j - 1;
     else
-      return; /* v[t] is the pivot, in place */
+      lo = j + 1;
   }
   for (karst_int_t i = lo + 1; i <= hi; i++) {
     cand_t x = v[i];
@@ -317,8 +316,10 @@ static int gather(const grid_t *g, karst_int_t s, const int64_t cc[3], double T,
         dr[t] = karst_i_dist2_xyz(px[t], py[t], pz[t], q);
       cand_t *out = b->v;
       const int32_t *restrict idx = g->sidx + p0;
-      for (karst_int_t t = 0; t < len; t++)
-        if (dr[t] <= T) out[m].d = dr[t], out[m].i = idx[t], m++;
+      for (karst_int_t t = 0; t < len; t++) { /* written always, kept when within T */
+        out[m].d = dr[t], out[m].i = idx[t];
+        m += dr[t] <= T;
+      }
       if (s >= p0 && s < p1) /* the query itself, at d = 0 <= T: drop it, keeping the order */
         for (karst_int_t t = m - 1;; t--)
           if (out[t].i == g->sidx[s]) {
