@@ -839,6 +839,58 @@ static void task_fill(void *arg, int tid, int nth) {
   }
 }
 
+/* The fill's samples appended to the samples in tile order, each tile's in the order it drew
+ * them (what adding them one by one would give), tiles copied by the threads from a prefix sum
+ * of their counts into storage of large pages grown once. */
+typedef struct append_job {
+  const fill_job_t *J;
+  const size_t *at; /* per tile: its first sample's index in the samples */
+  size_t ntiles;
+  karst_samples_t *s;
+} append_job_t;
+
+static void task_append(void *arg, int tid, int nth) {
+  const append_job_t *A = arg;
+  for (size_t t = A->ntiles * (size_t)tid / (size_t)nth;
+       t < A->ntiles * (size_t)(tid + 1) / (size_t)nth; t++) {
+    const tile_t *T = &A->J->tiles[t];
+    memcpy(A->s->xyz + 3 * A->at[t], A->J->xyz + 3 * T->first, sizeof(double) * 3 * (size_t)T->ns);
+    memset(A->s->source + A->at[t], KARST_SAMPLE_FILL, (size_t)T->ns);
+  }
+}
+
+static karst_error_t append_fill(sampler_t *S, const fill_job_t *J, size_t ntiles) {
+  karst_samples_t *s = S->s;
+  size_t *at = malloc(sizeof(size_t) * (ntiles + 1));
+  if (!at) return karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill samples");
+  size_t n = (size_t)s->n;
+  for (size_t t = 0; t < ntiles; t++)
+    at[t] = n, n += (size_t)J->tiles[t].ns;
+  karst_error_t err = KARST_SUCCESS;
+  if ((double)n > (double)S->sc->sampling.max_samples) {
+    err = too_many_samples(S);
+    goto cleanup;
+  }
+  if (n > (size_t)s->cap) {
+    double *xyz =
+        karst_i_realloc_large(s->xyz, sizeof(double) * 3 * (size_t)s->n, sizeof(double) * 3 * n);
+    unsigned char *so = xyz ? realloc(s->source, n) : NULL;
+    if (xyz) s->xyz = xyz;
+    if (!so) {
+      err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for %zu samples", n);
+      goto cleanup;
+    }
+    s->source = so, s->cap = (karst_int_t)n;
+  }
+  append_job_t A = {J, at, ntiles, s};
+  int nth = S->ctx && S->ctx->nthreads > 0 ? S->ctx->nthreads : 1;
+  karst_i_parallel_run(n - (size_t)s->n < ((size_t)1 << 16) ? 1 : nth, task_append, &A);
+  s->n = (karst_int_t)n;
+cleanup:
+  free(at);
+  return err;
+}
+
 static karst_error_t sample_fill(sampler_t *S) {
   fill_job_t J;
   memset(&J, 0, sizeof J);
@@ -927,11 +979,7 @@ static karst_error_t sample_fill(sampler_t *S) {
       }
     }
   }
-  for (size_t t = 0; t < ntiles; t++)
-    for (int32_t e = 0; e < J.tiles[t].ns; e++)
-      if ((err = add_sample(S, J.xyz + 3 * ((int64_t)J.tiles[t].first + e), KARST_SAMPLE_FILL)) !=
-          KARST_SUCCESS)
-        goto cleanup;
+  err = append_fill(S, &J, ntiles);
   goto cleanup;
 nomem:
   err = karst_set_error(S->ctx, KARST_ENOMEM, "no memory for the fill sampling cells");
@@ -995,23 +1043,66 @@ static uint64_t spread3(uint64_t x) {
   return x;
 }
 
-/* Stable LSD radix sort of (key, idx) pairs on the low 64 bits, 8 per pass;
- * k1, i1 are scratch of the same size. The result ends in k0, i0 (8 passes). */
-static void radix_sort(uint64_t *k0, int32_t *i0, uint64_t *k1, int32_t *i1, karst_int_t m) {
-  for (int shift = 0; shift < 64; shift += 8) {
-    size_t cnt[257] = {0};
-    for (karst_int_t i = 0; i < m; i++)
-      cnt[((k0[i] >> shift) & 255) + 1]++;
-    for (int b = 0; b < 256; b++)
-      cnt[b + 1] += cnt[b];
-    for (karst_int_t i = 0; i < m; i++) {
-      size_t d = cnt[(k0[i] >> shift) & 255]++;
-      k1[d] = k0[i], i1[d] = i0[i];
+/* The Morton order of one run of samples (morton_order), on the threads: the keys, then a
+ * stable LSD radix sort of (key, index) pairs on the low 64 bits, 8 bits per pass, then the
+ * coordinates gathered in that order. Each thread takes a contiguous part of the run; in a pass
+ * it counts its part's digits, and its elements of each digit go after those of the threads
+ * before it, so the sort stays stable and the order does not depend on the thread count. */
+typedef struct morton_job {
+  const karst_scenario_t *sc;
+  const double *src; /* all samples' coordinates */
+  double *dst;       /* the ordered coordinates */
+  uint64_t *key[2];
+  int32_t *idx[2];
+  karst_int_t b, m; /* the run: samples b .. b + m − 1 */
+  size_t *cnt;      /* 256 per thread: digit counts, then each digit's next slot */
+  int phase, shift, cur;
+} morton_job_t;
+
+/* Runs shorter than this are ordered on one thread (starting threads would cost more). */
+#define MORTON_MIN_PARALLEL ((karst_int_t)1 << 16)
+
+enum { MORTON_KEYS, MORTON_COUNT, MORTON_SCATTER, MORTON_GATHER };
+
+static void task_morton(void *arg, int tid, int nth) {
+  morton_job_t *J = arg;
+  const karst_int_t i0 = J->m * tid / nth, i1 = J->m * (tid + 1) / nth;
+  uint64_t *k = J->key[J->cur];
+  int32_t *ix = J->idx[J->cur];
+  size_t *cnt = J->cnt + 256 * (size_t)tid;
+  const int shift = J->shift;
+  switch (J->phase) {
+  case MORTON_KEYS: {
+    const double scale = 2097151.0; /* 2^21 - 1 cells per axis */
+    const double *lo = J->sc->domain_min, *hi = J->sc->domain_max;
+    for (karst_int_t i = i0; i < i1; i++) {
+      const double *p = J->src + 3 * (J->b + i);
+      uint64_t c = 0;
+      for (int a = 0; a < 3; a++) {
+        double f = (p[a] - lo[a]) / (hi[a] - lo[a]);
+        c |= spread3((uint64_t)(karst_i_fmin(karst_i_fmax(f, 0.0), 1.0) * scale)) << a;
+      }
+      k[i] = c, ix[i] = (int32_t)(J->b + i);
     }
-    uint64_t *tk = k0;
-    k0 = k1, k1 = tk;
-    int32_t *ti = i0;
-    i0 = i1, i1 = ti;
+    break;
+  }
+  case MORTON_COUNT:
+    memset(cnt, 0, 256 * sizeof *cnt);
+    for (karst_int_t i = i0; i < i1; i++)
+      cnt[(k[i] >> shift) & 255]++;
+    break;
+  case MORTON_SCATTER: {
+    uint64_t *k1 = J->key[1 - J->cur];
+    int32_t *ix1 = J->idx[1 - J->cur];
+    for (karst_int_t i = i0; i < i1; i++) {
+      size_t d = cnt[(k[i] >> shift) & 255]++;
+      k1[d] = k[i], ix1[d] = ix[i];
+    }
+    break;
+  }
+  default: /* MORTON_GATHER */
+    for (karst_int_t i = i0; i < i1; i++)
+      memcpy(J->dst + 3 * (J->b + i), J->src + 3 * (karst_int_t)ix[i], 3 * sizeof(double));
   }
 }
 
@@ -1019,7 +1110,8 @@ static void radix_sort(uint64_t *k0, int32_t *i0, uint64_t *k1, int32_t *i1, kar
  * the scenario's order) along a Morton (Z-order) curve of the domain box.
  * Dart throwing visits cells in a random order; a space-filling order makes
  * the neighbour search, the graph rows and the paths stage cache-friendly.
- * Stable radix sort (ties keep the draw order): O(n), deterministic. */
+ * Stable radix sort (ties keep the draw order): O(n), deterministic, the same
+ * on any number of threads (task_morton). */
 static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc,
                                   karst_samples_t *s) {
   karst_int_t n = s->n;
@@ -1028,31 +1120,42 @@ static karst_error_t morton_order(karst_ctx_t *ctx, const karst_scenario_t *sc,
   /* The ordered coordinates go to a new array of large pages: the searches read them at random
    * (the A* heuristic), and the grown array they come from is not. */
   double *xyz = karst_i_alloc_large(sizeof(double) * 3 * (size_t)(n > 0 ? n : 1));
-  if (!key || !idx || !xyz) {
-    free(key), free(idx), free(xyz);
+  int nth = ctx && ctx->nthreads > 0 ? ctx->nthreads : 1;
+  if (nth > KARST_I_MAX_THREADS) nth = KARST_I_MAX_THREADS;
+  size_t *cnt = malloc(sizeof(size_t) * 256 * (size_t)nth);
+  if (!key || !idx || !xyz || !cnt) {
+    free(key), free(idx), free(xyz), free(cnt);
     return karst_set_error(ctx, KARST_ENOMEM, "no memory to order %lld samples", (long long)n);
   }
-  const double scale = 2097151.0; /* 2^21 - 1 cells per axis */
   memcpy(xyz, s->xyz, sizeof(double) * 3 * (size_t)s->n_key_points);
+  morton_job_t J = {sc, s->xyz, xyz, {key, key + n}, {idx, idx + n}, 0, 0, cnt, 0, 0, 0};
   for (karst_int_t b = s->n_key_points; b < n;) {
     karst_int_t e = b;
     while (e < n && s->source[e] == s->source[b])
       e++;
-    karst_int_t m = e - b;
-    for (karst_int_t i = 0; i < m; i++) {
-      const double *p = s->xyz + 3 * (b + i);
-      uint64_t c = 0;
-      for (int a = 0; a < 3; a++) {
-        double f = (p[a] - sc->domain_min[a]) / (sc->domain_max[a] - sc->domain_min[a]);
-        c |= spread3((uint64_t)(karst_i_fmin(karst_i_fmax(f, 0.0), 1.0) * scale)) << a;
-      }
-      key[i] = c, idx[i] = (int32_t)(b + i);
+    J.b = b, J.m = e - b, J.cur = 0;
+    const int T = J.m < MORTON_MIN_PARALLEL ? 1 : nth;
+    J.phase = MORTON_KEYS;
+    karst_i_parallel_run(T, task_morton, &J);
+    for (J.shift = 0; J.shift < 64; J.shift += 8) {
+      J.phase = MORTON_COUNT;
+      karst_i_parallel_run(T, task_morton, &J);
+      size_t at = 0; /* digit by digit, thread by thread: each (thread, digit)'s first slot */
+      for (int d = 0; d < 256; d++)
+        for (int t = 0; t < T; t++) {
+          size_t c = cnt[256 * (size_t)t + (size_t)d];
+          cnt[256 * (size_t)t + (size_t)d] = at;
+          at += c;
+        }
+      J.phase = MORTON_SCATTER;
+      karst_i_parallel_run(T, task_morton, &J);
+      J.cur = 1 - J.cur;
     }
-    radix_sort(key, idx, key + n, idx + n, m);
-    for (karst_int_t i = 0; i < m; i++)
-      memcpy(xyz + 3 * (b + i), s->xyz + 3 * (karst_int_t)idx[i], 3 * sizeof(double));
+    J.phase = MORTON_GATHER; /* 8 passes: the sorted pairs are back in key[0], idx[0] */
+    karst_i_parallel_run(T, task_morton, &J);
     b = e;
   }
+  free(cnt);
   free(key), free(idx), free(s->xyz);
   s->xyz = xyz;
   /* The capacity is now that of the new array (later additions grow it again). */

@@ -4,6 +4,7 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -256,6 +257,55 @@ static void test_sampling_threads(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* The Morton key of p in the domain box as docs/generation.md and sampling.c define it (each
+ * coordinate quantised to 21 bits, x's bit b at bit 3b, y's at 3b + 1, z's at 3b + 2), written
+ * bit by bit here: an independent form of the sampler's spread-and-or. */
+static uint64_t morton_key(const karst_scenario_t *sc, const double p[3]) {
+  uint64_t key = 0;
+  for (int a = 0; a < 3; a++) {
+    double f = (p[a] - sc->domain_min[a]) / (sc->domain_max[a] - sc->domain_min[a]);
+    f = f < 0 ? 0 : (f > 1 ? 1 : f);
+    uint64_t q = (uint64_t)(f * 2097151.0);
+    for (int b = 0; b < 21; b++)
+      key |= ((q >> b) & 1) << (3 * b + a);
+  }
+  return key;
+}
+
+/* Runs of more than 65 536 samples of one source are put in Morton order on the threads (a
+ * radix sort whose passes split the run between them): 1 and 3 threads give the same samples,
+ * and within each source's run the keys, recomputed independently, never decrease. */
+static void test_sampling_morton_threads(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  scenario(&sc);
+  sc.sampling.fill_radius = 1.05;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_samples_t s[2];
+  const int threads[2] = {1, 3};
+  for (int t = 0; t < 2; t++) {
+    karst_rng_t rng;
+    karst_rng_init(&rng, 5, 0);
+    karst_samples_init(&s[t]);
+    ctx.nthreads = threads[t];
+    assert_int_equal(T_sampling_run(&ctx, &sc, &rng, &s[t]), KARST_SUCCESS);
+  }
+  assert_int_equal(s[0].n, s[1].n);
+  assert_memory_equal(s[0].xyz, s[1].xyz, sizeof(double) * 3 * (size_t)s[0].n);
+  assert_memory_equal(s[0].source, s[1].source, (size_t)s[0].n);
+  karst_int_t fill = 0;
+  for (karst_int_t i = s[0].n_key_points; i < s[0].n; i++) {
+    fill += s[0].source[i] == KARST_SAMPLE_FILL;
+    if (i > s[0].n_key_points && s[0].source[i] == s[0].source[i - 1])
+      assert_true(morton_key(&sc, s[0].xyz + 3 * (i - 1)) <= morton_key(&sc, s[0].xyz + 3 * i));
+  }
+  assert_true(fill > 65536); /* the threaded sort ran */
+  for (int t = 0; t < 2; t++)
+    karst_samples_destroy(&s[t]);
+  karst_scenario_destroy(&sc);
+}
+
 /* Dipping horizon under a tilted grid terrain; no key points; water table
  * below the box (no water-table samples); prescribed path samples. */
 static void test_sampling_dip_grid_prescribed(void **state) {
@@ -382,6 +432,7 @@ int main(void) {
       cmocka_unit_test(test_sampling_refine),
       cmocka_unit_test(test_sampling_determinism),
       cmocka_unit_test(test_sampling_threads),
+      cmocka_unit_test(test_sampling_morton_threads),
       cmocka_unit_test(test_sampling_dip_grid_prescribed),
       cmocka_unit_test(test_sampling_degenerate),
   };
