@@ -80,7 +80,6 @@
 #include <vtkXMLPolyDataWriter.h>
 #include <vtkZLibDataCompressor.h>
 
-
 namespace {
 
 /* VTK creates its registry of object factories on the first object made (vtkObjectFactory::Init),

@@ -48,16 +48,22 @@ typedef struct {
   int err;
 } vbuf_t;
 
-static void vb_flush(vbuf_t *b) {
-  for (size_t at = 0; at < b->n && !b->failed;) {
-    ssize_t w = pwrite(b->fd, b->p + at, b->n - at, (off_t)(b->off + at));
+/* Write @p n bytes at file offset @p pos, retrying short writes; a failure sets b->failed. */
+static void vb_write_at(vbuf_t *b, const char *s, size_t n, uint64_t pos) {
+  while (n > 0 && !b->failed) {
+    ssize_t w = pwrite(b->fd, s, n, (off_t)pos);
     if (w < 0 && errno == EINTR) continue;
     if (w <= 0) {
       b->failed = 2, b->err = w < 0 ? errno : EIO;
       return;
     }
-    at += (size_t)w;
+    s += w, n -= (size_t)w, pos += (uint64_t)w;
   }
+}
+
+static void vb_flush(vbuf_t *b) {
+  vb_write_at(b, b->p, b->n, b->off);
+  if (b->failed) return;
   b->off += b->n;
   b->n = 0;
 }
@@ -94,20 +100,12 @@ static void vb_put(vbuf_t *b, const char *s, size_t n) {
 /* Overwrite @p n bytes at file offset @p pos (written earlier: in the file, in the buffer, or
  * partly in each). */
 static void vb_patch(vbuf_t *b, uint64_t pos, const char *s, size_t n) {
-  while (n > 0 && !b->failed) {
-    if (pos >= b->off) {
-      memcpy(b->p + (pos - b->off), s, n);
-      return;
-    }
+  if (pos < b->off) { /* the part already in the file */
     size_t k = (size_t)(b->off - pos) < n ? (size_t)(b->off - pos) : n;
-    ssize_t w = pwrite(b->fd, s, k, (off_t)pos);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) {
-      b->failed = 2, b->err = w < 0 ? errno : EIO;
-      return;
-    }
-    s += w, n -= (size_t)w, pos += (uint64_t)w;
+    vb_write_at(b, s, k, pos);
+    s += k, n -= k, pos += k;
   }
+  if (n > 0 && !b->failed) memcpy(b->p + (pos - b->off), s, n);
 }
 
 static void vb_str(vbuf_t *b, const char *s) { vb_put(b, s, strlen(s)); }
