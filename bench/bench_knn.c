@@ -62,6 +62,14 @@ static void print_stage(const char *name, const marks_t *m, int a, int b) {
          m->cpu[b] - m->cpu[a]);
 }
 
+/* The number arc @p a of row @p v is coded as: for the row's first arc the zig-zag difference of
+ * its head from v, for the others the gap from the previous head less one (rows are sorted). */
+static uint64_t arc_code(const karst_graph_t *g, karst_int_t v, karst_int_t a) {
+  if (a > g->offsets[v]) return (uint64_t)(g->adj[a] - g->adj[a - 1] - 1);
+  int64_t d = (int64_t)g->adj[a] - v;
+  return d < 0 ? (uint64_t)(-2 * d - 1) : (uint64_t)(2 * d);
+}
+
 /* What the neighbour indices would take delta-coded (docs/performance.md, "Memory at scale"):
  * each row's sorted indices as the zig-zag difference of the first from the row's vertex, then
  * the gaps minus one, in LEB128 (7 bits a byte, the high bit: more follow). Prints the bytes per
@@ -75,26 +83,26 @@ static void adjacency_figures(const karst_graph_t *g, char *line, size_t cap) {
     for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
       int64_t d = (int64_t)g->adj[a] - v;
       near16 += d >= -32768 && d < 32768;
-      uint64_t x = a == g->offsets[v] ? (d < 0 ? (uint64_t)(-2 * d - 1) : (uint64_t)(2 * d))
-                                      : (uint64_t)(g->adj[a] - g->adj[a - 1] - 1);
       size_t nb = 1;
-      while (x >= 128)
-        x >>= 7, nb++;
+      for (uint64_t x = arc_code(g, v, a); x >= 128; x >>= 7)
+        nb++;
       bytes += nb, one_byte += nb == 1;
     }
-  unsigned char *code = malloc(bytes + 1);
-  if (!code || g->n_arcs == 0) {
-    free(code);
+  if (g->n_arcs == 0) {
+    snprintf(line, cap, "  %-22s no arcs\n", "neighbour indices");
+    return;
+  }
+  unsigned char *code = malloc(bytes);
+  if (!code) {
+    snprintf(line, cap, "  %-22s not coded: no memory for %zu bytes\n", "neighbour indices", bytes);
     return;
   }
   unsigned char *c = code;
   for (karst_int_t v = 0; v < g->n; v++)
     for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      int64_t d = (int64_t)g->adj[a] - v;
-      uint64_t x = a == g->offsets[v] ? (d < 0 ? (uint64_t)(-2 * d - 1) : (uint64_t)(2 * d))
-                                      : (uint64_t)(g->adj[a] - g->adj[a - 1] - 1);
-      while (x >= 128)
-        *c++ = (unsigned char)(x | 128), x >>= 7;
+      uint64_t x = arc_code(g, v, a);
+      for (; x >= 128; x >>= 7)
+        *c++ = (unsigned char)(x | 128);
       *c++ = (unsigned char)x;
     }
   double t32 = 1e300, tcode = 1e300;
