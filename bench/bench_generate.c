@@ -63,16 +63,12 @@ static void bench_keypoint_methods(int nx, int ny, int nz, int K) {
     xyz[3 * i + 1] = 5.0 * (y + 0.3 * (2 * karst_rng_uniform(&r) - 1));
     xyz[3 * i + 2] = 5.0 * (z + 0.3 * (2 * karst_rng_uniform(&r) - 1));
   }
-  karst_graph_t g;
-  memset(&g, 0, sizeof g);
-  g.n = n;
-  g.xyz = xyz;
-  g.offsets = malloc((size_t)(n + 1) * sizeof *g.offsets);
-  g.adj = malloc((size_t)n * 26 * sizeof *g.adj);
-  g.cost = malloc((size_t)n * 26 * sizeof *g.cost);
+  karst_int_t *offsets = malloc((size_t)(n + 1) * sizeof *offsets);
+  int32_t *adj = malloc((size_t)n * 26 * sizeof *adj);
+  karst_arc_cost_t *cost = malloc((size_t)n * 26 * sizeof *cost);
   karst_int_t a = 0;
   for (karst_int_t i = 0; i < n; i++) {
-    g.offsets[i] = a;
+    offsets[i] = a;
     karst_int_t x = i % nx, y = (i / nx) % ny, z = i / ((karst_int_t)nx * ny);
     for (int dz = -1; dz <= 1; dz++)
       for (int dy = -1; dy <= 1; dy++)
@@ -88,13 +84,19 @@ static void bench_keypoint_methods(int nx, int ny, int nz, int K) {
           uint64_t lo = i < j ? (uint64_t)i : (uint64_t)j, hi = i < j ? (uint64_t)j : (uint64_t)i;
           karst_rng_t h;
           karst_rng_init(&h, lo, hi);
-          g.adj[a] = j;
-          g.cost[a] = sqrt(ex * ex + ey * ey + ez * ez) * (1 + karst_rng_uniform(&h));
+          adj[a] = (int32_t)j;
+          cost[a] = (karst_arc_cost_t)(sqrt(ex * ex + ey * ey + ez * ez) * (1 + karst_rng_uniform(&h)));
           a++;
         }
   }
-  g.offsets[n] = a;
-  g.n_arcs = a;
+  offsets[n] = a;
+  karst_graph_t g;
+  karst_graph_init(&g);
+  if (karst_graph_from_rows(&ctx, &g, n, xyz, offsets, adj, cost) != KARST_SUCCESS) {
+    fprintf(stderr, "bench_generate: %s\n", ctx.errmsg);
+    exit(1);
+  }
+  free(offsets), free(adj), free(cost);
   karst_int_t *keys = malloc((size_t)K * sizeof *keys);
   for (int k = 0; k < K; k++)
     keys[k] = (karst_int_t)karst_rng_below(&r, (uint64_t)n);
@@ -120,7 +122,8 @@ static void bench_keypoint_methods(int nx, int ny, int nz, int K) {
          "%.3f s; max rel. diff %.1e\n",
          (long long)n, (long long)g.n_arcs, K, t1 - t0, t2 - t1, (t2 - t1) / (t1 - t0), t3 - t2,
          t4 - t3, maxdiff);
-  free(d1), free(d2), free(keys), free(xyz), free(g.offsets), free(g.adj), free(g.cost);
+  free(d1), free(d2), free(keys), free(xyz);
+  karst_graph_destroy(&g);
 }
 
 /* Generate @p runs times (the machine is shared: the fastest run is the least disturbed one;

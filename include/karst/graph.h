@@ -84,11 +84,42 @@ typedef struct karst_graph {
   karst_int_t n;          /**< vertices */
   karst_int_t n_arcs;     /**< directed arcs = 2 * undirected edges */
   const double *xyz;      /**< vertex positions (3 * n), borrowed from the samples */
-  karst_int_t *offsets;   /**< n + 1 */
-  int32_t *adj;           /**< n_arcs neighbour indices, 32 bits (the graph builders refuse
-                               n >= 2^31 - 1 vertices: half the memory and cache of 64-bit ones) */
+  karst_int_t *offsets;   /**< n + 1: the arcs of v are offsets[v] .. offsets[v+1]-1 */
+  int32_t *adj;           /**< n_arcs neighbour indices (read them with karst_graph_arcs) */
   karst_arc_cost_t *cost; /**< n_arcs, single precision (above) */
 } karst_graph_t;
+
+/** Reads the neighbours of one vertex in row order (karst_graph_arcs, karst_arc_next). */
+typedef struct karst_arc_reader {
+  const int32_t *p;
+} karst_arc_reader_t;
+
+/** A reader of the neighbours of @p v: the i-th call of karst_arc_next returns the head of arc
+ *  offsets[v] + i. O(1). */
+static inline karst_arc_reader_t karst_graph_arcs(const karst_graph_t *g, karst_int_t v) {
+  karst_arc_reader_t r = {g->adj + g->offsets[v]};
+  return r;
+}
+
+/** The head of the next arc of the row (call it once per arc, in order). O(1). */
+static inline karst_int_t karst_arc_next(karst_arc_reader_t *r) {
+  return *r->p++;
+}
+
+/** The arc v -> w of @p g (its index into cost), or -1 when there is none. O(degree of v). */
+karst_int_t karst_graph_find_arc(const karst_graph_t *g, karst_int_t v, karst_int_t w);
+
+/**
+ * Make @p g the graph with the given rows: the arcs of v are heads adj[offsets[v] ..
+ * offsets[v+1]-1] with costs cost[...], kept in the order given (sorted rows store smallest).
+ * The arrays are copied. Every head must be in [0, n).
+ * @return KARST_SUCCESS, KARST_EINVAL (n < 0 or >= 2^31 - 1, offsets not nondecreasing from 0,
+ *         a head out of range), KARST_ENOMEM; @p g is unchanged on failure.
+ * Time complexity: O(n + arcs).
+ */
+karst_error_t karst_graph_from_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
+                                    const double *xyz, const karst_int_t *offsets,
+                                    const int32_t *adj, const karst_arc_cost_t *cost);
 
 void karst_graph_init(karst_graph_t *g);
 void karst_graph_destroy(karst_graph_t *g);

@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "graph/graph_internal.h"
 #include "karst/conditioning.h"
 
 typedef struct {
@@ -65,22 +66,9 @@ karst_error_t karst_conditioning_add_legs(karst_ctx_t *ctx, const karst_scenario
   qsort(extra, (size_t)m, sizeof *extra, cmp_arc);
   /* Count the arcs that are new (not in the row already); repeats keep their first, cheapest. */
   karst_int_t n_new = 0;
-  for (karst_int_t i = 0, k = 0; i < m; i++) {
+  for (karst_int_t i = 0; i < m; i++) {
     if (i > 0 && extra[i].u == extra[i - 1].u && extra[i].v == extra[i - 1].v) continue;
-    karst_int_t u = extra[i].u;
-    const int32_t *row = g->adj + g->offsets[u];
-    karst_int_t deg = g->offsets[u + 1] - g->offsets[u];
-    /* rows are sorted: binary search */
-    karst_int_t lo = 0, hi = deg;
-    while (lo < hi) {
-      karst_int_t mid = (lo + hi) / 2;
-      if (row[mid] < extra[i].v)
-        lo = mid + 1;
-      else
-        hi = mid;
-    }
-    if (!(lo < deg && row[lo] == extra[i].v)) n_new++;
-    (void)k;
+    if (karst_graph_find_arc(g, extra[i].u, extra[i].v) < 0) n_new++;
   }
   offsets = malloc((size_t)(g->n + 1) * sizeof *offsets);
   adj = malloc((size_t)(g->n_arcs + n_new > 0 ? g->n_arcs + n_new : 1) * sizeof *adj);
@@ -94,37 +82,38 @@ karst_error_t karst_conditioning_add_legs(karst_ctx_t *ctx, const karst_scenario
   for (karst_int_t u = 0; u < g->n; u++) {
     offsets[u] = w;
     karst_int_t a = g->offsets[u], end = g->offsets[u + 1];
+    /* The row's heads, read in order: head is that of arc a while a < end. */
+    karst_arc_reader_t rd = karst_graph_arcs(g, u);
+    karst_int_t head = a < end ? karst_arc_next(&rd) : -1;
     while (a < end || (x < m && extra[x].u == u)) {
       if (x < m && extra[x].u == u && x > 0 && extra[x - 1].u == u &&
           extra[x - 1].v == extra[x].v) {
         x++; /* a repeated leg */
         continue;
       }
-      int take_extra = x < m && extra[x].u == u && (a >= end || extra[x].v <= g->adj[a]);
+      int take_extra = x < m && extra[x].u == u && (a >= end || extra[x].v <= head);
       if (take_extra) {
         adj[w] = (int32_t)extra[x].v;
         /* Rounded up: a leg costs exactly the A* bound per metre times its length, and the
          * heuristic must not exceed it by the rounding of the store. */
         cost[w] = karst_arc_cost_round(extra[x].cost);
         if ((double)cost[w] < extra[x].cost) cost[w] = nextafterf(cost[w], INFINITY);
-        if (a < end && g->adj[a] == extra[x].v) a++; /* the k-NN arc: replaced */
+        if (a < end && head == extra[x].v) { /* the k-NN arc: replaced */
+          a++;
+          head = a < end ? karst_arc_next(&rd) : -1;
+        }
         x++;
       } else {
-        adj[w] = g->adj[a];
+        adj[w] = (int32_t)head;
         cost[w] = g->cost[a];
         a++;
+        head = a < end ? karst_arc_next(&rd) : -1;
       }
       w++;
     }
   }
   offsets[g->n] = w;
-  free(g->offsets);
-  free(g->adj);
-  free(g->cost);
-  g->offsets = offsets;
-  g->adj = adj;
-  g->cost = cost;
-  g->n_arcs = w;
+  err = karst_i_graph_take_rows(ctx, g, g->n, g->xyz, offsets, adj, cost);
   offsets = NULL;
   adj = NULL;
   cost = NULL;

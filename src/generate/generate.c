@@ -75,8 +75,9 @@ static int count_pieces(const karst_graph_t *g, karst_int_t n_keys, karst_int_t 
     comp[s] = c;
     while (head < tail) {
       karst_int_t u = queue[head++];
+      karst_arc_reader_t rd = karst_graph_arcs(g, u);
       for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++) {
-        karst_int_t w = g->adj[a];
+        karst_int_t w = karst_arc_next(&rd);
         if (comp[w] < 0) {
           comp[w] = c;
           queue[tail++] = w;

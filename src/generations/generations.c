@@ -44,19 +44,6 @@ void karst_inherited_destroy(karst_inherited_t *h) {
   memset(h, 0, sizeof *h);
 }
 
-/* Index of arc u -> w in the sorted row of u, or -1. O(log degree). */
-static karst_int_t find_arc(const karst_graph_t *g, karst_int_t u, karst_int_t w) {
-  karst_int_t lo = g->offsets[u], hi = g->offsets[u + 1];
-  while (lo < hi) {
-    karst_int_t mid = lo + (hi - lo) / 2;
-    if (g->adj[mid] < w)
-      lo = mid + 1;
-    else
-      hi = mid;
-  }
-  return lo < g->offsets[u + 1] && g->adj[lo] == w ? lo : -1;
-}
-
 static int push_arc(karst_inherited_t *h, karst_int_t arc, double cost) {
   if (h->n == h->cap) {
     karst_int_t cap = h->cap ? 2 * h->cap : 1024;
@@ -95,7 +82,7 @@ karst_error_t karst_generation_discount(karst_ctx_t *ctx, karst_graph_t *g,
     karst_int_t u = sk->vertex_of_node[net->edges[2 * e]],
                 w = sk->vertex_of_node[net->edges[2 * e + 1]];
     for (int dir = 0; dir < 2; dir++) {
-      karst_int_t a = dir ? find_arc(g, w, u) : find_arc(g, u, w);
+      karst_int_t a = dir ? karst_graph_find_arc(g, w, u) : karst_graph_find_arc(g, u, w);
       if (a < 0) continue;
       if (push_arc(saved, a, g->cost[a]))
         return karst_set_error(ctx, KARST_ENOMEM, "generations: out of memory");

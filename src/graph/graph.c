@@ -30,6 +30,63 @@ karst_int_t karst_graph_edge_count(const karst_graph_t *g) {
   return g->n_arcs / 2;
 }
 
+karst_int_t karst_graph_find_arc(const karst_graph_t *g, karst_int_t v, karst_int_t w) {
+  if (v < 0 || v >= g->n) return -1;
+  karst_arc_reader_t r = karst_graph_arcs(g, v);
+  for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++)
+    if (karst_arc_next(&r) == w) return a;
+  return -1;
+}
+
+karst_error_t karst_graph_from_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
+                                    const double *xyz, const karst_int_t *offsets,
+                                    const int32_t *adj, const karst_arc_cost_t *cost) {
+  if (n < 0 || n >= INT32_MAX)
+    return karst_set_error(ctx, KARST_EINVAL,
+                           "graph: %lld vertices; from 0 to 2^31 - 2 are supported", (long long)n);
+  if (offsets[0] != 0)
+    return karst_set_error(ctx, KARST_EINVAL, "graph: the first row starts at arc %lld, not 0",
+                           (long long)offsets[0]);
+  for (karst_int_t v = 0; v < n; v++) {
+    if (offsets[v + 1] < offsets[v])
+      return karst_set_error(ctx, KARST_EINVAL, "graph: row %lld ends (%lld) before it starts (%lld)",
+                             (long long)v, (long long)offsets[v + 1], (long long)offsets[v]);
+    for (karst_int_t a = offsets[v]; a < offsets[v + 1]; a++)
+      if (adj[a] < 0 || adj[a] >= n)
+        return karst_set_error(ctx, KARST_EINVAL,
+                               "graph: arc %lld of vertex %lld has head %lld, outside [0, %lld)",
+                               (long long)a, (long long)v, (long long)adj[a], (long long)n);
+  }
+  karst_int_t *o = malloc(sizeof(karst_int_t) * ((size_t)n + 1));
+  int32_t *h = malloc(sizeof(int32_t) * ((size_t)offsets[n] + 1));
+  karst_arc_cost_t *c = malloc(sizeof *c * ((size_t)offsets[n] + 1));
+  if (!o || !h || !c) {
+    free(o), free(h), free(c);
+    return karst_set_error(ctx, KARST_ENOMEM, "no memory for a graph of %lld vertices and %lld arcs",
+                           (long long)n, (long long)offsets[n]);
+  }
+  memcpy(o, offsets, sizeof(karst_int_t) * ((size_t)n + 1));
+  if (offsets[n] > 0) {
+    memcpy(h, adj, sizeof(int32_t) * (size_t)offsets[n]);
+    memcpy(c, cost, sizeof *c * (size_t)offsets[n]);
+  }
+  return karst_i_graph_take_rows(ctx, g, n, xyz, o, h, c);
+}
+
+karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
+                                      const double *xyz, karst_int_t *offsets, int32_t *adj,
+                                      karst_arc_cost_t *cost) {
+  (void)ctx;
+  karst_graph_destroy(g);
+  g->n = n;
+  g->xyz = xyz;
+  g->n_arcs = offsets[n];
+  g->offsets = offsets;
+  g->adj = adj;
+  g->cost = cost;
+  return KARST_SUCCESS;
+}
+
 /* Rows handed to a thread at a time (interleaved, so the split is static and
  * the result does not depend on scheduling). */
 #define ROW_BLOCK 512

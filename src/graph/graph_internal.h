@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "karst/common.h"
+#include "karst/graph.h"
 
 /**
  * Squared Euclidean distance |a − b|², always evaluated as ((dx² + dy²) + dz²) with
@@ -24,6 +25,16 @@ static inline double karst_i_dist2_xyz(double ax, double ay, double az, const do
 static inline double karst_i_dist2(const double *a, const double *b) {
   return karst_i_dist2_xyz(a[0], a[1], a[2], b);
 }
+
+/**
+ * Make @p g the graph with rows (offsets, adj, cost), as karst_graph_from_rows, taking the three
+ * arrays (malloc'd; adj and cost of offsets[n] entries): they belong to @p g or are freed, on
+ * failure too. The rows are not checked. @p g is unchanged on failure.
+ * @return KARST_SUCCESS, KARST_ENOMEM.
+ */
+karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
+                                      const double *xyz, karst_int_t *offsets, int32_t *adj,
+                                      karst_arc_cost_t *cost);
 
 /** (d, i) < (e, j) in the lexicographic order that breaks distance ties by index. */
 static inline int karst_i_knn_less(double d, int32_t i, double e, int32_t j) {

@@ -313,11 +313,14 @@ static void tabulate_worker(void *arg, int tid, int nthreads) {
   const tabulate_t *t = arg;
   const karst_graph_t *g = t->g;
   const karst_int_t lo = g->n * tid / nthreads, hi = g->n * (tid + 1) / nthreads;
-  for (karst_int_t v = lo; v < hi; v++)
+  for (karst_int_t v = lo; v < hi; v++) {
+    karst_arc_reader_t rd = karst_graph_arcs(g, v);
     for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      t->fwd[a] = (karst_arc_cost_t)route_cost(t->r, g->cost[a], v, g->adj[a]);
-      t->bwd[a] = (karst_arc_cost_t)route_cost(t->r, g->cost[a], g->adj[a], v);
+      karst_int_t w = karst_arc_next(&rd);
+      t->fwd[a] = (karst_arc_cost_t)route_cost(t->r, g->cost[a], v, w);
+      t->bwd[a] = (karst_arc_cost_t)route_cost(t->r, g->cost[a], w, v);
     }
+  }
 }
 
 void karst_route_tabulate(const karst_ctx_t *ctx, const karst_graph_t *g, const karst_route_t *r,
@@ -358,11 +361,11 @@ typedef struct {
 __attribute__((always_inline))
 #endif
 static inline void
-prefetch_arcs(const karst_int_t *off, const int32_t *adj, const karst_arc_cost_t *cost,
-              karst_int_t u) {
-  const char *pa = (const char *)(adj + off[u]), *pc = (const char *)(cost + off[u]);
+prefetch_arcs(const karst_graph_t *g, const karst_arc_cost_t *cost, karst_int_t u) {
+  const karst_int_t *off = g->offsets;
+  const char *pa = (const char *)(g->adj + off[u]), *pc = (const char *)(cost + off[u]);
   size_t deg = (size_t)(off[u + 1] - off[u]);
-  for (size_t b = 0; b < deg * sizeof *adj; b += 64)
+  for (size_t b = 0; b < deg * sizeof *g->adj; b += 64)
     __builtin_prefetch(pa + b);
   for (size_t b = 0; b < deg * sizeof *cost; b += 64)
     __builtin_prefetch(pc + b);
@@ -383,7 +386,6 @@ run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
   const double lb = o->lb;
   const int astar = target >= 0 && lb > 0 && g->xyz;
   const karst_int_t *restrict off = g->offsets;
-  const int32_t *restrict adj = g->adj;
   const karst_arc_cost_t *restrict cost = g->cost;
   const unsigned char *blocked = o->blocked, *noexpand = o->noexpand, *is_target = o->is_target;
   const karst_route_t *route = o->route;
@@ -427,9 +429,10 @@ run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
       if (o->stop_after > 0 && ++found >= o->stop_after) break;
     }
     if (noexpand && noexpand[v] && gv > 0.0) continue; /* a start (cost 0) is expanded */
-    if (s->hn > 0) prefetch_arcs(off, adj, arc_cost, s->heap[0].v);
+    if (s->hn > 0) prefetch_arcs(g, arc_cost, s->heap[0].v);
+    karst_arc_reader_t rd = karst_graph_arcs(g, v);
     for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
-      karst_int_t w = adj[a];
+      karst_int_t w = karst_arc_next(&rd);
       double c = arc_cost[a];
       if (!(c < INFINITY) || (with_blocked && blocked[w])) continue;
       if (with_route) c = backward ? route_cost(route, c, w, v) : route_cost(route, c, v, w);
@@ -636,7 +639,6 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
   const double *dn = reuse->dist_to_net;
   const karst_route_t *route = reuse->route;
   const karst_int_t *restrict off = g->offsets;
-  const int32_t *restrict adj = g->adj;
   /* Tabulated routed costs replace the base costs and the formula (karst_route_tabulate). */
   const karst_arc_cost_t *restrict cost = route && route->arc_fwd ? route->arc_fwd : g->cost;
   if (route && route->arc_fwd) route = NULL;
@@ -661,10 +663,11 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
                                (long long)source);
     }
     if (v == target) break;
-    if (s->hn > 0) prefetch_arcs(off, adj, cost, s->heap[0].v);
+    if (s->hn > 0) prefetch_arcs(g, cost, s->heap[0].v);
     const unsigned char *vflag = flag && !(dn && dn[v] > 0.0) ? flag : NULL;
+    karst_arc_reader_t rd = karst_graph_arcs(g, v);
     for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
-      karst_int_t w = adj[a];
+      karst_int_t w = karst_arc_next(&rd);
       double c = cost[a];
       if (!(c < INFINITY) || (closed && closed[w] && w != target)) continue;
       if (route) c = route_cost(route, c, v, w);
@@ -723,9 +726,10 @@ karst_error_t karst_paths_lower_distances(karst_ctx_t *ctx, karst_search_t *s,
   }
   while (s->hn > 0) {
     heap_entry_t e = heap_pop(s);
-    if (s->hn > 0) prefetch_arcs(g->offsets, g->adj, g->cost, s->heap[0].v);
+    if (s->hn > 0) prefetch_arcs(g, g->cost, s->heap[0].v);
+    karst_arc_reader_t rd = karst_graph_arcs(g, e.v);
     for (karst_int_t a = g->offsets[e.v]; a < g->offsets[e.v + 1]; a++) {
-      karst_int_t w = g->adj[a];
+      karst_int_t w = karst_arc_next(&rd);
       double nd = e.key + g->cost[a];
       if (nd < dist[w]) {
         dist[w] = nd;
@@ -938,8 +942,9 @@ karst_error_t karst_paths_tree_path(karst_ctx_t *ctx, const karst_graph_t *g,
     karst_int_t p = pred_row[u];
     if (p >= 0) {
       double best = INFINITY;
+      karst_arc_reader_t rd = karst_graph_arcs(g, p);
       for (karst_int_t a = g->offsets[p]; a < g->offsets[p + 1]; a++)
-        if (g->adj[a] == u && g->cost[a] < best) best = g->cost[a];
+        if (karst_arc_next(&rd) == u && g->cost[a] < best) best = g->cost[a];
       cost += best;
     }
   }
@@ -1185,8 +1190,9 @@ karst_error_t karst_paths_row_path(karst_ctx_t *ctx, const karst_graph_t *g,
     karst_int_t w = succ_row[u];
     if (w >= 0) {
       double best = INFINITY;
+      karst_arc_reader_t rd = karst_graph_arcs(g, u);
       for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++)
-        if (g->adj[a] == w) {
+        if (karst_arc_next(&rd) == w) {
           double c = route ? route_cost(route, g->cost[a], u, w) : g->cost[a];
           if (c < best) best = c;
         }

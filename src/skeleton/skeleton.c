@@ -163,8 +163,9 @@ static karst_error_t node_for(karst_ctx_t *ctx, karst_skeleton_t *sk, const kars
 /* Cost of arc u -> w (the cheapest, should the graph hold parallel arcs). */
 static double arc_cost(const karst_graph_t *g, karst_int_t u, karst_int_t w) {
   double best = INFINITY;
+  karst_arc_reader_t rd = karst_graph_arcs(g, u);
   for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++)
-    if (g->adj[a] == w && g->cost[a] < best) best = g->cost[a];
+    if (karst_arc_next(&rd) == w && g->cost[a] < best) best = g->cost[a];
   return best;
 }
 
@@ -308,10 +309,11 @@ static void flag_path_arcs(const karst_graph_t *g, const karst_path_t *path, uns
   unsigned char t = tag ? tag : 1;
   for (karst_int_t i = 1; i < path->n; i++) {
     karst_int_t u = path->v[i - 1], w = path->v[i];
+    karst_arc_reader_t ru = karst_graph_arcs(g, u), rw = karst_graph_arcs(g, w);
     for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++)
-      if (g->adj[a] == w && !flag[a]) flag[a] = t;
+      if (karst_arc_next(&ru) == w && !flag[a]) flag[a] = t;
     for (karst_int_t a = g->offsets[w]; a < g->offsets[w + 1]; a++)
-      if (g->adj[a] == u && !flag[a]) flag[a] = t;
+      if (karst_arc_next(&rw) == u && !flag[a]) flag[a] = t;
   }
 }
 

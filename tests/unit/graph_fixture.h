@@ -17,10 +17,7 @@ typedef double (*fx_cost_fn)(const double *a, const double *b, void *user);
 
 /* Free a graph made here (the library's destroy belongs to the graph module). */
 static inline void fx_graph_free(karst_graph_t *g) {
-  free(g->offsets);
-  free(g->adj);
-  free(g->cost);
-  memset(g, 0, sizeof *g);
+  karst_graph_destroy(g);
 }
 
 /* CSR from an undirected edge list (both directions, same cost), neighbours
@@ -28,27 +25,27 @@ static inline void fx_graph_free(karst_graph_t *g) {
 static inline void fx_graph_from_edges(karst_graph_t *g, karst_int_t n, const double *xyz,
                                        karst_int_t m, const karst_int_t *u, const karst_int_t *v,
                                        const double *cost) {
-  memset(g, 0, sizeof *g);
-  g->n = n;
-  g->xyz = xyz;
-  g->n_arcs = 2 * m;
-  g->offsets = calloc((size_t)n + 1, sizeof *g->offsets);
-  g->adj = malloc((size_t)(2 * m + 1) * sizeof *g->adj);
-  g->cost = malloc((size_t)(2 * m + 1) * sizeof *g->cost);
+  karst_graph_init(g);
+  karst_int_t *offsets = calloc((size_t)n + 1, sizeof *offsets);
+  int32_t *adj = malloc((size_t)(2 * m + 1) * sizeof *adj);
+  karst_arc_cost_t *c = malloc((size_t)(2 * m + 1) * sizeof *c);
   for (karst_int_t e = 0; e < m; e++)
-    g->offsets[u[e] + 1]++, g->offsets[v[e] + 1]++;
+    offsets[u[e] + 1]++, offsets[v[e] + 1]++;
   for (karst_int_t i = 0; i < n; i++)
-    g->offsets[i + 1] += g->offsets[i];
+    offsets[i + 1] += offsets[i];
   karst_int_t *fill = calloc((size_t)n + 1, sizeof *fill);
   for (karst_int_t e = 0; e < m; e++) {
-    karst_int_t a = g->offsets[u[e]] + fill[u[e]]++;
-    g->adj[a] = v[e];
-    g->cost[a] = karst_arc_cost_round(cost[e]);
-    karst_int_t b = g->offsets[v[e]] + fill[v[e]]++;
-    g->adj[b] = u[e];
-    g->cost[b] = karst_arc_cost_round(cost[e]);
+    karst_int_t a = offsets[u[e]] + fill[u[e]]++;
+    adj[a] = (int32_t)v[e];
+    c[a] = karst_arc_cost_round(cost[e]);
+    karst_int_t b = offsets[v[e]] + fill[v[e]]++;
+    adj[b] = (int32_t)u[e];
+    c[b] = karst_arc_cost_round(cost[e]);
   }
   free(fill);
+  /* The library keeps the rows as given (unsorted, duplicates included). */
+  if (karst_graph_from_rows(NULL, g, n, xyz, offsets, adj, c) != KARST_SUCCESS) abort();
+  free(offsets), free(adj), free(c);
 }
 
 /* Undirected k-nearest-neighbour graph by brute force (ties by index). */

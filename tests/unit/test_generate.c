@@ -70,9 +70,11 @@ static void make_fixture(fixture_t *f, int isolate_key) {
   fx_cost_ctx_t cc = {sc, 4};
   fx_knn_graph(&f->g, f->n, f->xyz, 20, fx_scenario_cost, &cc);
   if (isolate_key)
-    for (karst_int_t v = 0; v < f->n; v++)
+    for (karst_int_t v = 0; v < f->n; v++) {
+      karst_arc_reader_t rd = karst_graph_arcs(&f->g, v);
       for (karst_int_t a = f->g.offsets[v]; a < f->g.offsets[v + 1]; a++)
-        if (v == 4 || f->g.adj[a] == 4) f->g.cost[a] = INFINITY;
+        if (karst_arc_next(&rd) == 4 || v == 4) f->g.cost[a] = INFINITY;
+    }
 }
 
 static void free_fixture(fixture_t *f) {

@@ -12,6 +12,7 @@
 #include <cmocka.h>
 
 #include "geology_fixture.h"
+#include "graph_heads.h"
 #include "karst.h"
 #include "test_util.h"
 
@@ -73,29 +74,36 @@ static unsigned char *brute_knn_union(const karst_samples_t *s, int k) {
 static void check_symmetric(const karst_graph_t *g) {
   assert_int_equal(g->offsets[0], 0);
   assert_int_equal(g->offsets[g->n], g->n_arcs);
+  int32_t *adj = fx_heads(g);
+  assert_non_null(adj);
   for (karst_int_t v = 0; v < g->n; v++)
     for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      karst_int_t u = g->adj[a];
+      karst_int_t u = adj[a];
       assert_true(u != v && u >= 0 && u < g->n);
-      if (a > g->offsets[v]) assert_true(g->adj[a - 1] < u);
+      if (a > g->offsets[v]) assert_true(adj[a - 1] < u);
       int found = 0;
       for (karst_int_t b = g->offsets[u]; b < g->offsets[u + 1]; b++)
-        if (g->adj[b] == v) found = 1, assert_true(g->cost[b] == g->cost[a]);
+        if (adj[b] == v) found = 1, assert_true(g->cost[b] == g->cost[a]);
       assert_true(found);
+      assert_int_equal(karst_graph_find_arc(g, v, u), a);
     }
+  free(adj);
 }
 
 static void check_against_brute(const karst_samples_t *s, const karst_graph_t *g, int k) {
   unsigned char *A = brute_knn_union(s, k);
   int n = (int)s->n;
   karst_int_t arcs = 0;
+  int32_t *adj = fx_heads(g);
+  assert_non_null(adj);
   for (int v = 0; v < n; v++) {
     for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++)
-      assert_int_equal(A[(size_t)v * n + g->adj[a]], 1);
+      assert_int_equal(A[(size_t)v * n + adj[a]], 1);
     for (int u = 0; u < n; u++)
       arcs += A[(size_t)v * n + u];
   }
   assert_int_equal(arcs, g->n_arcs); /* same size and included: equal sets */
+  free(adj);
   free(A);
 }
 
@@ -122,14 +130,17 @@ static void test_knn_exact(void **state) {
     assert_true(g1.offsets[v + 1] - g1.offsets[v] >= 12);
   assert_int_equal(g1.n_arcs, g2.n_arcs);
   assert_memory_equal(g1.offsets, g2.offsets, sizeof(karst_int_t) * (size_t)(g1.n + 1));
-  assert_memory_equal(g1.adj, g2.adj, sizeof *g1.adj * (size_t)g1.n_arcs);
+  int32_t *adj1 = fx_heads(&g1), *adj2 = fx_heads(&g2);
+  assert_non_null(adj1), assert_non_null(adj2);
+  assert_memory_equal(adj1, adj2, sizeof *adj1 * (size_t)g1.n_arcs);
   assert_memory_equal(g1.cost, g2.cost, sizeof *g1.cost * (size_t)g1.n_arcs);
   for (karst_int_t v = 0; v < g1.n; v += 97)
     for (karst_int_t a = g1.offsets[v]; a < g1.offsets[v + 1]; a++) {
       /* the stored cost is the nearest float of the length: within 2^-24 relative */
-      double len = sqrt(d2(s.xyz + 3 * v, s.xyz + 3 * g1.adj[a]));
+      double len = sqrt(d2(s.xyz + 3 * v, s.xyz + 3 * adj1[a]));
       assert_close(g1.cost[a], len, 0x1p-24 * len + 1e-12);
     }
+  free(adj1), free(adj2);
   assert_int_equal(karst_graph_edge_count(&g1), g1.n_arcs / 2);
   karst_graph_destroy(&g1), karst_graph_destroy(&g2);
   karst_samples_destroy(&s);
@@ -196,9 +207,11 @@ static void test_graph_small_cases(void **state) {
   sc.sampling.k = 5;
   assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_SUCCESS);
   check_symmetric(&g);
-  for (karst_int_t v = 0; v < 40; v++)
+  for (karst_int_t v = 0; v < 40; v++) {
+    karst_arc_reader_t rd = karst_graph_arcs(&g, v);
     for (karst_int_t a = g.offsets[v]; a < g.offsets[v + 1]; a++)
-      assert_true((v < 20) == (g.adj[a] < 20));
+      assert_true((v < 20) == (karst_arc_next(&rd) < 20));
+  }
   /* Invalid k and non-finite samples are refused. */
   sc.sampling.k = 0;
   assert_int_equal(T_graph_build(&ctx, &sc, &s, &g), KARST_EINVAL);
@@ -259,8 +272,9 @@ static void test_from_edges(void **state) {
   const karst_int_t row0[] = {1, 2, 3, 4};
   const double cost0[] = {3, 2, 4, 7};
   assert_int_equal(g.offsets[1] - g.offsets[0], 4);
+  karst_arc_reader_t rd = karst_graph_arcs(&g, 0);
   for (int i = 0; i < 4; i++) {
-    assert_int_equal(g.adj[i], row0[i]);
+    assert_int_equal(karst_arc_next(&rd), row0[i]);
     assert_close(g.cost[i], cost0[i], 0);
   }
   check_symmetric(&g);
@@ -308,9 +322,11 @@ static void test_pipeline(void **state) {
   double lb = karst_cost_lower_bound_per_metre(&sc);
   for (karst_int_t v = 0; v < g.n; v++) {
     if (v < 2) assert_true(g.offsets[v + 1] - g.offsets[v] >= 20);
+    karst_arc_reader_t rd = karst_graph_arcs(&g, v);
     for (karst_int_t e = g.offsets[v]; e < g.offsets[v + 1]; e++) {
+      karst_int_t w = karst_arc_next(&rd);
       assert_true(isfinite(g.cost[e]));
-      assert_true(g.cost[e] >= lb * sqrt(d2(s.xyz + 3 * v, s.xyz + 3 * g.adj[e])));
+      assert_true(g.cost[e] >= lb * sqrt(d2(s.xyz + 3 * v, s.xyz + 3 * w)));
     }
   }
   karst_graph_destroy(&g);
@@ -364,14 +380,19 @@ static void test_costs_all_terms(void **state) {
   }
   check_symmetric(&g[0]);
   check_against_brute(&s, &g[0], 10);
+  int32_t *adj0 = fx_heads(&g[0]);
+  assert_non_null(adj0);
   for (int t = 1; t < 3; t++) {
     assert_int_equal(g[0].n_arcs, g[t].n_arcs);
-    assert_memory_equal(g[0].adj, g[t].adj, sizeof *g[0].adj * (size_t)g[0].n_arcs);
+    int32_t *adjt = fx_heads(&g[t]);
+    assert_non_null(adjt);
+    assert_memory_equal(adj0, adjt, sizeof *adj0 * (size_t)g[0].n_arcs);
+    free(adjt);
     assert_memory_equal(g[0].cost, g[t].cost, sizeof *g[0].cost * (size_t)g[0].n_arcs);
   }
   for (karst_int_t v = 0; v < g[0].n; v++)
     for (karst_int_t a = g[0].offsets[v]; a < g[0].offsets[v + 1]; a++) {
-      karst_int_t w = g[0].adj[a];
+      karst_int_t w = adj0[a];
       const double *p = s.xyz + 3 * v, *q = s.xyz + 3 * w;
       /* computed once, from the smaller index to the larger, and stored as its nearest float */
       assert_true(g[0].cost[a] ==
@@ -391,6 +412,7 @@ static void test_costs_all_terms(void **state) {
       double len = sqrt(d2(p, q)), ref = sum / m * len;
       assert_close(g[0].cost[a], ref, sc.cost.permeability * len / m + 1e-6 * ref);
     }
+  free(adj0);
   for (int t = 0; t < 3; t++)
     karst_graph_destroy(&g[t]);
   karst_samples_destroy(&s);

@@ -11,6 +11,7 @@
 
 #include "geology_fixture.h"
 #include "graph_fixture.h"
+#include "graph_heads.h"
 #include "test_util.h"
 
 /* Random cost per metre in [1, 3]; one edge in 10 excluded (INFINITY). */
@@ -30,8 +31,9 @@ static void assert_valid_path_rel(const karst_graph_t *g, const karst_path_t *p,
   double sum = 0;
   for (karst_int_t i = 1; i < p->n; i++) {
     double best = INFINITY;
+    karst_arc_reader_t rd = karst_graph_arcs(g, p->v[i - 1]);
     for (karst_int_t a = g->offsets[p->v[i - 1]]; a < g->offsets[p->v[i - 1] + 1]; a++)
-      if (g->adj[a] == p->v[i] && g->cost[a] < best) best = g->cost[a];
+      if (karst_arc_next(&rd) == p->v[i] && g->cost[a] < best) best = g->cost[a];
     assert_true(best < INFINITY); /* consecutive vertices are joined by a usable edge */
     sum += best;
   }
@@ -66,8 +68,9 @@ static void exact_dijkstra(const karst_graph_t *g, karst_int_t src, double *d, k
       if (!done[w] && d[w] < INFINITY && (v < 0 || d[w] < d[v])) v = w;
     if (v < 0) break;
     done[v] = 1;
+    karst_arc_reader_t rd = karst_graph_arcs(g, v);
     for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      karst_int_t w = g->adj[a];
+      karst_int_t w = karst_arc_next(&rd);
       double nd = d[v] + wide_cost(g->xyz + 3 * v, g->xyz + 3 * w, NULL);
       if (nd < d[w]) d[w] = nd, pred[w] = v;
     }
@@ -514,6 +517,8 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
         assert_true((double)bound[(size_t)i * n + v] <= karst_search_dist(s1, v));
     }
     unsigned char *flag = calloc((size_t)g.n_arcs + 1, 1), *in_net = calloc((size_t)n, 1);
+    int32_t *heads = fx_heads(&g);
+    assert_non_null(heads);
     double *to_net = malloc((size_t)n * sizeof *to_net),
            *to_cap = malloc((size_t)n * sizeof *to_cap);
     const double M =
@@ -561,8 +566,8 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
         for (karst_int_t i = 1; i < p.n; i++)
           for (karst_int_t a = 0; a < g.n_arcs; a++) {
             karst_int_t u = p.v[i - 1], w = p.v[i];
-            if (a >= g.offsets[u] && a < g.offsets[u + 1] && g.adj[a] == w) flag[a] = 1;
-            if (a >= g.offsets[w] && a < g.offsets[w + 1] && g.adj[a] == u) flag[a] = 1;
+            if (a >= g.offsets[u] && a < g.offsets[u + 1] && heads[a] == w) flag[a] = 1;
+            if (a >= g.offsets[w] && a < g.offsets[w + 1] && heads[a] == u) flag[a] = 1;
           }
         for (karst_int_t i = 0; i < p.n; i++)
           in_net[p.v[i]] = 1;
@@ -594,7 +599,7 @@ static void test_astar_reuse_equals_dijkstra(void **state) {
     karst_path_destroy(&p);
     karst_path_destroy(&q);
     karst_search_free(s1);
-    free(flag), free(in_net), free(to_net), free(to_cap), free(bound);
+    free(flag), free(in_net), free(to_net), free(to_cap), free(bound), free(heads);
     fx_graph_free(&g);
     free(xyz);
   }

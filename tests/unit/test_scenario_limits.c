@@ -516,9 +516,11 @@ static void test_unreachable_message(void **state) {
   assert_non_null(parent);
   for (karst_int_t v = 0; v < g.n; v++)
     parent[v] = v;
-  for (karst_int_t u = 0; u < g.n; u++)
+  for (karst_int_t u = 0; u < g.n; u++) {
+    karst_arc_reader_t rd = karst_graph_arcs(&g, u);
     for (karst_int_t a = g.offsets[u]; a < g.offsets[u + 1]; a++)
-      parent[find_root(parent, u)] = find_root(parent, g.adj[a]);
+      parent[find_root(parent, u)] = find_root(parent, karst_arc_next(&rd));
+  }
   long long pieces = 0;
   for (karst_int_t v = 0; v < g.n; v++)
     pieces += find_root(parent, v) == v;
