@@ -56,9 +56,9 @@ void karst_samples_destroy(karst_samples_t *s);
 karst_error_t karst_samples_add(karst_samples_t *s, const double p[3], karst_sample_source_t src);
 
 /**
- * Undirected weighted graph in compressed sparse row form: the neighbours of
- * vertex v are adj[offsets[v] .. offsets[v+1]-1], sorted by index, and the
- * cost of the arc v -> adj[i] is cost[i]. Every edge appears in both
+ * Undirected weighted graph in compressed sparse row form: the arcs of vertex v
+ * are offsets[v] .. offsets[v+1]-1, their heads sorted by index (coded, see
+ * karst_graph_t) and the cost of arc a is cost[a]. Every edge appears in both
  * directions with the same cost (the line integral of Paris et al. 2021, §4,
  * is symmetric because c_F depends on (n·d)^2). Excluded edges (cost
  * INFINITY: leaving the bedrock) are removed, so every stored cost is finite.
@@ -80,30 +80,54 @@ static inline karst_arc_cost_t karst_arc_cost_round(double c) {
   return c > (double)FLT_MAX && c < INFINITY ? FLT_MAX : (karst_arc_cost_t)c;
 }
 
+/**
+ * The neighbour indices are stored delta-coded, about 1.2 bytes per arc instead of 4 (the
+ * samples' Morton order puts most neighbours within a few hundred indices of each other). Each
+ * row is cut into runs: a run starts with an escaped arc, whose head is the row's next entry of
+ * esc (esc[esc_off[v]], esc[esc_off[v] + 1], ...) and whose code byte is the number r of arcs
+ * that follow it in the run (0 to 255); the code byte b of each of those is the gap to the
+ * previous head less one (gaps 1 to 256). The first arc of a row is always escaped; a gap outside
+ * 1 .. 256 (unsorted rows, repeated heads) or a run of 255 starts a new run. So any row codes,
+ * sorted rows smallest. Read a row with karst_graph_arcs and karst_arc_next; a loop that must be
+ * fast reads the runs itself (src/paths/paths.c, run_search_loop).
+ */
 typedef struct karst_graph {
   karst_int_t n;          /**< vertices */
   karst_int_t n_arcs;     /**< directed arcs = 2 * undirected edges */
   const double *xyz;      /**< vertex positions (3 * n), borrowed from the samples */
   karst_int_t *offsets;   /**< n + 1: the arcs of v are offsets[v] .. offsets[v+1]-1 */
-  int32_t *adj;           /**< n_arcs neighbour indices (read them with karst_graph_arcs) */
+  unsigned char *code;    /**< n_arcs code bytes (above) */
+  int32_t *esc;           /**< esc_off[n] escaped heads, the first arc of each run */
+  karst_int_t *esc_off;   /**< n + 1: the escaped heads of row v start at esc[esc_off[v]] */
   karst_arc_cost_t *cost; /**< n_arcs, single precision (above) */
 } karst_graph_t;
 
 /** Reads the neighbours of one vertex in row order (karst_graph_arcs, karst_arc_next). */
 typedef struct karst_arc_reader {
-  const int32_t *p;
+  const unsigned char *code;
+  const int32_t *esc;
+  int64_t head;
+  unsigned left; /**< arcs left in the run */
 } karst_arc_reader_t;
 
 /** A reader of the neighbours of @p v: the i-th call of karst_arc_next returns the head of arc
  *  offsets[v] + i. O(1). */
 static inline karst_arc_reader_t karst_graph_arcs(const karst_graph_t *g, karst_int_t v) {
-  karst_arc_reader_t r = {g->adj + g->offsets[v]};
+  karst_arc_reader_t r = {g->code + g->offsets[v], g->esc + g->esc_off[v], -1, 0};
   return r;
 }
 
-/** The head of the next arc of the row (call it once per arc, in order). O(1). */
+/** The head of the next arc of the row (call it at most once per arc, in order). O(1). */
 static inline karst_int_t karst_arc_next(karst_arc_reader_t *r) {
-  return *r->p++;
+  const unsigned b = *r->code++;
+  if (r->left == 0) {
+    r->head = *r->esc++;
+    r->left = b;
+  } else {
+    r->head += (int64_t)b + 1;
+    r->left--;
+  }
+  return (karst_int_t)r->head;
 }
 
 /** The arc v -> w of @p g (its index into cost), or -1 when there is none. O(degree of v). */
@@ -112,7 +136,7 @@ karst_int_t karst_graph_find_arc(const karst_graph_t *g, karst_int_t v, karst_in
 /**
  * Make @p g the graph with the given rows: the arcs of v are heads adj[offsets[v] ..
  * offsets[v+1]-1] with costs cost[...], kept in the order given (sorted rows store smallest).
- * The arrays are copied. Every head must be in [0, n).
+ * The heads are coded (above) and the costs copied. Every head must be in [0, n).
  * @return KARST_SUCCESS, KARST_EINVAL (n < 0 or >= 2^31 - 1, offsets not nondecreasing from 0,
  *         a head out of range), KARST_ENOMEM; @p g is unchanged on failure.
  * Time complexity: O(n + arcs).

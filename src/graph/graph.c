@@ -20,7 +20,9 @@ void karst_graph_init(karst_graph_t *g) {
 /** Release the storage of @p g (not the borrowed positions) and leave it empty. O(1). */
 void karst_graph_destroy(karst_graph_t *g) {
   free(g->offsets);
-  free(g->adj);
+  free(g->code);
+  free(g->esc);
+  free(g->esc_off);
   free(g->cost);
   memset(g, 0, sizeof *g);
 }
@@ -28,6 +30,42 @@ void karst_graph_destroy(karst_graph_t *g) {
 /** Number of undirected edges. O(1). */
 karst_int_t karst_graph_edge_count(const karst_graph_t *g) {
   return g->n_arcs / 2;
+}
+
+/* ------------------------------------------------------------------------ */
+/* The coded rows (karst_graph_t)                                            */
+/* ------------------------------------------------------------------------ */
+
+/* Row coding (karst_graph_t): whether head h, after head prev in a run of @p run arcs after
+ * its escaped arc, continues the run as a gap (1 to 256). */
+static inline int codes_as_gap(int64_t prev, int64_t h, int run) {
+  return h - prev >= 1 && h - prev <= 256 && run < 255;
+}
+
+/* Escaped heads of the row h[0 .. d). */
+static karst_int_t row_escapes(const int32_t *h, karst_int_t d) {
+  karst_int_t e = 0;
+  int run = 0;
+  for (karst_int_t i = 0; i < d; i++) {
+    if (i > 0 && codes_as_gap(h[i - 1], h[i], run))
+      run++;
+    else
+      e++, run = 0;
+  }
+  return e;
+}
+
+/* Code the row h[0 .. d) into code[0 .. d) and its escaped heads into esc (row_escapes many). */
+static void row_encode(const int32_t *h, karst_int_t d, unsigned char *code, int32_t *esc) {
+  karst_int_t start = 0;
+  for (karst_int_t i = 0; i < d; i++) {
+    if (i > 0 && codes_as_gap(h[i - 1], h[i], code[start])) {
+      code[i] = (unsigned char)(h[i] - h[i - 1] - 1);
+      code[start]++;
+    } else {
+      code[i] = 0, *esc++ = h[i], start = i;
+    }
+  }
 }
 
 karst_int_t karst_graph_find_arc(const karst_graph_t *g, karst_int_t v, karst_int_t w) {
@@ -76,13 +114,32 @@ karst_error_t karst_graph_from_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_in
 karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
                                       const double *xyz, karst_int_t *offsets, int32_t *adj,
                                       karst_arc_cost_t *cost) {
-  (void)ctx;
+  karst_int_t *esc_off = malloc(sizeof(karst_int_t) * ((size_t)n + 1));
+  unsigned char *code = malloc((size_t)offsets[n] + 1);
+  int32_t *esc = NULL;
+  if (esc_off && code) {
+    esc_off[0] = 0;
+    for (karst_int_t v = 0; v < n; v++)
+      esc_off[v + 1] = esc_off[v] + row_escapes(adj + offsets[v], offsets[v + 1] - offsets[v]);
+    esc = malloc(sizeof(int32_t) * ((size_t)esc_off[n] + 1));
+  }
+  if (!esc) {
+    free(offsets), free(adj), free(cost), free(esc_off), free(code);
+    return karst_set_error(ctx, KARST_ENOMEM, "no memory for a graph of %lld vertices",
+                           (long long)n);
+  }
+  for (karst_int_t v = 0; v < n; v++)
+    row_encode(adj + offsets[v], offsets[v + 1] - offsets[v], code + offsets[v], esc + esc_off[v]);
+  esc[esc_off[n]] = 0;
+  free(adj);
   karst_graph_destroy(g);
   g->n = n;
   g->xyz = xyz;
   g->n_arcs = offsets[n];
   g->offsets = offsets;
-  g->adj = adj;
+  g->code = code;
+  g->esc = esc;
+  g->esc_off = esc_off;
   g->cost = cost;
   return KARST_SUCCESS;
 }
@@ -172,15 +229,16 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
       if (i == b || arcs[i].v != arcs[i - 1].v) arcs[w++] = arcs[i];
   }
   r.offsets[n] = w;
-  r.n_arcs = w;
-  r.adj = malloc(sizeof(int32_t) * ((size_t)w + 1));
-  r.cost = malloc(sizeof *r.cost * ((size_t)w + 1));
-  if (!r.adj || !r.cost) goto nomem;
+  int32_t *adj = malloc(sizeof(int32_t) * ((size_t)w + 1));
+  karst_arc_cost_t *c = malloc(sizeof *c * ((size_t)w + 1));
+  if (!adj || !c) {
+    free(adj), free(c);
+    goto nomem;
+  }
   for (karst_int_t i = 0; i < w; i++)
-    r.adj[i] = (int32_t)arcs[i].v, r.cost[i] = karst_arc_cost_round(arcs[i].c);
-  karst_graph_destroy(g);
-  *g = r;
-  karst_graph_init(&r);
+    adj[i] = (int32_t)arcs[i].v, c[i] = karst_arc_cost_round(arcs[i].c);
+  err = karst_i_graph_take_rows(ctx, g, n, xyz, r.offsets, adj, c);
+  r.offsets = NULL;
   goto cleanup;
 nomem:
   err = karst_set_error(ctx, KARST_ENOMEM, "no memory for a graph of %lld vertices and %lld edges",
@@ -195,29 +253,18 @@ cleanup:
 /* ------------------------------------------------------------------------ */
 /* The kNN graph                                                             */
 /* ------------------------------------------------------------------------ */
-static karst_int_t find_arc(const int32_t *adj, karst_int_t b, karst_int_t e, karst_int_t x) {
-  while (b < e) {
-    karst_int_t mid = b + (e - b) / 2;
-    if (adj[mid] < x)
-      b = mid + 1;
-    else
-      e = mid;
-  }
-  return b;
-}
-
 /* Sources are split into at most this many contiguous chunks for the
  * scatter of the arcs into rows (one count array of n entries each). */
 #define SCATTER_MAX_CHUNKS 8
 
-/* First slot of the sorted run adj[b .. e) holding x or more. Usually few
- * entries precede x (neighbours have nearby indices in the samples' Morton
- * order): a short forward scan reads one cache line where a binary search
- * misses four; long runs fall back to the search. */
-static karst_int_t first_at_least(const int32_t *adj, karst_int_t b, karst_int_t e, karst_int_t x) {
-  for (karst_int_t i = b; i < e && i < b + 8; i++)
-    if (adj[i] >= x) return i;
-  return find_arc(adj, b, e, x);
+/* First arc of row v whose head is x or more (rows are sorted), or offsets[v + 1]. Usually
+ * few heads precede x (neighbours have nearby indices in the samples' Morton order). */
+static karst_int_t first_at_least(const karst_graph_t *g, karst_int_t v, karst_int_t x) {
+  karst_arc_reader_t r = karst_graph_arcs(g, v);
+  karst_int_t a = g->offsets[v];
+  for (; a < g->offsets[v + 1]; a++)
+    if (karst_arc_next(&r) >= x) break;
+  return a;
 }
 
 typedef struct build {
@@ -229,6 +276,10 @@ typedef struct build {
   const double *kd2;
   int32_t *cnt; /* nchunks n: arcs of chunk c into w, then their next slot in row w */
   int32_t *own; /* per vertex: own arcs whose reverse is not a kNN arc */
+  int32_t *lo, *hi; /* per vertex: its least and greatest k nearest */
+  /* The batch of rows being built: rows v0 .. v1-1, their heads in buf (arc a at a - a0). */
+  karst_int_t v0, v1, a0;
+  int32_t *buf;
   unsigned char *inside;
   karst_graph_t *g;
   const karst_i_cost_model_t *model;
@@ -260,30 +311,35 @@ static void task_count(void *p, int tid, int nth) {
     int32_t *cnt = B->cnt + (size_t)c * (size_t)B->n;
     for (karst_int_t u = CHUNK_BEGIN(B, c); u < CHUNK_BEGIN(B, c + 1); u++) {
       B->inside[u] = (unsigned char)karst_geology_in_bedrock(B->model->geo, B->g->xyz + 3 * u);
-      int32_t *row = B->nbr + (size_t)u * k, own = 0;
+      int32_t *row = B->nbr + (size_t)u * k, own = 0, lo = INT32_MAX, hi = -1;
       for (int j = 0; j < k; j++) {
         int32_t w = row[j];
         cnt[w]++;
+        lo = w < lo ? w : lo, hi = w > hi ? w : hi;
         if (!chosen_by(B, u, w)) row[j] = ~w, own++;
       }
-      B->own[u] = own;
+      B->own[u] = own, B->lo[u] = lo, B->hi[u] = hi;
     }
   }
 }
 
 /* Sources in increasing order within a chunk, chunks in increasing order
- * within a row: every in(v) run comes out sorted, whatever the threads. */
+ * within a row: every in(v) run comes out sorted, whatever the threads. Only the
+ * rows of the batch are written (sources whose neighbours all lie outside it are
+ * skipped). */
 static void task_scatter(void *p, int tid, int nth) {
   build_t *B = p;
   int k = B->k;
-  karst_graph_t *g = B->g;
+  const karst_graph_t *g = B->g;
+  const karst_int_t v0 = B->v0, v1 = B->v1, a0 = B->a0;
   for (int c = tid; c < B->nchunks; c += nth) {
     int32_t *cnt = B->cnt + (size_t)c * (size_t)B->n;
     for (karst_int_t u = CHUNK_BEGIN(B, c); u < CHUNK_BEGIN(B, c + 1); u++) {
+      if (B->hi[u] < v0 || B->lo[u] >= v1) continue;
       const int32_t *row = B->nbr + (size_t)u * k;
       for (int j = 0; j < k; j++) {
         int32_t w = row[j] < 0 ? ~row[j] : row[j];
-        g->adj[g->offsets[w] + cnt[w]++] = (int32_t)u;
+        if (w >= v0 && w < v1) B->buf[g->offsets[w] - a0 + cnt[w]++] = (int32_t)u;
       }
     }
   }
@@ -299,6 +355,31 @@ static void sort_small_i32(int32_t *v, int n) {
   }
 }
 
+/* The rows of the batch, ROW_BLOCK at a time, interleaved between the threads. */
+#define FOR_BATCH_ROWS(v, B, tid, nth)                                                             \
+  for (karst_int_t blk_ = (B)->v0 + (karst_int_t)(tid) * ROW_BLOCK; blk_ < (B)->v1;                \
+       blk_ += (karst_int_t)(nth) * ROW_BLOCK)                                                     \
+    for (karst_int_t v = blk_; v < (B)->v1 && v < blk_ + ROW_BLOCK; v++)
+
+/* Escapes of each row of the batch, into esc_off[v + 1] (made a prefix sum after). */
+static void task_count_escapes(void *p, int tid, int nth) {
+  build_t *B = p;
+  karst_graph_t *g = B->g;
+  FOR_BATCH_ROWS(v, B, tid, nth) {
+    g->esc_off[v + 1] = row_escapes(B->buf + (g->offsets[v] - B->a0), g->offsets[v + 1] - g->offsets[v]);
+  }
+}
+
+/* Code the rows of the batch (esc_off and esc ready). */
+static void task_encode(void *p, int tid, int nth) {
+  build_t *B = p;
+  karst_graph_t *g = B->g;
+  FOR_BATCH_ROWS(v, B, tid, nth) {
+    row_encode(B->buf + (g->offsets[v] - B->a0), g->offsets[v + 1] - g->offsets[v],
+               g->code + g->offsets[v], g->esc + g->esc_off[v]);
+  }
+}
+
 /* Merge the sorted in(v) run at the start of each row with the few own
  * neighbours that did not choose v (sorted here), which fill the row. */
 static void task_merge(void *p, int tid, int nth) {
@@ -310,7 +391,7 @@ static void task_merge(void *p, int tid, int nth) {
     B->failed[tid] = 1;
     return;
   }
-  FOR_ROWS(v, B->n, tid, nth) {
+  FOR_BATCH_ROWS(v, B, tid, nth) {
     int own = B->own[v];
     if (own == 0) continue;
     const int32_t *row = B->nbr + (size_t)v * k;
@@ -319,7 +400,7 @@ static void task_merge(void *p, int tid, int nth) {
       if (row[j] < 0) tmp[m++] = ~row[j];
     sort_small_i32(tmp, m);
     /* Merge from the back: the free slots are at the end of the row. */
-    int32_t *adj = g->adj + g->offsets[v];
+    int32_t *adj = B->buf + (g->offsets[v] - B->a0);
     karst_int_t i = g->offsets[v + 1] - g->offsets[v] - own - 1, w = i + own;
     int j = own - 1;
     while (j >= 0) {
@@ -356,26 +437,68 @@ static void task_cost(void *p, int tid, int nth) {
         B->failed[tid] = 2;
         goto cleanup;
       }
-      for (karst_int_t a = g->offsets[u + 1] - 1; a >= g->offsets[u] && g->adj[a] > u; a--) {
-        karst_int_t v = g->adj[a], b = g->offsets[v];
+      karst_arc_reader_t r = karst_graph_arcs(g, u);
+      for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++) {
+        karst_int_t v = karst_arc_next(&r), b = g->offsets[v];
+        if (v <= u) continue;
         double cst = B->inside[u] && B->inside[v]
                          ? karst_i_cost_edge_inside(B->model, g->xyz + 3 * u, g->xyz + 3 * v)
                          : INFINITY;
         n_inf += !isfinite(cst);
         const karst_arc_cost_t cf = karst_arc_cost_round(cst);
         g->cost[a] = cf;
-        if (cursor[v] < 0)
-          cursor[v] = (int32_t)(first_at_least(g->adj, b, g->offsets[v + 1], u0) - b);
+        if (cursor[v] < 0) cursor[v] = (int32_t)(first_at_least(g, v, u0) - b);
         g->cost[b + cursor[v]++] = cf;
       }
     }
-    for (karst_int_t u = u0; u < u1; u++) /* reset what this chunk started */
-      for (karst_int_t a = g->offsets[u + 1] - 1; a >= g->offsets[u] && g->adj[a] > u; a--)
-        cursor[g->adj[a]] = -1;
+    for (karst_int_t u = u0; u < u1; u++) { /* reset what this chunk started */
+      karst_arc_reader_t r = karst_graph_arcs(g, u);
+      for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++)
+        cursor[karst_arc_next(&r)] = -1;
+    }
   }
 cleanup:
   B->n_infinite[tid] = n_inf;
   free(cursor);
+}
+
+/* Batches the rows are built in (see karst_graph_build). */
+#define BUILD_BATCHES 4
+
+/* Remove the @p n_drop arcs of infinite cost (edges leaving the bedrock; costs are symmetric, so
+ * both arcs of an edge go together): each row is read, then coded again over its kept arcs, the
+ * costs and code bytes moving down in place; the escaped heads (a removed arc can turn the gap
+ * after it into an escape) go to a new array. O(arcs). */
+static karst_error_t drop_infinite_arcs(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n_drop) {
+  karst_int_t maxdeg = 0;
+  for (karst_int_t v = 0; v < g->n; v++)
+    if (g->offsets[v + 1] - g->offsets[v] > maxdeg) maxdeg = g->offsets[v + 1] - g->offsets[v];
+  int32_t *esc = malloc(sizeof(int32_t) * ((size_t)(g->esc_off[g->n] + n_drop) + 1));
+  int32_t *row = malloc(sizeof(int32_t) * ((size_t)maxdeg + 1));
+  if (!esc || !row) {
+    free(esc), free(row);
+    return karst_set_error(ctx, KARST_ENOMEM, "no memory for the graph of %lld samples",
+                           (long long)g->n);
+  }
+  karst_int_t w = 0, x = 0;
+  for (karst_int_t v = 0; v < g->n; v++) {
+    karst_arc_reader_t r = karst_graph_arcs(g, v);
+    karst_int_t b = g->offsets[v], e = g->offsets[v + 1], m = 0;
+    g->offsets[v] = w, g->esc_off[v] = x;
+    for (karst_int_t a = b; a < e; a++) {
+      int32_t h = (int32_t)karst_arc_next(&r);
+      if (isfinite(g->cost[a])) row[m] = h, g->cost[w + m++] = g->cost[a];
+    }
+    row_encode(row, m, g->code + w, esc + x);
+    w += m, x += row_escapes(row, m);
+  }
+  g->offsets[g->n] = w, g->esc_off[g->n] = x;
+  esc[x] = 0;
+  g->n_arcs = w;
+  free(row);
+  free(g->esc);
+  g->esc = esc;
+  return KARST_SUCCESS;
 }
 
 /**
@@ -402,7 +525,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
                                 const karst_samples_t *samples, karst_graph_t *out) {
   karst_graph_t g;
   karst_graph_init(&g);
-  int32_t *nbr = NULL, *kidx = NULL, *cnt = NULL, *own = NULL;
+  int32_t *nbr = NULL, *kidx = NULL, *cnt = NULL, *own = NULL, *lo = NULL, *hi = NULL, *buf = NULL;
   double *kd2 = NULL;
   unsigned char *inside = NULL;
   karst_i_cost_model_t model;
@@ -426,6 +549,8 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
   g.offsets = karst_i_calloc_large((size_t)n + 1, sizeof(karst_int_t));
   if (!g.offsets) goto nomem;
   int k = sc->sampling.k < n - 1 ? sc->sampling.k : (int)(n > 0 ? n - 1 : 0);
+  g.esc_off = karst_i_calloc_large((size_t)n + 1, sizeof(karst_int_t));
+  if (!g.esc_off) goto nomem;
   if (k > 0) {
     int nchunks = nth < SCATTER_MAX_CHUNKS ? nth : SCATTER_MAX_CHUNKS;
     nbr = karst_i_alloc_large(sizeof(int32_t) * (size_t)n * (size_t)k);
@@ -433,13 +558,16 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
     kd2 = malloc(sizeof(double) * (size_t)n);
     inside = malloc((size_t)n);
     own = malloc(sizeof(int32_t) * (size_t)n);
+    lo = malloc(sizeof(int32_t) * (size_t)n);
+    hi = malloc(sizeof(int32_t) * (size_t)n);
     cnt = calloc((size_t)nchunks * (size_t)n, sizeof(int32_t));
-    if (!nbr || !kidx || !kd2 || !inside || !own || !cnt) goto nomem;
+    if (!nbr || !kidx || !kd2 || !inside || !own || !lo || !hi || !cnt) goto nomem;
     err = sc->sampling.knn == KARST_KNN_FLANN
               ? karst_i_knn_flann(ctx, samples->xyz, n, k, nth, nbr, kd2, kidx)
               : karst_i_knn(ctx, samples->xyz, n, k, nth, nbr, kd2, kidx);
     if (err != KARST_SUCCESS) goto cleanup;
-    build_t B = {ctx, n, k, nchunks, nbr, kidx, kd2, cnt, own, inside, &g, &model, {0}, {0}};
+    build_t B = {ctx, n, k, nchunks, nbr, kidx, kd2, cnt, own, lo, hi, 0, 0, 0, NULL, inside, &g,
+                 &model, {0}, {0}};
     karst_i_parallel_run(nth, task_count, &B);
     /* Row of v: in(v), then the own arcs not chosen back. Turn the chunk
      * counts into each chunk's first slot within the row. */
@@ -453,16 +581,45 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
       g.offsets[v + 1] = g.offsets[v] + at + own[v];
     }
     g.n_arcs = g.offsets[n];
-    g.adj = karst_i_alloc_large(sizeof(int32_t) * (size_t)g.n_arcs);
-    if (!g.adj) goto nomem;
-    karst_i_parallel_run(nth, task_scatter, &B);
-    free(cnt), free(kidx), free(kd2);
-    cnt = NULL, kidx = NULL, kd2 = NULL;
-    karst_i_parallel_run(nth, task_merge, &B);
-    free(nbr), free(own);
-    nbr = NULL, own = NULL;
-    for (int t = 0; t < KARST_I_MAX_THREADS; t++)
-      if (B.failed[t]) goto nomem;
+    g.code = karst_i_alloc_large((size_t)g.n_arcs + 1);
+    if (!g.code) goto nomem;
+    /* The rows are built 32-bit in BUILD_BATCHES batches of about equal arcs, each coded before
+     * the next: the 32-bit rows of the whole graph never sit beside the k nearest
+     * (docs/performance.md, "Memory at scale"). Small graphs take the same way, so that every
+     * test runs it. */
+    karst_int_t batch = g.n_arcs / BUILD_BATCHES;
+    karst_int_t largest = 0, esc_cap = 0;
+    for (karst_int_t v0 = 0, v1; v0 < n; v0 = v1) {
+      for (v1 = v0 + 1; v1 < n && g.offsets[v1 + 1] - g.offsets[v0] <= batch; v1++) {
+      }
+      karst_int_t arcs = g.offsets[v1] - g.offsets[v0];
+      if (arcs > largest) {
+        free(buf);
+        buf = malloc(sizeof(int32_t) * ((size_t)arcs + 1));
+        if (!buf) goto nomem;
+        largest = arcs;
+      }
+      B.v0 = v0, B.v1 = v1, B.a0 = g.offsets[v0], B.buf = buf;
+      karst_i_parallel_run(nth, task_scatter, &B);
+      karst_i_parallel_run(nth, task_merge, &B);
+      karst_i_parallel_run(nth, task_count_escapes, &B);
+      for (karst_int_t v = v0; v < v1; v++)
+        g.esc_off[v + 1] += g.esc_off[v];
+      if (g.esc_off[v1] + 1 > esc_cap) {
+        karst_int_t cap = g.esc_off[v1] + 1 + (n - v1) / 2 + 1;
+        int32_t *e = realloc(g.esc, sizeof(int32_t) * (size_t)cap);
+        if (!e) goto nomem;
+        g.esc = e, esc_cap = cap;
+      }
+      karst_i_parallel_run(nth, task_encode, &B);
+      for (int t = 0; t < KARST_I_MAX_THREADS; t++)
+        if (B.failed[t]) goto nomem;
+    }
+    g.esc[g.esc_off[n]] = 0; /* the padding karst_arc_next reads */
+    free(buf), free(cnt), free(kidx), free(kd2), free(nbr), free(own), free(lo), free(hi);
+    buf = NULL, cnt = NULL, kidx = NULL, kd2 = NULL, nbr = NULL, own = NULL, lo = NULL, hi = NULL;
+    int32_t *e = realloc(g.esc, sizeof(int32_t) * ((size_t)g.esc_off[n] + 1));
+    if (e) g.esc = e;
     g.cost = karst_i_alloc_large(sizeof *g.cost * (size_t)g.n_arcs);
     if (!g.cost) goto nomem;
     karst_progress(ctx, "edge costs", 0, 1);
@@ -480,20 +637,13 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
       }
       n_inf += B.n_infinite[t];
     }
-    if (n_inf > 0) {
-      /* Remove the excluded (infinite) edges; costs are symmetric, so both
-       * arcs of an edge go together. */
-      karst_int_t w = 0;
-      for (karst_int_t v = 0; v < n; v++) {
-        karst_int_t b = g.offsets[v], e = g.offsets[v + 1];
-        g.offsets[v] = w;
-        for (karst_int_t a = b; a < e; a++)
-          if (isfinite(g.cost[a])) g.adj[w] = g.adj[a], g.cost[w++] = g.cost[a];
-      }
-      g.offsets[n] = w;
-      g.n_arcs = w;
-    }
+    if (n_inf > 0 && (err = drop_infinite_arcs(ctx, &g, 2 * n_inf)) != KARST_SUCCESS) goto cleanup;
     karst_progress(ctx, "edge costs", 1, 1);
+  }
+  if (!g.code) { /* no arcs: the rows are still readable */
+    g.code = malloc(1);
+    g.esc = calloc(1, sizeof(int32_t));
+    if (!g.code || !g.esc) goto nomem;
   }
   karst_log(ctx, KARST_LOG_INFO, "graph: %lld vertices, %lld edges (k = %d)", (long long)n,
             (long long)(g.n_arcs / 2), k);
@@ -512,5 +662,8 @@ cleanup:
   free(inside);
   free(cnt);
   free(own);
+  free(lo);
+  free(hi);
+  free(buf);
   return err;
 }

@@ -363,13 +363,35 @@ __attribute__((always_inline))
 static inline void
 prefetch_arcs(const karst_graph_t *g, const karst_arc_cost_t *cost, karst_int_t u) {
   const karst_int_t *off = g->offsets;
-  const char *pa = (const char *)(g->adj + off[u]), *pc = (const char *)(cost + off[u]);
+  const char *pa = (const char *)(g->code + off[u]), *pc = (const char *)(cost + off[u]);
   size_t deg = (size_t)(off[u + 1] - off[u]);
-  for (size_t b = 0; b < deg * sizeof *g->adj; b += 64)
+  __builtin_prefetch(g->esc + g->esc_off[u]);
+  for (size_t b = 0; b < deg; b += 64)
     __builtin_prefetch(pa + b);
   for (size_t b = 0; b < deg * sizeof *cost; b += 64)
     __builtin_prefetch(pc + b);
 }
+
+/* The arcs a of row v with their heads w, read run by run (karst_graph_t) in two nested loops
+ * opened by ARCS_BEGIN and closed by ARCS_END: per arc one code byte and two additions, where
+ * karst_arc_next also tests for the run's end (the searches' relaxations wait on memory, and
+ * the fewer instructions an arc takes, the more arcs the processor has in flight; measured in
+ * docs/performance.md, "Memory at scale"). The body may `continue` to the next arc; it must not
+ * `break`. */
+#define ARCS_BEGIN(g, v, a, w)                                                                     \
+  {                                                                                                \
+    const unsigned char *restrict code_ = (g)->code;                                               \
+    const int32_t *esc_ = (g)->esc + (g)->esc_off[v];                                              \
+    for (karst_int_t a = (g)->offsets[v], end_ = (g)->offsets[(v) + 1]; a < end_;) {               \
+      const karst_int_t run_end_ = a + 1 + code_[a];                                               \
+      int64_t head_ = (int64_t)*esc_++ - code_[a] - 1;                                             \
+      for (; a < run_end_; a++) {                                                                  \
+        head_ += code_[a] + 1;                                                                     \
+        const karst_int_t w = (karst_int_t)head_;
+#define ARCS_END                                                                                   \
+  }                                                                                                \
+  }                                                                                                \
+  }
 
 /* The loop of run_search for one combination of its per-arc options (a routed cost formula, a
  * blocked mask), given as constants so that each instance tests neither per arc: about 5
@@ -385,7 +407,6 @@ run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
   const karst_int_t target = o->target;
   const double lb = o->lb;
   const int astar = target >= 0 && lb > 0 && g->xyz;
-  const karst_int_t *restrict off = g->offsets;
   const karst_arc_cost_t *restrict cost = g->cost;
   const unsigned char *blocked = o->blocked, *noexpand = o->noexpand, *is_target = o->is_target;
   const karst_route_t *route = o->route;
@@ -430,9 +451,7 @@ run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
     }
     if (noexpand && noexpand[v] && gv > 0.0) continue; /* a start (cost 0) is expanded */
     if (s->hn > 0) prefetch_arcs(g, arc_cost, s->heap[0].v);
-    karst_arc_reader_t rd = karst_graph_arcs(g, v);
-    for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
-      karst_int_t w = karst_arc_next(&rd);
+    ARCS_BEGIN(g, v, a, w)
       double c = arc_cost[a];
       if (!(c < INFINITY) || (with_blocked && blocked[w])) continue;
       if (with_route) c = backward ? route_cost(route, c, w, v) : route_cost(route, c, v, w);
@@ -450,7 +469,7 @@ run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
       nw->dist = nd;
       if (want_pred) pred[w] = (int32_t)v;
       heap_update(s, nw, astar ? nd + hh[w] : nd, w);
-    }
+    ARCS_END
   }
   return KARST_SUCCESS;
 }
@@ -638,7 +657,6 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
    * reads the tags (one byte per arc, not backed by large pages) only along the network. */
   const double *dn = reuse->dist_to_net;
   const karst_route_t *route = reuse->route;
-  const karst_int_t *restrict off = g->offsets;
   /* Tabulated routed costs replace the base costs and the formula (karst_route_tabulate). */
   const karst_arc_cost_t *restrict cost = route && route->arc_fwd ? route->arc_fwd : g->cost;
   if (route && route->arc_fwd) route = NULL;
@@ -665,9 +683,7 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
     if (v == target) break;
     if (s->hn > 0) prefetch_arcs(g, cost, s->heap[0].v);
     const unsigned char *vflag = flag && !(dn && dn[v] > 0.0) ? flag : NULL;
-    karst_arc_reader_t rd = karst_graph_arcs(g, v);
-    for (karst_int_t a = off[v]; a < off[v + 1]; a++) {
-      karst_int_t w = karst_arc_next(&rd);
+    ARCS_BEGIN(g, v, a, w)
       double c = cost[a];
       if (!(c < INFINITY) || (closed && closed[w] && w != target)) continue;
       if (route) c = route_cost(route, c, v, w);
@@ -686,7 +702,7 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
       nw->dist = nd;
       pred[w] = (int32_t)v;
       heap_update(s, nw, nd + hh[w], w);
-    }
+    ARCS_END
   }
   if (!is_settled(s, target))
     return karst_set_error(ctx, KARST_EUNREACHABLE,
@@ -727,15 +743,13 @@ karst_error_t karst_paths_lower_distances(karst_ctx_t *ctx, karst_search_t *s,
   while (s->hn > 0) {
     heap_entry_t e = heap_pop(s);
     if (s->hn > 0) prefetch_arcs(g, g->cost, s->heap[0].v);
-    karst_arc_reader_t rd = karst_graph_arcs(g, e.v);
-    for (karst_int_t a = g->offsets[e.v]; a < g->offsets[e.v + 1]; a++) {
-      karst_int_t w = karst_arc_next(&rd);
+    ARCS_BEGIN(g, e.v, a, w)
       double nd = e.key + g->cost[a];
       if (nd < dist[w]) {
         dist[w] = nd;
         heap_update(s, touch(s, w), nd, w);
       }
-    }
+    ARCS_END
   }
   return KARST_SUCCESS;
 }
