@@ -5,8 +5,8 @@
  * average of the machine (other processes share its cores: compare wall
  * with CPU / threads). Each case runs `repeat` times and the fastest wall
  * time is printed (on a loaded machine the minimum is the least disturbed).
- * For each graph it also prints what its neighbour indices would take delta-coded
- * (adjacency_figures).
+ * For each graph it also prints how much its coded neighbour indices take and how fast
+ * they decode (adjacency_figures).
  * Usage: bench_knn [threads] [--small] [--repeat N]   (--small skips the 1.5 M run). */
 #include <stdint.h>
 #include <stdio.h>
@@ -62,104 +62,54 @@ static void print_stage(const char *name, const marks_t *m, int a, int b) {
          m->cpu[b] - m->cpu[a]);
 }
 
-/* The number arc @p a of row @p v is coded as: for the row's first arc the zig-zag difference of
- * its head from v, for the others the gap from the previous head less one (rows are sorted). */
-static uint64_t arc_code(const karst_graph_t *g, const int32_t *adj, karst_int_t v, karst_int_t a) {
-  if (a > g->offsets[v]) return (uint64_t)(adj[a] - adj[a - 1] - 1);
-  int64_t d = (int64_t)adj[a] - v;
-  return d < 0 ? (uint64_t)(-2 * d - 1) : (uint64_t)(2 * d);
-}
-
-/* What the neighbour indices would take delta-coded (docs/performance.md, "Memory at scale"):
- * each row's sorted indices as the zig-zag difference of the first from the row's vertex, then
- * the gaps minus one, in LEB128 (7 bits a byte, the high bit: more follow). Prints the bytes per
- * arc, the share of one-byte gaps, the share of neighbours within 2^15 of their vertex in the
- * Morton order (what 16-bit differences would hold without an escape), and the time of one
- * sequential pass over all rows reading the 32-bit indices and decoding the coded ones (the
- * fastest of 3, the sum of the indices compared), as one line in @p line. */
+/* How the graph stores its neighbour indices (include/karst/graph.h: runs of one-byte gaps after
+ * an escaped head): bytes per arc (code bytes, escaped heads, and the 8-byte escape offset per
+ * vertex), the share of escaped arcs, and the time of one pass over all rows decoding them
+ * (karst_arc_next) against reading a 32-bit copy (the fastest of 3, the sums of the indices
+ * compared), as one line in @p line. */
 static void adjacency_figures(const karst_graph_t *g, char *line, size_t cap) {
-  size_t bytes = 0, one_byte = 0, near16 = 0;
-  int32_t *adj = malloc(sizeof *adj * ((size_t)g->n_arcs + 1));
-  if (!adj) {
-    snprintf(line, cap, "  %-22s not coded: no memory\n", "neighbour indices");
-    return;
-  }
-  for (karst_int_t v = 0; v < g->n; v++) {
-    karst_arc_reader_t rd = karst_graph_arcs(g, v);
-    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++)
-      adj[a] = (int32_t)karst_arc_next(&rd);
-  }
-  for (karst_int_t v = 0; v < g->n; v++)
-    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      int64_t d = (int64_t)adj[a] - v;
-      near16 += d >= -32768 && d < 32768;
-      size_t nb = 1;
-      for (uint64_t x = arc_code(g, adj, v, a); x >= 128; x >>= 7)
-        nb++;
-      bytes += nb, one_byte += nb == 1;
-    }
   if (g->n_arcs == 0) {
     snprintf(line, cap, "  %-22s no arcs\n", "neighbour indices");
-    free(adj);
     return;
   }
-  unsigned char *code = malloc(bytes);
-  if (!code) {
-    snprintf(line, cap, "  %-22s not coded: no memory for %zu bytes\n", "neighbour indices", bytes);
-    free(adj);
+  int32_t *adj = malloc(sizeof *adj * ((size_t)g->n_arcs + 1));
+  if (!adj) {
+    snprintf(line, cap, "  %-22s no memory for a 32-bit copy\n", "neighbour indices");
     return;
   }
-  unsigned char *c = code;
-  for (karst_int_t v = 0; v < g->n; v++)
-    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      uint64_t x = arc_code(g, adj, v, a);
-      for (; x >= 128; x >>= 7)
-        *c++ = (unsigned char)(x | 128);
-      *c++ = (unsigned char)x;
-    }
   double t32 = 1e300, tcode = 1e300;
   uint64_t sum32 = 0, sumcode = 0;
   for (int r = 0; r < 3; r++) {
     double t0 = now();
     uint64_t s = 0;
-    for (karst_int_t a = 0; a < g->n_arcs; a++)
-      s += (uint32_t)adj[a];
-    double t1 = now();
-    if (t1 - t0 < t32) t32 = t1 - t0;
-    sum32 = s;
-    s = 0;
-    const unsigned char *p = code;
     for (karst_int_t v = 0; v < g->n; v++) {
-      int64_t w = 0;
+      karst_arc_reader_t rd = karst_graph_arcs(g, v);
       for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-        uint64_t x = 0;
-        int shift = 0;
-        for (;;) {
-          unsigned char b = *p++;
-          x |= (uint64_t)(b & 127) << shift;
-          if (b < 128) break;
-          shift += 7;
-        }
-        if (a == g->offsets[v])
-          w = v + ((x & 1) ? -(int64_t)((x + 1) / 2) : (int64_t)(x / 2));
-        else
-          w += (int64_t)x + 1;
+        karst_int_t w = karst_arc_next(&rd);
         s += (uint64_t)w;
+        if (r == 0) adj[a] = (int32_t)w;
       }
     }
-    double t2 = now();
-    if (t2 - t1 < tcode) tcode = t2 - t1;
+    double t1 = now();
+    if (r > 0 && t1 - t0 < tcode) tcode = t1 - t0;
     sumcode = s;
+    if (r == 0) continue;
+    s = 0;
+    for (karst_int_t a = 0; a < g->n_arcs; a++)
+      s += (uint32_t)adj[a];
+    double t2 = now();
+    if (t2 - t1 < t32) t32 = t2 - t1;
+    sum32 = s;
   }
-  snprintf(
-      line, cap,
-      "  %-22s 4 B/arc as stored; delta-coded (LEB128) %.3f B/arc, %.1f %% of arcs one byte; "
-      "%.1f %% within 2^15 of their vertex; one pass %.2f ns/arc (32-bit), %.2f ns/arc (coded)%s\n",
-      "neighbour indices", (double)bytes / (double)g->n_arcs,
-      100.0 * (double)one_byte / (double)g->n_arcs, 100.0 * (double)near16 / (double)g->n_arcs,
-      1e9 * t32 / (double)g->n_arcs, 1e9 * tcode / (double)g->n_arcs,
-      sum32 == sumcode ? "" : " -- the decoded indices differ!");
-  free(code);
+  double esc = (double)g->esc_off[g->n];
+  snprintf(line, cap,
+           "  %-22s coded %.3f B/arc (1 code byte, %.3f escaped heads, %.3f escape offsets) "
+           "against 4 B/arc 32-bit; %.1f %% of arcs escaped; one pass %.2f ns/arc (32-bit copy), "
+           "%.2f ns/arc (coded)%s\n",
+           "neighbour indices", (g->n_arcs + 4 * esc + 8.0 * (g->n + 1)) / (double)g->n_arcs,
+           4 * esc / (double)g->n_arcs, 8.0 * (g->n + 1) / (double)g->n_arcs,
+           100.0 * esc / (double)g->n_arcs, 1e9 * t32 / (double)g->n_arcs,
+           1e9 * tcode / (double)g->n_arcs, sum32 == sumcode ? "" : " -- the indices differ!");
   free(adj);
 }
 

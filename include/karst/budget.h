@@ -22,10 +22,12 @@ extern "C" {
  *  estimate is an upper bound, docs/scenario.md gives the measured factor). */
 #define KARST_BUDGET_BYTES_BASE (96.0 * 1024 * 1024) /**< the program and its libraries */
 #define KARST_BUDGET_BYTES_PER_SAMPLE 512.0          /**< a sample, its grids and geology */
-/** A k-NN edge: at most two arcs (itself and its reverse), each a 32-bit neighbour index and a
- *  4-byte cost, 16 bytes; while the graph is built, the k-NN lists (4 bytes per edge) and the
- *  neighbour indices coexist before the costs are allocated, at most 12 bytes. */
-#define KARST_BUDGET_BYTES_PER_EDGE 16.0
+/** A k-NN edge: at most two arcs (itself and its reverse), each a 4-byte cost, a code byte and,
+ *  at worst (every head escaped: samples in no spatial order), a 4-byte escaped head, 18 bytes
+ *  (about 10.3 in the sampling's Morton order, include/karst/graph.h); while the graph is
+ *  built, the k-NN lists (4 bytes per edge), a quarter of the rows 32-bit (2 bytes per edge) and
+ *  the coded rows (at most 10) coexist before the costs are allocated, at most 16 bytes. */
+#define KARST_BUDGET_BYTES_PER_EDGE 18.0
 #define KARST_BUDGET_BYTES_PER_SEARCH_SAMPLE 40.0 /**< A* state per sample per thread */
 /** Tabulated routed costs of an edge per spring (both arcs, both ways), up to
  *  KARST_ROUTING_ARC_BUDGET in all (include/karst/routing.h). */

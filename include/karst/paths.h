@@ -37,7 +37,7 @@ typedef struct karst_route {
   double rise_cost;          /**< >= 0, per metre of rise */
   double inv_phreatic_depth; /**< 1 / phreatic_depth (1/m), >= 0 */
   /** Optional tables (karst_route_tabulate), NULL when not made: the routed cost of every arc a
-   *  of the graph (from v to adj[a]) in fwd[a], and of its reverse (adj[a] to v) in bwd[a], the
+   *  of the graph (from v to its head w) in fwd[a], and of its reverse (w to v) in bwd[a], the
    *  same values the formula gives (rounded to single precision like the base costs, by the
    *  formula too), so searches read one value per arc instead of evaluating the formula on two
    *  vertices' depths. Only valid while the graph's costs are unchanged. */

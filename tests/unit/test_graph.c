@@ -69,6 +69,32 @@ static unsigned char *brute_knn_union(const karst_samples_t *s, int k) {
   return A;
 }
 
+/* The coded rows follow the rule of include/karst/graph.h, re-derived here from the decoded heads:
+ * a row's first arc, and an arc whose gap to the previous head is outside 1 .. 256 or that would
+ * be the 256th of a run, is escaped (its head the row's next entry of esc, its code byte the
+ * number of arcs after it in its run); any other arc's code byte is its gap less one. */
+static void check_coding(const karst_graph_t *g) {
+  int32_t *adj = fx_heads(g);
+  assert_non_null(adj);
+  assert_int_equal(g->esc_off[0], 0);
+  for (karst_int_t v = 0; v < g->n; v++) {
+    karst_int_t e = g->esc_off[v], start = -1;
+    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
+      int64_t gap = a > g->offsets[v] ? (int64_t)adj[a] - adj[a - 1] : 0;
+      if (start >= 0 && gap >= 1 && gap <= 256 && a - start <= 255) {
+        assert_int_equal(g->code[a], gap - 1);
+      } else {
+        if (start >= 0) assert_int_equal(g->code[start], a - start - 1);
+        assert_int_equal(g->esc[e++], adj[a]);
+        start = a;
+      }
+    }
+    if (start >= 0) assert_int_equal(g->code[start], g->offsets[v + 1] - start - 1);
+    assert_int_equal(g->esc_off[v + 1], e);
+  }
+  free(adj);
+}
+
 /* The CSR structure is a simple undirected graph: sorted rows, no self-loop,
  * every arc mirrored with the same cost. */
 static void check_symmetric(const karst_graph_t *g) {
@@ -88,6 +114,7 @@ static void check_symmetric(const karst_graph_t *g) {
       assert_int_equal(karst_graph_find_arc(g, v, u), a);
     }
   free(adj);
+  check_coding(g);
 }
 
 static void check_against_brute(const karst_samples_t *s, const karst_graph_t *g, int k) {
@@ -257,6 +284,81 @@ static void test_graph_excludes_air(void **state) {
 
 /* CSR from edge lists: duplicates keep the cheaper, self-loops and infinite
  * costs are dropped, rows sorted; bad input is refused with the edge named. */
+/* Rows given as they are, coded by hand from the rule of include/karst/graph.h. */
+static void test_from_rows_coding(void **state) {
+  (void)state;
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_graph_t g;
+  karst_graph_init(&g);
+  /* Row 0: 5, 6 (gap 1), 262 (gap 256), 263 (gap 1), 1000 (gap 737: escaped), 1000 (gap 0:
+   * escaped), 3 (backwards: escaped): runs [5 6 262 263] [1000] [1000] [3]. Row 1 is empty.
+   * Row 2: 0 .. 299, a run of 1 + 255 arcs, then 256 .. 299 (1 + 43). Row 3: the last vertex. */
+  enum { N = 1 << 20 };
+  karst_int_t off[5] = {0, 7, 7, 307, 308};
+  int32_t adj[308];
+  karst_arc_cost_t cost[308];
+  const int32_t row0[7] = {5, 6, 262, 263, 1000, 1000, 3};
+  for (int i = 0; i < 7; i++)
+    adj[i] = row0[i];
+  for (int i = 0; i < 300; i++)
+    adj[7 + i] = i;
+  adj[307] = N - 1;
+  for (int i = 0; i < 308; i++)
+    cost[i] = (karst_arc_cost_t)(i + 0.5);
+  karst_int_t *offsets = calloc(N + 1, sizeof *offsets);
+  assert_non_null(offsets);
+  for (int v = 0; v < N + 1; v++)
+    offsets[v] = v < 4 ? off[v] : 308;
+  assert_int_equal(karst_graph_from_rows(&ctx, &g, N, NULL, offsets, adj, cost), KARST_SUCCESS);
+  assert_int_equal(g.n_arcs, 308);
+  const unsigned char code0[7] = {3, 0, 255, 0, 0, 0, 0};
+  assert_memory_equal(g.code, code0, 7);
+  assert_int_equal(g.code[7], 255);   /* 0: escaped, 255 arcs follow */
+  assert_int_equal(g.code[8], 0);     /* 1: gap 1 */
+  assert_int_equal(g.code[7 + 256], 43); /* 256: the 256th arc after an escape starts a run */
+  assert_int_equal(g.code[307], 0);
+  const int32_t esc[7] = {5, 1000, 1000, 3, 0, 256, N - 1};
+  assert_int_equal(g.esc_off[1], 4);
+  assert_int_equal(g.esc_off[2], 4);
+  assert_int_equal(g.esc_off[3], 6);
+  assert_int_equal(g.esc_off[4], 7);
+  assert_int_equal(g.esc_off[N], 7);
+  assert_memory_equal(g.esc, esc, sizeof esc);
+  /* Read back as given, costs with their arcs. */
+  for (karst_int_t v = 0; v < 4; v++) {
+    karst_arc_reader_t r = karst_graph_arcs(&g, v);
+    for (karst_int_t a = g.offsets[v]; a < g.offsets[v + 1]; a++) {
+      assert_int_equal(karst_arc_next(&r), adj[a]);
+      assert_true(g.cost[a] == cost[a]);
+    }
+  }
+  assert_int_equal(karst_graph_find_arc(&g, 0, 1000), 4); /* the first of a repeated head */
+  assert_int_equal(karst_graph_find_arc(&g, 0, 4), -1);
+  assert_int_equal(karst_graph_find_arc(&g, 2, 299), 306);
+  assert_int_equal(karst_graph_find_arc(&g, 1, 0), -1);
+  check_coding(&g);
+  /* Bad rows: the graph is left as it was, the message says what and where. */
+  karst_graph_t before = g;
+  offsets[0] = 1;
+  assert_int_equal(karst_graph_from_rows(&ctx, &g, N, NULL, offsets, adj, cost), KARST_EINVAL);
+  assert_non_null(strstr(ctx.errmsg, "first row starts at arc 1"));
+  offsets[0] = 0;
+  offsets[2] = 3;
+  assert_int_equal(karst_graph_from_rows(&ctx, &g, N, NULL, offsets, adj, cost), KARST_EINVAL);
+  assert_non_null(strstr(ctx.errmsg, "row 1 ends (3) before it starts (7)"));
+  offsets[2] = 7;
+  adj[5] = N;
+  assert_int_equal(karst_graph_from_rows(&ctx, &g, N, NULL, offsets, adj, cost), KARST_EINVAL);
+  assert_non_null(strstr(ctx.errmsg, "arc 5 of vertex 0 has head 1048576, outside [0, 1048576)"));
+  adj[5] = -1;
+  assert_int_equal(karst_graph_from_rows(&ctx, &g, N, NULL, offsets, adj, cost), KARST_EINVAL);
+  assert_int_equal(karst_graph_from_rows(&ctx, &g, -1, NULL, offsets, adj, cost), KARST_EINVAL);
+  assert_memory_equal(&g, &before, sizeof g);
+  karst_graph_destroy(&g);
+  free(offsets);
+}
+
 static void test_from_edges(void **state) {
   (void)state;
   karst_ctx_t ctx;
@@ -424,6 +526,7 @@ int main(void) {
       cmocka_unit_test(test_knn_exact),         cmocka_unit_test(test_knn_collinear),
       cmocka_unit_test(test_graph_small_cases), cmocka_unit_test(test_graph_excludes_air),
       cmocka_unit_test(test_from_edges),        cmocka_unit_test(test_pipeline),
+      cmocka_unit_test(test_from_rows_coding),
       cmocka_unit_test(test_costs_all_terms),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
