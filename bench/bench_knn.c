@@ -63,8 +63,8 @@ static void print_stage(const char *name, const marks_t *m, int a, int b) {
 }
 
 /* How the graph stores its neighbour indices (include/karst/graph.h: runs of one-byte gaps after
- * an escaped head): bytes per arc (code bytes, escaped heads, and the 8-byte escape offset per
- * vertex), the share of escaped arcs, and the time of one pass over all rows decoding them
+ * a run's first head): bytes per arc (a byte an arc, 4 per run, and the 8-byte row offset per
+ * vertex), the arcs per run, and the time of one pass over all rows decoding them
  * (karst_arc_next) against reading a 32-bit copy (the fastest of 3, the sums of the indices
  * compared), as one line in @p line. */
 static void adjacency_figures(const karst_graph_t *g, char *line, size_t cap) {
@@ -101,14 +101,15 @@ static void adjacency_figures(const karst_graph_t *g, char *line, size_t cap) {
     if (t2 - t1 < t32) t32 = t2 - t1;
     sum32 = s;
   }
-  double esc = (double)g->esc_off[g->n];
+  /* Every arc takes a byte; every run 4 more (its first head). */
+  double runs = (double)(g->code_off[g->n] - g->n_arcs) / 4;
   snprintf(line, cap,
-           "  %-22s coded %.3f B/arc (1 code byte, %.3f escaped heads, %.3f escape offsets) "
-           "against 4 B/arc 32-bit; %.1f %% of arcs escaped; one pass %.2f ns/arc (32-bit copy), "
-           "%.2f ns/arc (coded)%s\n",
-           "neighbour indices", (g->n_arcs + 4 * esc + 8.0 * (g->n + 1)) / (double)g->n_arcs,
-           4 * esc / (double)g->n_arcs, 8.0 * (g->n + 1) / (double)g->n_arcs,
-           100.0 * esc / (double)g->n_arcs, 1e9 * t32 / (double)g->n_arcs,
+           "  %-22s coded %.3f B/arc (1 byte an arc, %.3f for the runs' first heads, %.3f for the "
+           "rows' offsets) against 4 B/arc 32-bit; %.2f arcs a run; one pass %.2f ns/arc (32-bit "
+           "copy), %.2f ns/arc (coded)%s\n",
+           "neighbour indices", (g->code_off[g->n] + 8.0 * (g->n + 1)) / (double)g->n_arcs,
+           4 * runs / (double)g->n_arcs, 8.0 * (g->n + 1) / (double)g->n_arcs,
+           (double)g->n_arcs / runs, 1e9 * t32 / (double)g->n_arcs,
            1e9 * tcode / (double)g->n_arcs, sum32 == sumcode ? "" : " -- the indices differ!");
   free(adj);
 }

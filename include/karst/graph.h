@@ -82,30 +82,28 @@ static inline karst_arc_cost_t karst_arc_cost_round(double c) {
 
 /**
  * The neighbour indices are stored delta-coded, about 1.2 bytes per arc instead of 4 (the
- * samples' Morton order puts most neighbours within a few hundred indices of each other). Each
- * row is cut into runs: a run starts with an escaped arc, whose head is the row's next entry of
- * esc (esc[esc_off[v]], esc[esc_off[v] + 1], ...) and whose code byte is the number r of arcs
- * that follow it in the run (0 to 255); the code byte b of each of those is the gap to the
- * previous head less one (gaps 1 to 256). The first arc of a row is always escaped; a gap outside
- * 1 .. 256 (unsorted rows, repeated heads) or a run of 255 starts a new run. So any row codes,
- * sorted rows smallest. Read a row with karst_graph_arcs and karst_arc_next; a loop that must be
- * fast reads the runs itself (src/paths/paths.c, run_search_loop).
+ * samples' Morton order puts most neighbours within a few hundred indices of each other). Row v
+ * is the byte string code[code_off[v] .. code_off[v+1]), a sequence of runs: a run is its first
+ * arc's head (4 bytes, little-endian), the number r of arcs after it in the run (1 byte, 0 to
+ * 255), then one byte per each of those r arcs, the gap to the previous head less one (gaps 1 to
+ * 256). A row's first arc always starts a run; a gap outside 1 .. 256 (unsorted rows, repeated
+ * heads) or a run of 256 arcs starts a new one. So any row codes, sorted rows smallest (1 byte
+ * an arc, 4 more per run). Read a row with karst_graph_arcs and karst_arc_next; a loop that
+ * must be fast reads the runs itself (src/paths/paths.c, ARCS_BEGIN).
  */
 typedef struct karst_graph {
   karst_int_t n;          /**< vertices */
   karst_int_t n_arcs;     /**< directed arcs = 2 * undirected edges */
   const double *xyz;      /**< vertex positions (3 * n), borrowed from the samples */
   karst_int_t *offsets;   /**< n + 1: the arcs of v are offsets[v] .. offsets[v+1]-1 */
-  unsigned char *code;    /**< n_arcs code bytes (above) */
-  int32_t *esc;           /**< esc_off[n] escaped heads, the first arc of each run */
-  karst_int_t *esc_off;   /**< n + 1: the escaped heads of row v start at esc[esc_off[v]] */
+  unsigned char *code;    /**< code_off[n] bytes: the coded rows (above) */
+  karst_int_t *code_off;  /**< n + 1: row v starts at code[code_off[v]] */
   karst_arc_cost_t *cost; /**< n_arcs, single precision (above) */
 } karst_graph_t;
 
 /** Reads the neighbours of one vertex in row order (karst_graph_arcs, karst_arc_next). */
 typedef struct karst_arc_reader {
-  const unsigned char *code;
-  const int32_t *esc;
+  const unsigned char *p;
   int64_t head;
   unsigned left; /**< arcs left in the run */
 } karst_arc_reader_t;
@@ -113,18 +111,24 @@ typedef struct karst_arc_reader {
 /** A reader of the neighbours of @p v: the i-th call of karst_arc_next returns the head of arc
  *  offsets[v] + i. O(1). */
 static inline karst_arc_reader_t karst_graph_arcs(const karst_graph_t *g, karst_int_t v) {
-  karst_arc_reader_t r = {g->code + g->offsets[v], g->esc + g->esc_off[v], -1, 0};
+  karst_arc_reader_t r = {g->code + g->code_off[v], -1, 0};
   return r;
+}
+
+/** The head of a run (4 bytes, little-endian) at @p p. */
+static inline int32_t karst_graph_run_head(const unsigned char *p) {
+  return (int32_t)((uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+                   (uint32_t)p[3] << 24);
 }
 
 /** The head of the next arc of the row (call it at most once per arc, in order). O(1). */
 static inline karst_int_t karst_arc_next(karst_arc_reader_t *r) {
-  const unsigned b = *r->code++;
   if (r->left == 0) {
-    r->head = *r->esc++;
-    r->left = b;
+    r->head = karst_graph_run_head(r->p);
+    r->left = r->p[4];
+    r->p += 5;
   } else {
-    r->head += (int64_t)b + 1;
+    r->head += (int64_t)*r->p++ + 1;
     r->left--;
   }
   return (karst_int_t)r->head;

@@ -21,8 +21,7 @@ void karst_graph_init(karst_graph_t *g) {
 void karst_graph_destroy(karst_graph_t *g) {
   free(g->offsets);
   free(g->code);
-  free(g->esc);
-  free(g->esc_off);
+  free(g->code_off);
   free(g->cost);
   memset(g, 0, sizeof *g);
 }
@@ -37,33 +36,38 @@ karst_int_t karst_graph_edge_count(const karst_graph_t *g) {
 /* ------------------------------------------------------------------------ */
 
 /* Row coding (karst_graph_t): whether head h, after head prev in a run of @p run arcs after
- * its escaped arc, continues the run as a gap (1 to 256). */
+ * its first, continues the run as a gap (1 to 256). */
 static inline int codes_as_gap(int64_t prev, int64_t h, int run) {
   return h - prev >= 1 && h - prev <= 256 && run < 255;
 }
 
-/* Escaped heads of the row h[0 .. d). */
-static karst_int_t row_escapes(const int32_t *h, karst_int_t d) {
-  karst_int_t e = 0;
+/* Bytes of the row h[0 .. d) coded. */
+static karst_int_t row_bytes(const int32_t *h, karst_int_t d) {
+  karst_int_t bytes = 0;
   int run = 0;
   for (karst_int_t i = 0; i < d; i++) {
     if (i > 0 && codes_as_gap(h[i - 1], h[i], run))
-      run++;
+      bytes++, run++;
     else
-      e++, run = 0;
+      bytes += 5, run = 0;
   }
-  return e;
+  return bytes;
 }
 
-/* Code the row h[0 .. d) into code[0 .. d) and its escaped heads into esc (row_escapes many). */
-static void row_encode(const int32_t *h, karst_int_t d, unsigned char *code, int32_t *esc) {
-  karst_int_t start = 0;
+/* Code the row h[0 .. d) into out (row_bytes many bytes). */
+static void row_encode(const int32_t *h, karst_int_t d, unsigned char *out) {
+  unsigned char *count = NULL;
   for (karst_int_t i = 0; i < d; i++) {
-    if (i > 0 && codes_as_gap(h[i - 1], h[i], code[start])) {
-      code[i] = (unsigned char)(h[i] - h[i - 1] - 1);
-      code[start]++;
+    if (i > 0 && codes_as_gap(h[i - 1], h[i], *count)) {
+      *out++ = (unsigned char)(h[i] - h[i - 1] - 1);
+      ++*count;
     } else {
-      code[i] = 0, *esc++ = h[i], start = i;
+      uint32_t x = (uint32_t)h[i];
+      out[0] = (unsigned char)x, out[1] = (unsigned char)(x >> 8);
+      out[2] = (unsigned char)(x >> 16), out[3] = (unsigned char)(x >> 24);
+      out[4] = 0;
+      count = out + 4;
+      out += 5;
     }
   }
 }
@@ -114,23 +118,21 @@ karst_error_t karst_graph_from_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_in
 karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
                                       const double *xyz, karst_int_t *offsets, int32_t *adj,
                                       karst_arc_cost_t *cost) {
-  karst_int_t *esc_off = malloc(sizeof(karst_int_t) * ((size_t)n + 1));
-  unsigned char *code = malloc((size_t)offsets[n] + 1);
-  int32_t *esc = NULL;
-  if (esc_off && code) {
-    esc_off[0] = 0;
+  karst_int_t *code_off = malloc(sizeof(karst_int_t) * ((size_t)n + 1));
+  unsigned char *code = NULL;
+  if (code_off) {
+    code_off[0] = 0;
     for (karst_int_t v = 0; v < n; v++)
-      esc_off[v + 1] = esc_off[v] + row_escapes(adj + offsets[v], offsets[v + 1] - offsets[v]);
-    esc = malloc(sizeof(int32_t) * ((size_t)esc_off[n] + 1));
+      code_off[v + 1] = code_off[v] + row_bytes(adj + offsets[v], offsets[v + 1] - offsets[v]);
+    code = malloc((size_t)code_off[n] + 1);
   }
-  if (!esc) {
-    free(offsets), free(adj), free(cost), free(esc_off), free(code);
+  if (!code) {
+    free(offsets), free(adj), free(cost), free(code_off);
     return karst_set_error(ctx, KARST_ENOMEM, "no memory for a graph of %lld vertices",
                            (long long)n);
   }
   for (karst_int_t v = 0; v < n; v++)
-    row_encode(adj + offsets[v], offsets[v + 1] - offsets[v], code + offsets[v], esc + esc_off[v]);
-  esc[esc_off[n]] = 0;
+    row_encode(adj + offsets[v], offsets[v + 1] - offsets[v], code + code_off[v]);
   free(adj);
   karst_graph_destroy(g);
   g->n = n;
@@ -138,8 +140,7 @@ karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_
   g->n_arcs = offsets[n];
   g->offsets = offsets;
   g->code = code;
-  g->esc = esc;
-  g->esc_off = esc_off;
+  g->code_off = code_off;
   g->cost = cost;
   return KARST_SUCCESS;
 }
@@ -361,22 +362,23 @@ static void sort_small_i32(int32_t *v, int n) {
        blk_ += (karst_int_t)(nth) * ROW_BLOCK)                                                     \
     for (karst_int_t v = blk_; v < (B)->v1 && v < blk_ + ROW_BLOCK; v++)
 
-/* Escapes of each row of the batch, into esc_off[v + 1] (made a prefix sum after). */
-static void task_count_escapes(void *p, int tid, int nth) {
+/* Coded bytes of each row of the batch, into code_off[v + 1] (made a prefix sum after). */
+static void task_count_bytes(void *p, int tid, int nth) {
   build_t *B = p;
   karst_graph_t *g = B->g;
   FOR_BATCH_ROWS(v, B, tid, nth) {
-    g->esc_off[v + 1] = row_escapes(B->buf + (g->offsets[v] - B->a0), g->offsets[v + 1] - g->offsets[v]);
+    g->code_off[v + 1] =
+        row_bytes(B->buf + (g->offsets[v] - B->a0), g->offsets[v + 1] - g->offsets[v]);
   }
 }
 
-/* Code the rows of the batch (esc_off and esc ready). */
+/* Code the rows of the batch (code_off ready, code large enough). */
 static void task_encode(void *p, int tid, int nth) {
   build_t *B = p;
   karst_graph_t *g = B->g;
   FOR_BATCH_ROWS(v, B, tid, nth) {
     row_encode(B->buf + (g->offsets[v] - B->a0), g->offsets[v + 1] - g->offsets[v],
-               g->code + g->offsets[v], g->esc + g->esc_off[v]);
+               g->code + g->code_off[v]);
   }
 }
 
@@ -466,17 +468,17 @@ cleanup:
 #define BUILD_BATCHES 4
 
 /* Remove the @p n_drop arcs of infinite cost (edges leaving the bedrock; costs are symmetric, so
- * both arcs of an edge go together): each row is read, then coded again over its kept arcs, the
- * costs and code bytes moving down in place; the escaped heads (a removed arc can turn the gap
- * after it into an escape) go to a new array. O(arcs). */
+ * both arcs of an edge go together): each row is read and coded again over its kept arcs into a
+ * new byte array (a removed arc can turn the gap after it into a new run: 4 bytes more at most),
+ * the costs moving down in place. O(arcs). */
 static karst_error_t drop_infinite_arcs(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n_drop) {
   karst_int_t maxdeg = 0;
   for (karst_int_t v = 0; v < g->n; v++)
     if (g->offsets[v + 1] - g->offsets[v] > maxdeg) maxdeg = g->offsets[v + 1] - g->offsets[v];
-  int32_t *esc = malloc(sizeof(int32_t) * ((size_t)(g->esc_off[g->n] + n_drop) + 1));
+  unsigned char *code = karst_i_alloc_large((size_t)(g->code_off[g->n] + 4 * n_drop) + 1);
   int32_t *row = malloc(sizeof(int32_t) * ((size_t)maxdeg + 1));
-  if (!esc || !row) {
-    free(esc), free(row);
+  if (!code || !row) {
+    free(code), free(row);
     return karst_set_error(ctx, KARST_ENOMEM, "no memory for the graph of %lld samples",
                            (long long)g->n);
   }
@@ -484,20 +486,19 @@ static karst_error_t drop_infinite_arcs(karst_ctx_t *ctx, karst_graph_t *g, kars
   for (karst_int_t v = 0; v < g->n; v++) {
     karst_arc_reader_t r = karst_graph_arcs(g, v);
     karst_int_t b = g->offsets[v], e = g->offsets[v + 1], m = 0;
-    g->offsets[v] = w, g->esc_off[v] = x;
+    g->offsets[v] = w, g->code_off[v] = x;
     for (karst_int_t a = b; a < e; a++) {
       int32_t h = (int32_t)karst_arc_next(&r);
       if (isfinite(g->cost[a])) row[m] = h, g->cost[w + m++] = g->cost[a];
     }
-    row_encode(row, m, g->code + w, esc + x);
-    w += m, x += row_escapes(row, m);
+    row_encode(row, m, code + x);
+    w += m, x += row_bytes(row, m);
   }
-  g->offsets[g->n] = w, g->esc_off[g->n] = x;
-  esc[x] = 0;
+  g->offsets[g->n] = w, g->code_off[g->n] = x;
   g->n_arcs = w;
   free(row);
-  free(g->esc);
-  g->esc = esc;
+  free(g->code);
+  g->code = code;
   return KARST_SUCCESS;
 }
 
@@ -549,8 +550,8 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
   g.offsets = karst_i_calloc_large((size_t)n + 1, sizeof(karst_int_t));
   if (!g.offsets) goto nomem;
   int k = sc->sampling.k < n - 1 ? sc->sampling.k : (int)(n > 0 ? n - 1 : 0);
-  g.esc_off = karst_i_calloc_large((size_t)n + 1, sizeof(karst_int_t));
-  if (!g.esc_off) goto nomem;
+  g.code_off = karst_i_calloc_large((size_t)n + 1, sizeof(karst_int_t));
+  if (!g.code_off) goto nomem;
   if (k > 0) {
     int nchunks = nth < SCATTER_MAX_CHUNKS ? nth : SCATTER_MAX_CHUNKS;
     nbr = karst_i_alloc_large(sizeof(int32_t) * (size_t)n * (size_t)k);
@@ -581,14 +582,16 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
       g.offsets[v + 1] = g.offsets[v] + at + own[v];
     }
     g.n_arcs = g.offsets[n];
-    g.code = karst_i_alloc_large((size_t)g.n_arcs + 1);
+    /* Room for 1.25 bytes an arc (1.16 on the 1.5 M block); grown when a batch needs more. */
+    karst_int_t code_cap = g.n_arcs + g.n_arcs / 4 + 64;
+    g.code = karst_i_alloc_large((size_t)code_cap);
     if (!g.code) goto nomem;
     /* The rows are built 32-bit in BUILD_BATCHES batches of about equal arcs, each coded before
      * the next: the 32-bit rows of the whole graph never sit beside the k nearest
      * (docs/performance.md, "Memory at scale"). Small graphs take the same way, so that every
      * test runs it. */
     karst_int_t batch = g.n_arcs / BUILD_BATCHES;
-    karst_int_t largest = 0, esc_cap = 0;
+    karst_int_t largest = 0;
     for (karst_int_t v0 = 0, v1; v0 < n; v0 = v1) {
       for (v1 = v0 + 1; v1 < n && g.offsets[v1 + 1] - g.offsets[v0] <= batch; v1++) {
       }
@@ -602,24 +605,21 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
       B.v0 = v0, B.v1 = v1, B.a0 = g.offsets[v0], B.buf = buf;
       karst_i_parallel_run(nth, task_scatter, &B);
       karst_i_parallel_run(nth, task_merge, &B);
-      karst_i_parallel_run(nth, task_count_escapes, &B);
+      karst_i_parallel_run(nth, task_count_bytes, &B);
       for (karst_int_t v = v0; v < v1; v++)
-        g.esc_off[v + 1] += g.esc_off[v];
-      if (g.esc_off[v1] + 1 > esc_cap) {
-        karst_int_t cap = g.esc_off[v1] + 1 + (n - v1) / 2 + 1;
-        int32_t *e = realloc(g.esc, sizeof(int32_t) * (size_t)cap);
-        if (!e) goto nomem;
-        g.esc = e, esc_cap = cap;
+        g.code_off[v + 1] += g.code_off[v];
+      if (g.code_off[v1] > code_cap) {
+        karst_int_t cap = g.code_off[v1] + (g.n_arcs - g.offsets[v1]) * 5 / 4 + 64;
+        unsigned char *c = karst_i_realloc_large(g.code, (size_t)g.code_off[v0], (size_t)cap);
+        if (!c) goto nomem;
+        g.code = c, code_cap = cap;
       }
       karst_i_parallel_run(nth, task_encode, &B);
       for (int t = 0; t < KARST_I_MAX_THREADS; t++)
         if (B.failed[t]) goto nomem;
     }
-    g.esc[g.esc_off[n]] = 0; /* the padding karst_arc_next reads */
     free(buf), free(cnt), free(kidx), free(kd2), free(nbr), free(own), free(lo), free(hi);
     buf = NULL, cnt = NULL, kidx = NULL, kd2 = NULL, nbr = NULL, own = NULL, lo = NULL, hi = NULL;
-    int32_t *e = realloc(g.esc, sizeof(int32_t) * ((size_t)g.esc_off[n] + 1));
-    if (e) g.esc = e;
     g.cost = karst_i_alloc_large(sizeof *g.cost * (size_t)g.n_arcs);
     if (!g.cost) goto nomem;
     karst_progress(ctx, "edge costs", 0, 1);
@@ -642,8 +642,7 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
   }
   if (!g.code) { /* no arcs: the rows are still readable */
     g.code = malloc(1);
-    g.esc = calloc(1, sizeof(int32_t));
-    if (!g.code || !g.esc) goto nomem;
+    if (!g.code) goto nomem;
   }
   karst_log(ctx, KARST_LOG_INFO, "graph: %lld vertices, %lld edges (k = %d)", (long long)n,
             (long long)(g.n_arcs / 2), k);

@@ -363,30 +363,31 @@ __attribute__((always_inline))
 static inline void
 prefetch_arcs(const karst_graph_t *g, const karst_arc_cost_t *cost, karst_int_t u) {
   const karst_int_t *off = g->offsets;
-  const char *pa = (const char *)(g->code + off[u]), *pc = (const char *)(cost + off[u]);
-  size_t deg = (size_t)(off[u + 1] - off[u]);
-  __builtin_prefetch(g->esc + g->esc_off[u]);
-  for (size_t b = 0; b < deg; b += 64)
+  const char *pa = (const char *)(g->code + g->code_off[u]), *pc = (const char *)(cost + off[u]);
+  size_t deg = (size_t)(off[u + 1] - off[u]), bytes = (size_t)(g->code_off[u + 1] - g->code_off[u]);
+  for (size_t b = 0; b < bytes; b += 64)
     __builtin_prefetch(pa + b);
   for (size_t b = 0; b < deg * sizeof *cost; b += 64)
     __builtin_prefetch(pc + b);
 }
 
 /* The arcs a of row v with their heads w, read run by run (karst_graph_t) in two nested loops
- * opened by ARCS_BEGIN and closed by ARCS_END: per arc one code byte and two additions, where
+ * opened by ARCS_BEGIN and closed by ARCS_END: per arc one byte and two additions, where
  * karst_arc_next also tests for the run's end (the searches' relaxations wait on memory, and
  * the fewer instructions an arc takes, the more arcs the processor has in flight; measured in
- * docs/performance.md, "Memory at scale"). The body may `continue` to the next arc; it must not
- * `break`. */
+ * docs/performance.md, "Memory at scale"). A run's first arc takes its count byte as its code
+ * (head_ starts that much below the run's head), so every arc adds its byte plus one. The body
+ * may `continue` to the next arc; it must not `break`. */
 #define ARCS_BEGIN(g, v, a, w)                                                                     \
   {                                                                                                \
-    const unsigned char *restrict code_ = (g)->code;                                               \
-    const int32_t *esc_ = (g)->esc + (g)->esc_off[v];                                              \
+    const unsigned char *q_ = (g)->code + (g)->code_off[v];                                        \
     for (karst_int_t a = (g)->offsets[v], end_ = (g)->offsets[(v) + 1]; a < end_;) {               \
-      const karst_int_t run_end_ = a + 1 + code_[a];                                               \
-      int64_t head_ = (int64_t)*esc_++ - code_[a] - 1;                                             \
+      const int32_t first_ = karst_graph_run_head(q_);                                             \
+      q_ += 4;                                                                                     \
+      const karst_int_t run_end_ = a + 1 + *q_;                                                    \
+      int64_t head_ = (int64_t)first_ - *q_ - 1;                                                   \
       for (; a < run_end_; a++) {                                                                  \
-        head_ += code_[a] + 1;                                                                     \
+        head_ += *q_++ + 1;                                                                        \
         const karst_int_t w = (karst_int_t)head_;
 #define ARCS_END                                                                                   \
   }                                                                                                \

@@ -69,28 +69,33 @@ static unsigned char *brute_knn_union(const karst_samples_t *s, int k) {
   return A;
 }
 
-/* The coded rows follow the rule of include/karst/graph.h, re-derived here from the decoded heads:
- * a row's first arc, and an arc whose gap to the previous head is outside 1 .. 256 or that would
- * be the 256th of a run, is escaped (its head the row's next entry of esc, its code byte the
- * number of arcs after it in its run); any other arc's code byte is its gap less one. */
+/* The coded rows are the bytes the rule of include/karst/graph.h gives, re-derived here from the
+ * decoded heads: a run starts at a row's first arc, and at an arc whose gap to the previous head
+ * is outside 1 .. 256 or that would be the 256th of its run; it is its first head (4 bytes,
+ * little-endian) and the count of the arcs after it, then each of those arcs' gap less one. */
 static void check_coding(const karst_graph_t *g) {
   int32_t *adj = fx_heads(g);
   assert_non_null(adj);
-  assert_int_equal(g->esc_off[0], 0);
+  assert_int_equal(g->code_off[0], 0);
   for (karst_int_t v = 0; v < g->n; v++) {
-    karst_int_t e = g->esc_off[v], start = -1;
+    const unsigned char *c = g->code + g->code_off[v];
+    karst_int_t at = 0, count_at = -1, run = 0;
     for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
       int64_t gap = a > g->offsets[v] ? (int64_t)adj[a] - adj[a - 1] : 0;
-      if (start >= 0 && gap >= 1 && gap <= 256 && a - start <= 255) {
-        assert_int_equal(g->code[a], gap - 1);
-      } else {
-        if (start >= 0) assert_int_equal(g->code[start], a - start - 1);
-        assert_int_equal(g->esc[e++], adj[a]);
-        start = a;
+      if (count_at >= 0 && gap >= 1 && gap <= 256 && run < 255) {
+        assert_int_equal(c[at++], gap - 1);
+        run++;
+        continue;
       }
+      if (count_at >= 0) /* the run before ended at the arc before */
+        assert_int_equal(c[count_at], at - count_at - 1);
+      uint32_t x = (uint32_t)adj[a];
+      for (int i = 0; i < 4; i++)
+        assert_int_equal(c[at++], (x >> (8 * i)) & 255);
+      count_at = at++, run = 0;
     }
-    if (start >= 0) assert_int_equal(g->code[start], g->offsets[v + 1] - start - 1);
-    assert_int_equal(g->esc_off[v + 1], e);
+    if (count_at >= 0) assert_int_equal(c[count_at], at - count_at - 1);
+    assert_int_equal(g->code_off[v + 1] - g->code_off[v], at);
   }
   free(adj);
 }
@@ -312,19 +317,21 @@ static void test_from_rows_coding(void **state) {
     offsets[v] = v < 4 ? off[v] : 308;
   assert_int_equal(karst_graph_from_rows(&ctx, &g, N, NULL, offsets, adj, cost), KARST_SUCCESS);
   assert_int_equal(g.n_arcs, 308);
-  const unsigned char code0[7] = {3, 0, 255, 0, 0, 0, 0};
-  assert_memory_equal(g.code, code0, 7);
-  assert_int_equal(g.code[7], 255);   /* 0: escaped, 255 arcs follow */
-  assert_int_equal(g.code[8], 0);     /* 1: gap 1 */
-  assert_int_equal(g.code[7 + 256], 43); /* 256: the 256th arc after an escape starts a run */
-  assert_int_equal(g.code[307], 0);
-  const int32_t esc[7] = {5, 1000, 1000, 3, 0, 256, N - 1};
-  assert_int_equal(g.esc_off[1], 4);
-  assert_int_equal(g.esc_off[2], 4);
-  assert_int_equal(g.esc_off[3], 6);
-  assert_int_equal(g.esc_off[4], 7);
-  assert_int_equal(g.esc_off[N], 7);
-  assert_memory_equal(g.esc, esc, sizeof esc);
+  const unsigned char row0code[23] = {5,   0, 0, 0, 3, 0, 255, 0, 0xe8, 3, 0, 0,
+                                       0,   0xe8, 3, 0, 0, 0, 3, 0, 0, 0, 0};
+  assert_int_equal(g.code_off[1], 23);
+  assert_memory_equal(g.code, row0code, 23);
+  assert_int_equal(g.code_off[2], 23);                /* row 1: empty */
+  assert_int_equal(g.code_off[3], 23 + 5 + 255 + 5 + 43); /* row 2: two runs */
+  const unsigned char *r2 = g.code + 23;
+  const unsigned char head0[5] = {0, 0, 0, 0, 255}, head256[5] = {0, 1, 0, 0, 43};
+  assert_memory_equal(r2, head0, 5);     /* 0, then 255 arcs of gap 1 */
+  for (int i = 0; i < 255; i++)
+    assert_int_equal(r2[5 + i], 0);
+  assert_memory_equal(r2 + 260, head256, 5); /* the 256th arc after a run's head starts a run */
+  const unsigned char last[5] = {0xff, 0xff, 0x0f, 0, 0};
+  assert_memory_equal(g.code + g.code_off[3], last, 5);
+  assert_int_equal(g.code_off[N], g.code_off[3] + 5);
   /* Read back as given, costs with their arcs. */
   for (karst_int_t v = 0; v < 4; v++) {
     karst_arc_reader_t r = karst_graph_arcs(&g, v);
