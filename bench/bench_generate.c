@@ -85,7 +85,8 @@ static void bench_keypoint_methods(int nx, int ny, int nz, int K) {
           karst_rng_t h;
           karst_rng_init(&h, lo, hi);
           adj[a] = (int32_t)j;
-          cost[a] = (karst_arc_cost_t)(sqrt(ex * ex + ey * ey + ez * ez) * (1 + karst_rng_uniform(&h)));
+          cost[a] =
+              (karst_arc_cost_t)(sqrt(ex * ex + ey * ey + ez * ez) * (1 + karst_rng_uniform(&h)));
           a++;
         }
   }

@@ -109,8 +109,8 @@ static void adjacency_figures(const karst_graph_t *g, char *line, size_t cap) {
            "copy), %.2f ns/arc (coded)%s\n",
            "neighbour indices", (g->code_off[g->n] + 8.0 * (g->n + 1)) / (double)g->n_arcs,
            4 * runs / (double)g->n_arcs, 8.0 * (g->n + 1) / (double)g->n_arcs,
-           (double)g->n_arcs / runs, 1e9 * t32 / (double)g->n_arcs,
-           1e9 * tcode / (double)g->n_arcs, sum32 == sumcode ? "" : " -- the indices differ!");
+           (double)g->n_arcs / runs, 1e9 * t32 / (double)g->n_arcs, 1e9 * tcode / (double)g->n_arcs,
+           sum32 == sumcode ? "" : " -- the indices differ!");
   free(adj);
 }
 

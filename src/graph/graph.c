@@ -91,8 +91,9 @@ karst_error_t karst_graph_from_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_in
                            (long long)offsets[0]);
   for (karst_int_t v = 0; v < n; v++) {
     if (offsets[v + 1] < offsets[v])
-      return karst_set_error(ctx, KARST_EINVAL, "graph: row %lld ends (%lld) before it starts (%lld)",
-                             (long long)v, (long long)offsets[v + 1], (long long)offsets[v]);
+      return karst_set_error(ctx, KARST_EINVAL,
+                             "graph: row %lld ends (%lld) before it starts (%lld)", (long long)v,
+                             (long long)offsets[v + 1], (long long)offsets[v]);
     for (karst_int_t a = offsets[v]; a < offsets[v + 1]; a++)
       if (adj[a] < 0 || adj[a] >= n)
         return karst_set_error(ctx, KARST_EINVAL,
@@ -104,8 +105,9 @@ karst_error_t karst_graph_from_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_in
   karst_arc_cost_t *c = malloc(sizeof *c * ((size_t)offsets[n] + 1));
   if (!o || !h || !c) {
     free(o), free(h), free(c);
-    return karst_set_error(ctx, KARST_ENOMEM, "no memory for a graph of %lld vertices and %lld arcs",
-                           (long long)n, (long long)offsets[n]);
+    return karst_set_error(ctx, KARST_ENOMEM,
+                           "no memory for a graph of %lld vertices and %lld arcs", (long long)n,
+                           (long long)offsets[n]);
   }
   memcpy(o, offsets, sizeof(karst_int_t) * ((size_t)n + 1));
   if (offsets[n] > 0) {
@@ -275,8 +277,8 @@ typedef struct build {
   int32_t *nbr; /* n k; an arc u -> w whose reverse is not a kNN arc is stored as ~w */
   const int32_t *kidx;
   const double *kd2;
-  int32_t *cnt; /* nchunks n: arcs of chunk c into w, then their next slot in row w */
-  int32_t *own; /* per vertex: own arcs whose reverse is not a kNN arc */
+  int32_t *cnt;     /* nchunks n: arcs of chunk c into w, then their next slot in row w */
+  int32_t *own;     /* per vertex: own arcs whose reverse is not a kNN arc */
   int32_t *lo, *hi; /* per vertex: its least and greatest k nearest */
   /* The batch of rows being built: rows v0 .. v1-1, their heads in buf (arc a at a - a0). */
   karst_int_t v0, v1, a0;
@@ -358,8 +360,8 @@ static void sort_small_i32(int32_t *v, int n) {
 
 /* The rows of the batch, ROW_BLOCK at a time, interleaved between the threads. */
 #define FOR_BATCH_ROWS(v, B, tid, nth)                                                             \
-  for (karst_int_t blk_ = (B)->v0 + (karst_int_t)(tid) * ROW_BLOCK; blk_ < (B)->v1;                \
-       blk_ += (karst_int_t)(nth) * ROW_BLOCK)                                                     \
+  for (karst_int_t blk_ = (B)->v0 + (karst_int_t)(tid)*ROW_BLOCK; blk_ < (B)->v1;                  \
+       blk_ += (karst_int_t)(nth)*ROW_BLOCK)                                                       \
     for (karst_int_t v = blk_; v < (B)->v1 && v < blk_ + ROW_BLOCK; v++)
 
 /* Coded bytes of each row of the batch, into code_off[v + 1] (made a prefix sum after). */
@@ -439,10 +441,9 @@ static void task_cost(void *p, int tid, int nth) {
         B->failed[tid] = 2;
         goto cleanup;
       }
-      karst_arc_reader_t r = karst_graph_arcs(g, u);
-      for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++) {
-        karst_int_t v = karst_arc_next(&r), b = g->offsets[v];
+      KARST_I_ARCS_BEGIN(g, u, a, v)
         if (v <= u) continue;
+        const karst_int_t b = g->offsets[v];
         double cst = B->inside[u] && B->inside[v]
                          ? karst_i_cost_edge_inside(B->model, g->xyz + 3 * u, g->xyz + 3 * v)
                          : INFINITY;
@@ -451,12 +452,13 @@ static void task_cost(void *p, int tid, int nth) {
         g->cost[a] = cf;
         if (cursor[v] < 0) cursor[v] = (int32_t)(first_at_least(g, v, u0) - b);
         g->cost[b + cursor[v]++] = cf;
-      }
+      KARST_I_ARCS_END
     }
     for (karst_int_t u = u0; u < u1; u++) { /* reset what this chunk started */
-      karst_arc_reader_t r = karst_graph_arcs(g, u);
-      for (karst_int_t a = g->offsets[u]; a < g->offsets[u + 1]; a++)
-        cursor[karst_arc_next(&r)] = -1;
+      KARST_I_ARCS_BEGIN(g, u, a, w)
+        (void)a;
+        cursor[w] = -1;
+      KARST_I_ARCS_END
     }
   }
 cleanup:
@@ -464,8 +466,10 @@ cleanup:
   free(cursor);
 }
 
-/* Batches the rows are built in (see karst_graph_build). */
+/* Batches the rows of a large graph are built in (see karst_graph_build). */
 #define BUILD_BATCHES 4
+
+karst_int_t karst_i_graph_min_batch_arcs = (karst_int_t)1 << 22;
 
 /* Remove the @p n_drop arcs of infinite cost (edges leaving the bedrock; costs are symmetric, so
  * both arcs of an edge go together): each row is read and coded again over its kept arcs into a
@@ -567,8 +571,8 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
               ? karst_i_knn_flann(ctx, samples->xyz, n, k, nth, nbr, kd2, kidx)
               : karst_i_knn(ctx, samples->xyz, n, k, nth, nbr, kd2, kidx);
     if (err != KARST_SUCCESS) goto cleanup;
-    build_t B = {ctx, n, k, nchunks, nbr, kidx, kd2, cnt, own, lo, hi, 0, 0, 0, NULL, inside, &g,
-                 &model, {0}, {0}};
+    build_t B = {ctx, n, k, nchunks, nbr,  kidx,   kd2, cnt,    own, lo,
+                 hi,  0, 0, 0,       NULL, inside, &g,  &model, {0}, {0}};
     karst_i_parallel_run(nth, task_count, &B);
     /* Row of v: in(v), then the own arcs not chosen back. Turn the chunk
      * counts into each chunk's first slot within the row. */
@@ -586,11 +590,12 @@ karst_error_t karst_graph_build(karst_ctx_t *ctx, const karst_geology_t *geo,
     karst_int_t code_cap = g.n_arcs + g.n_arcs / 4 + 64;
     g.code = karst_i_alloc_large((size_t)code_cap);
     if (!g.code) goto nomem;
-    /* The rows are built 32-bit in BUILD_BATCHES batches of about equal arcs, each coded before
-     * the next: the 32-bit rows of the whole graph never sit beside the k nearest
-     * (docs/performance.md, "Memory at scale"). Small graphs take the same way, so that every
-     * test runs it. */
+    /* The rows are built 32-bit in BUILD_BATCHES batches of about equal arcs (at least
+     * karst_i_graph_min_batch_arcs), each coded before the next: the 32-bit rows of a large graph
+     * never sit beside the k nearest (docs/performance.md, "Memory at scale"). A batch scans
+     * every source, so small graphs take one. */
     karst_int_t batch = g.n_arcs / BUILD_BATCHES;
+    if (batch < karst_i_graph_min_batch_arcs) batch = karst_i_graph_min_batch_arcs;
     karst_int_t largest = 0;
     for (karst_int_t v0 = 0, v1; v0 < n; v0 = v1) {
       for (v1 = v0 + 1; v1 < n && g.offsets[v1 + 1] - g.offsets[v0] <= batch; v1++) {

@@ -26,6 +26,10 @@ static inline double karst_i_dist2(const double *a, const double *b) {
   return karst_i_dist2_xyz(a[0], a[1], a[2], b);
 }
 
+/** Least arcs per batch in which karst_graph_build builds its rows 32-bit before coding them
+ *  (4 Mi: smaller graphs take one batch); a test lowers it to build small graphs in batches. */
+extern karst_int_t karst_i_graph_min_batch_arcs;
+
 /**
  * Make @p g the graph with rows (offsets, adj, cost), as karst_graph_from_rows, taking the three
  * arrays (malloc'd; adj and cost of offsets[n] entries): they belong to @p g or are freed, on
@@ -35,6 +39,29 @@ static inline double karst_i_dist2(const double *a, const double *b) {
 karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
                                       const double *xyz, karst_int_t *offsets, int32_t *adj,
                                       karst_arc_cost_t *cost);
+
+/* The arcs a of row v with their heads w, read run by run (karst_graph_t) in two nested loops
+ * opened by KARST_I_ARCS_BEGIN and closed by KARST_I_ARCS_END: per arc one byte and two additions,
+ * where karst_arc_next also tests for the run's end (the searches' relaxations wait on memory, and
+ * the fewer instructions an arc takes, the more arcs the processor has in flight; measured in
+ * docs/performance.md, "Memory at scale"). A run's first arc takes its count byte as its code
+ * (head_ starts that much below the run's head), so every arc adds its byte plus one. The body
+ * may `continue` to the next arc; it must not `break`. */
+#define KARST_I_ARCS_BEGIN(g, v, a, w)                                                             \
+  {                                                                                                \
+    const unsigned char *q_ = (g)->code + (g)->code_off[v];                                        \
+    for (karst_int_t a = (g)->offsets[v], end_ = (g)->offsets[(v) + 1]; a < end_;) {               \
+      const int32_t first_ = karst_graph_run_head(q_);                                             \
+      q_ += 4;                                                                                     \
+      const karst_int_t run_end_ = a + 1 + *q_;                                                    \
+      int64_t head_ = (int64_t)first_ - *q_ - 1;                                                   \
+      for (; a < run_end_; a++) {                                                                  \
+        head_ += *q_++ + 1;                                                                        \
+        const karst_int_t w = (karst_int_t)head_;
+#define KARST_I_ARCS_END                                                                           \
+  }                                                                                                \
+  }                                                                                                \
+  }
 
 /** (d, i) < (e, j) in the lexicographic order that breaks distance ties by index. */
 static inline int karst_i_knn_less(double d, int32_t i, double e, int32_t j) {

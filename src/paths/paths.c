@@ -10,6 +10,7 @@
 
 #include "core/memory_internal.h"
 #include "core/parallel_internal.h"
+#include "graph/graph_internal.h"
 
 /*
  * Per-vertex search state. What every arc relaxation reads (g and whether
@@ -314,12 +315,10 @@ static void tabulate_worker(void *arg, int tid, int nthreads) {
   const karst_graph_t *g = t->g;
   const karst_int_t lo = g->n * tid / nthreads, hi = g->n * (tid + 1) / nthreads;
   for (karst_int_t v = lo; v < hi; v++) {
-    karst_arc_reader_t rd = karst_graph_arcs(g, v);
-    for (karst_int_t a = g->offsets[v]; a < g->offsets[v + 1]; a++) {
-      karst_int_t w = karst_arc_next(&rd);
+    KARST_I_ARCS_BEGIN(g, v, a, w)
       t->fwd[a] = (karst_arc_cost_t)route_cost(t->r, g->cost[a], v, w);
       t->bwd[a] = (karst_arc_cost_t)route_cost(t->r, g->cost[a], w, v);
-    }
+    KARST_I_ARCS_END
   }
 }
 
@@ -370,29 +369,6 @@ prefetch_arcs(const karst_graph_t *g, const karst_arc_cost_t *cost, karst_int_t 
   for (size_t b = 0; b < deg * sizeof *cost; b += 64)
     __builtin_prefetch(pc + b);
 }
-
-/* The arcs a of row v with their heads w, read run by run (karst_graph_t) in two nested loops
- * opened by ARCS_BEGIN and closed by ARCS_END: per arc one byte and two additions, where
- * karst_arc_next also tests for the run's end (the searches' relaxations wait on memory, and
- * the fewer instructions an arc takes, the more arcs the processor has in flight; measured in
- * docs/performance.md, "Memory at scale"). A run's first arc takes its count byte as its code
- * (head_ starts that much below the run's head), so every arc adds its byte plus one. The body
- * may `continue` to the next arc; it must not `break`. */
-#define ARCS_BEGIN(g, v, a, w)                                                                     \
-  {                                                                                                \
-    const unsigned char *q_ = (g)->code + (g)->code_off[v];                                        \
-    for (karst_int_t a = (g)->offsets[v], end_ = (g)->offsets[(v) + 1]; a < end_;) {               \
-      const int32_t first_ = karst_graph_run_head(q_);                                             \
-      q_ += 4;                                                                                     \
-      const karst_int_t run_end_ = a + 1 + *q_;                                                    \
-      int64_t head_ = (int64_t)first_ - *q_ - 1;                                                   \
-      for (; a < run_end_; a++) {                                                                  \
-        head_ += *q_++ + 1;                                                                        \
-        const karst_int_t w = (karst_int_t)head_;
-#define ARCS_END                                                                                   \
-  }                                                                                                \
-  }                                                                                                \
-  }
 
 /* The loop of run_search for one combination of its per-arc options (a routed cost formula, a
  * blocked mask), given as constants so that each instance tests neither per arc: about 5
@@ -452,7 +428,7 @@ run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
     }
     if (noexpand && noexpand[v] && gv > 0.0) continue; /* a start (cost 0) is expanded */
     if (s->hn > 0) prefetch_arcs(g, arc_cost, s->heap[0].v);
-    ARCS_BEGIN(g, v, a, w)
+    KARST_I_ARCS_BEGIN(g, v, a, w)
       double c = arc_cost[a];
       if (!(c < INFINITY) || (with_blocked && blocked[w])) continue;
       if (with_route) c = backward ? route_cost(route, c, w, v) : route_cost(route, c, v, w);
@@ -470,7 +446,7 @@ run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
       nw->dist = nd;
       if (want_pred) pred[w] = (int32_t)v;
       heap_update(s, nw, astar ? nd + hh[w] : nd, w);
-    ARCS_END
+    KARST_I_ARCS_END
   }
   return KARST_SUCCESS;
 }
@@ -684,7 +660,7 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
     if (v == target) break;
     if (s->hn > 0) prefetch_arcs(g, cost, s->heap[0].v);
     const unsigned char *vflag = flag && !(dn && dn[v] > 0.0) ? flag : NULL;
-    ARCS_BEGIN(g, v, a, w)
+    KARST_I_ARCS_BEGIN(g, v, a, w)
       double c = cost[a];
       if (!(c < INFINITY) || (closed && closed[w] && w != target)) continue;
       if (route) c = route_cost(route, c, v, w);
@@ -703,7 +679,7 @@ karst_error_t karst_paths_astar_reuse(karst_ctx_t *ctx, karst_search_t *s, karst
       nw->dist = nd;
       pred[w] = (int32_t)v;
       heap_update(s, nw, nd + hh[w], w);
-    ARCS_END
+    KARST_I_ARCS_END
   }
   if (!is_settled(s, target))
     return karst_set_error(ctx, KARST_EUNREACHABLE,
@@ -744,13 +720,13 @@ karst_error_t karst_paths_lower_distances(karst_ctx_t *ctx, karst_search_t *s,
   while (s->hn > 0) {
     heap_entry_t e = heap_pop(s);
     if (s->hn > 0) prefetch_arcs(g, g->cost, s->heap[0].v);
-    ARCS_BEGIN(g, e.v, a, w)
+    KARST_I_ARCS_BEGIN(g, e.v, a, w)
       double nd = e.key + g->cost[a];
       if (nd < dist[w]) {
         dist[w] = nd;
         heap_update(s, touch(s, w), nd, w);
       }
-    ARCS_END
+    KARST_I_ARCS_END
   }
   return KARST_SUCCESS;
 }

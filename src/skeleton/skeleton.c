@@ -21,7 +21,8 @@ karst_error_t karst_skeleton_init(karst_ctx_t *ctx, karst_skeleton_t *sk, const 
   memset(sk, 0, sizeof *sk);
   karst_network_init(&sk->net);
   sk->n_graph = g->n;
-  sk->node_of_vertex = karst_i_alloc_large((size_t)(g->n > 0 ? g->n : 1) * sizeof *sk->node_of_vertex);
+  sk->node_of_vertex =
+      karst_i_alloc_large((size_t)(g->n > 0 ? g->n : 1) * sizeof *sk->node_of_vertex);
   sk->edge_set_cap = 1024;
   sk->edge_keys = calloc(sk->edge_set_cap, sizeof *sk->edge_keys);
   double *d;

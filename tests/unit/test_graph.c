@@ -12,6 +12,7 @@
 #include <cmocka.h>
 
 #include "geology_fixture.h"
+#include "graph/graph_internal.h"
 #include "graph_heads.h"
 #include "karst.h"
 #include "test_util.h"
@@ -317,15 +318,15 @@ static void test_from_rows_coding(void **state) {
     offsets[v] = v < 4 ? off[v] : 308;
   assert_int_equal(karst_graph_from_rows(&ctx, &g, N, NULL, offsets, adj, cost), KARST_SUCCESS);
   assert_int_equal(g.n_arcs, 308);
-  const unsigned char row0code[23] = {5,   0, 0, 0, 3, 0, 255, 0, 0xe8, 3, 0, 0,
-                                       0,   0xe8, 3, 0, 0, 0, 3, 0, 0, 0, 0};
+  const unsigned char row0code[23] = {5, 0,    0, 0, 3, 0, 255, 0, 0xe8, 3, 0, 0,
+                                      0, 0xe8, 3, 0, 0, 0, 3,   0, 0,    0, 0};
   assert_int_equal(g.code_off[1], 23);
   assert_memory_equal(g.code, row0code, 23);
-  assert_int_equal(g.code_off[2], 23);                /* row 1: empty */
+  assert_int_equal(g.code_off[2], 23);                    /* row 1: empty */
   assert_int_equal(g.code_off[3], 23 + 5 + 255 + 5 + 43); /* row 2: two runs */
   const unsigned char *r2 = g.code + 23;
   const unsigned char head0[5] = {0, 0, 0, 0, 255}, head256[5] = {0, 1, 0, 0, 43};
-  assert_memory_equal(r2, head0, 5);     /* 0, then 255 arcs of gap 1 */
+  assert_memory_equal(r2, head0, 5); /* 0, then 255 arcs of gap 1 */
   for (int i = 0; i < 255; i++)
     assert_int_equal(r2[5 + i], 0);
   assert_memory_equal(r2 + 260, head256, 5); /* the 256th arc after a run's head starts a run */
@@ -438,6 +439,24 @@ static void test_pipeline(void **state) {
       assert_true(g.cost[e] >= lb * sqrt(d2(s.xyz + 3 * v, s.xyz + 3 * w)));
     }
   }
+  /* Built in batches (karst_graph_build: each quarter of the arcs built 32-bit, then coded; large
+   * graphs only, here forced), on 1 and 3 threads: the same graph byte for byte, edges leaving
+   * the bedrock (above the terrain) dropped alike. */
+  const karst_int_t saved = karst_i_graph_min_batch_arcs;
+  karst_i_graph_min_batch_arcs = 0;
+  for (int t = 1; t <= 3; t += 2) {
+    karst_graph_t h;
+    karst_graph_init(&h);
+    ctx.nthreads = t;
+    assert_int_equal(T_graph_build(&ctx, &sc, &s, &h), KARST_SUCCESS);
+    assert_int_equal(h.n_arcs, g.n_arcs);
+    assert_memory_equal(h.offsets, g.offsets, sizeof *g.offsets * (size_t)(g.n + 1));
+    assert_memory_equal(h.code_off, g.code_off, sizeof *g.code_off * (size_t)(g.n + 1));
+    assert_memory_equal(h.code, g.code, (size_t)g.code_off[g.n]);
+    assert_memory_equal(h.cost, g.cost, sizeof *g.cost * (size_t)g.n_arcs);
+    karst_graph_destroy(&h);
+  }
+  karst_i_graph_min_batch_arcs = saved;
   karst_graph_destroy(&g);
   karst_samples_destroy(&s);
   karst_scenario_destroy(&sc);
@@ -533,8 +552,7 @@ int main(void) {
       cmocka_unit_test(test_knn_exact),         cmocka_unit_test(test_knn_collinear),
       cmocka_unit_test(test_graph_small_cases), cmocka_unit_test(test_graph_excludes_air),
       cmocka_unit_test(test_from_edges),        cmocka_unit_test(test_pipeline),
-      cmocka_unit_test(test_from_rows_coding),
-      cmocka_unit_test(test_costs_all_terms),
+      cmocka_unit_test(test_from_rows_coding),  cmocka_unit_test(test_costs_all_terms),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
