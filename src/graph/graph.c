@@ -151,10 +151,6 @@ karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_
  * the result does not depend on scheduling). */
 #define ROW_BLOCK 512
 
-#define FOR_ROWS(v, n, tid, nth)                                                                   \
-  for (karst_int_t blk_ = (tid); blk_ * ROW_BLOCK < (n); blk_ += (nth))                            \
-    for (karst_int_t v = blk_ * ROW_BLOCK; v < (n) && v < (blk_ + 1) * ROW_BLOCK; v++)
-
 /* ------------------------------------------------------------------------ */
 /* Edge lists                                                                */
 /* ------------------------------------------------------------------------ */
@@ -421,7 +417,7 @@ static void task_merge(void *p, int tid, int nth) {
  * both arcs. Sources are taken in contiguous chunks, in increasing order:
  * the sources u < v of one chunk that are neighbours of v then form one run
  * of v's sorted row, met in the same order, so the reverse arc's slot is a
- * per-row cursor (started at the chunk's first source by one binary search)
+ * per-row cursor (started at the chunk's first source by one scan of v's row)
  * instead of a search per edge. No two chunks write the same slot, and each
  * value is a pure function of the two positions. */
 static void task_cost(void *p, int tid, int nth) {
