@@ -88,8 +88,9 @@ static inline karst_arc_cost_t karst_arc_cost_round(double c) {
  * 255), then one byte per each of those r arcs, the gap to the previous head less one (gaps 1 to
  * 256). A row's first arc always starts a run; a gap outside 1 .. 256 (unsorted rows, repeated
  * heads) or a run of 256 arcs starts a new one. So any row codes, sorted rows smallest (1 byte
- * an arc, 4 more per run). Read a row with karst_graph_arcs and karst_arc_next; a loop that
- * must be fast reads the runs itself (src/paths/paths.c, ARCS_BEGIN).
+ * an arc, 4 more per run). Read a row with karst_graph_arcs and karst_arc_next; the library's
+ * loops that must be fast read the runs themselves (KARST_I_ARCS_BEGIN,
+ * src/graph/graph_internal.h).
  */
 typedef struct karst_graph {
   karst_int_t n;          /**< vertices */

@@ -115,7 +115,6 @@ karst_error_t karst_conditioning_add_legs(karst_ctx_t *ctx, const karst_scenario
   offsets[g->n] = w;
   err = karst_i_graph_take_rows(ctx, g, g->n, g->xyz, offsets, adj, cost);
   offsets = NULL;
-  adj = NULL;
   cost = NULL;
 cleanup:
   free(extra);

@@ -54,9 +54,9 @@ static karst_int_t row_bytes(const int32_t *h, karst_int_t d) {
   return bytes;
 }
 
-/* Code the row h[0 .. d) into out (row_bytes many bytes). */
-static void row_encode(const int32_t *h, karst_int_t d, unsigned char *out) {
-  unsigned char *count = NULL;
+/* Code the row h[0 .. d) into out; returns the bytes written (row_bytes). */
+static karst_int_t row_encode(const int32_t *h, karst_int_t d, unsigned char *out) {
+  unsigned char *const start = out, *count = NULL;
   for (karst_int_t i = 0; i < d; i++) {
     if (i > 0 && codes_as_gap(h[i - 1], h[i], *count)) {
       *out++ = (unsigned char)(h[i] - h[i - 1] - 1);
@@ -70,6 +70,7 @@ static void row_encode(const int32_t *h, karst_int_t d, unsigned char *out) {
       out += 5;
     }
   }
+  return out - start;
 }
 
 karst_int_t karst_graph_find_arc(const karst_graph_t *g, karst_int_t v, karst_int_t w) {
@@ -101,24 +102,20 @@ karst_error_t karst_graph_from_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_in
                                (long long)a, (long long)v, (long long)adj[a], (long long)n);
   }
   karst_int_t *o = malloc(sizeof(karst_int_t) * ((size_t)n + 1));
-  int32_t *h = malloc(sizeof(int32_t) * ((size_t)offsets[n] + 1));
   karst_arc_cost_t *c = malloc(sizeof *c * ((size_t)offsets[n] + 1));
-  if (!o || !h || !c) {
-    free(o), free(h), free(c);
+  if (!o || !c) {
+    free(o), free(c);
     return karst_set_error(ctx, KARST_ENOMEM,
                            "no memory for a graph of %lld vertices and %lld arcs", (long long)n,
                            (long long)offsets[n]);
   }
   memcpy(o, offsets, sizeof(karst_int_t) * ((size_t)n + 1));
-  if (offsets[n] > 0) {
-    memcpy(h, adj, sizeof(int32_t) * (size_t)offsets[n]);
-    memcpy(c, cost, sizeof *c * (size_t)offsets[n]);
-  }
-  return karst_i_graph_take_rows(ctx, g, n, xyz, o, h, c);
+  if (offsets[n] > 0) memcpy(c, cost, sizeof *c * (size_t)offsets[n]);
+  return karst_i_graph_take_rows(ctx, g, n, xyz, o, adj, c);
 }
 
 karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
-                                      const double *xyz, karst_int_t *offsets, int32_t *adj,
+                                      const double *xyz, karst_int_t *offsets, const int32_t *adj,
                                       karst_arc_cost_t *cost) {
   karst_int_t *code_off = malloc(sizeof(karst_int_t) * ((size_t)n + 1));
   unsigned char *code = NULL;
@@ -129,13 +126,12 @@ karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_
     code = malloc((size_t)code_off[n] + 1);
   }
   if (!code) {
-    free(offsets), free(adj), free(cost), free(code_off);
+    free(offsets), free(cost), free(code_off);
     return karst_set_error(ctx, KARST_ENOMEM, "no memory for a graph of %lld vertices",
                            (long long)n);
   }
   for (karst_int_t v = 0; v < n; v++)
     row_encode(adj + offsets[v], offsets[v + 1] - offsets[v], code + code_off[v]);
-  free(adj);
   karst_graph_destroy(g);
   g->n = n;
   g->xyz = xyz;
@@ -238,6 +234,7 @@ karst_error_t karst_graph_from_edges(karst_ctx_t *ctx, karst_graph_t *g, karst_i
     adj[i] = (int32_t)arcs[i].v, c[i] = karst_arc_cost_round(arcs[i].c);
   err = karst_i_graph_take_rows(ctx, g, n, xyz, r.offsets, adj, c);
   r.offsets = NULL;
+  free(adj);
   goto cleanup;
 nomem:
   err = karst_set_error(ctx, KARST_ENOMEM, "no memory for a graph of %lld vertices and %lld edges",
@@ -491,8 +488,7 @@ static karst_error_t drop_infinite_arcs(karst_ctx_t *ctx, karst_graph_t *g, kars
       int32_t h = (int32_t)karst_arc_next(&r);
       if (isfinite(g->cost[a])) row[m] = h, g->cost[w + m++] = g->cost[a];
     }
-    row_encode(row, m, code + x);
-    w += m, x += row_bytes(row, m);
+    w += m, x += row_encode(row, m, code + x);
   }
   g->offsets[g->n] = w, g->code_off[g->n] = x;
   g->n_arcs = w;

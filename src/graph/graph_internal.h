@@ -31,13 +31,14 @@ static inline double karst_i_dist2(const double *a, const double *b) {
 extern karst_int_t karst_i_graph_min_batch_arcs;
 
 /**
- * Make @p g the graph with rows (offsets, adj, cost), as karst_graph_from_rows, taking the three
- * arrays (malloc'd; adj and cost of offsets[n] entries): they belong to @p g or are freed, on
- * failure too. The rows are not checked. @p g is unchanged on failure.
+ * Make @p g the graph with rows (offsets, adj, cost), as karst_graph_from_rows, coding the heads
+ * @p adj (the caller keeps them) and taking @p offsets and @p cost (malloc'd, cost of offsets[n]
+ * entries): they belong to @p g or are freed, on failure too. The rows are not checked. @p g is
+ * unchanged on failure.
  * @return KARST_SUCCESS, KARST_ENOMEM.
  */
 karst_error_t karst_i_graph_take_rows(karst_ctx_t *ctx, karst_graph_t *g, karst_int_t n,
-                                      const double *xyz, karst_int_t *offsets, int32_t *adj,
+                                      const double *xyz, karst_int_t *offsets, const int32_t *adj,
                                       karst_arc_cost_t *cost);
 
 /* The arcs a of row v with their heads w, read run by run (karst_graph_t) in two nested loops
