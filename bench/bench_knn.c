@@ -65,8 +65,8 @@ static void print_stage(const char *name, const marks_t *m, int a, int b) {
 /* How the graph stores its neighbour indices (include/karst/graph.h: runs of one-byte gaps after
  * a run's first head): bytes per arc (a byte an arc, 4 per run, and the 8-byte row offset per
  * vertex), the arcs per run, and the time of one pass over all rows decoding them
- * (karst_arc_next) against reading a 32-bit copy (the fastest of 3, the sums of the indices
- * compared), as one line in @p line. */
+ * (karst_arc_next) against reading a 32-bit copy (the fastest of the 2 passes after the one that
+ * makes the copy, the sums of the indices compared), as one line in @p line. */
 static void adjacency_figures(const karst_graph_t *g, char *line, size_t cap) {
   if (g->n_arcs == 0) {
     snprintf(line, cap, "  %-22s no arcs\n", "neighbour indices");
