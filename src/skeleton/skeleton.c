@@ -350,13 +350,15 @@ static karst_error_t search_pair(karst_ctx_t *ctx, karst_search_t *s, const lay_
 /* run entirely along conduits already laid, and the network — the only     */
 /* state a search reads besides the graph — is then unchanged. So the       */
 /* threads search the next pairs ahead of the commit point on the current   */
-/* network (speculation); results are committed in pair order, and when a   */
-/* committed path adds an edge, the searches started on the old network are */
-/* cancelled and discarded, the network is updated with no search running, */
-/* and the search resumes at the next pair. Every committed path was thus   */
-/* computed on exactly the network the one-thread loop would have had, and  */
-/* the searches are exact with deterministic ties: the skeleton is the same */
-/* for any thread count (tests/unit/test_skeleton.c checks it).             */
+/* network (speculation); results are committed in pair order. When a      */
+/* committed path adds an edge, the searches under way pause at their next  */
+/* check (every 256 settled vertices), the network is updated with no       */
+/* search running, and each search, finished or paused, is kept only if it  */
+/* has read nothing the update changed: it then runs (or ran) exactly as it */
+/* would have on the new network. Every committed path was thus computed on */
+/* exactly the network the one-thread loop would have had, and the searches */
+/* are exact with deterministic ties: the skeleton is the same for any      */
+/* thread count (tests/unit/test_skeleton.c checks it).                     */
 /* ------------------------------------------------------------------------ */
 
 /*
@@ -375,21 +377,12 @@ static karst_error_t search_pair(karst_ctx_t *ctx, karst_search_t *s, const lay_
 #define SPEC_WINDOW_PER_THREAD 4
 
 /*
- * Speculation pays only while most commits leave the network unchanged: a
- * search running beside the one being committed slows it (they share the
- * memory bandwidth and the last-level cache), and is thrown away when the
- * commit adds an edge and the search read any of it. Measured on the 1.5 M
- * sample block of bench_generate (50 pairs, 40 of which add edges): skeleton
- * 4.3-4.5 s on 1 thread, 5.2-5.5 s on 2 with speculation throughout (the
- * commit's own search up to 1.6x slower beside another). So the threads search
- * ahead only while the recent share of commits that changed the network (an
- * exponential average with weight SPEC_CHANGE_WEIGHT on the newest commit) is
- * at most SPEC_MAX_CHANGE_SHARE; otherwise only the next pair to commit is
- * searched. This decides only which searches run when, never a result: the
- * skeleton stays the same for any thread count.
+ * The threads always search ahead. Until 6 December 2026 they did so only while at most half of
+ * the recent commits changed the network, because a change threw away every search under way
+ * and every finished one; once finished searches that read nothing of a change were kept (5
+ * December), and then paused searches too (6 December), searching ahead paid on the 1.5 M sample
+ * block of bench_generate as well (50 pairs, 43 of which add edges; docs/performance.md).
  */
-#define SPEC_MAX_CHANGE_SHARE 0.5
-#define SPEC_CHANGE_WEIGHT 0.25
 
 typedef struct {
   karst_path_t path;
@@ -415,20 +408,66 @@ typedef struct {
   /* under mu: */
   karst_int_t next;   /* next pair to hand out */
   karst_int_t commit; /* next pair to commit */
-  unsigned epoch;     /* bumped each time the network changes */
+  unsigned epoch;     /* bumped each time a network change has been applied */
   int in_flight, mutating, stop;
   karst_error_t err;
   karst_int_t kept;
   uint32_t *mark; /* per vertex: the change (mark_id) that last altered what it reads */
   uint32_t mark_id;
-  karst_int_t n_kept_results; /* speculative results kept across a network change (statistics) */
-  double change_share;        /* recent share of commits that changed the network */
-  karst_int_t n_quiet;        /* commits made while searching ahead was off (statistics) */
-  atomic_int cancel;          /* read by the searches without the lock */
+  karst_int_t n_kept_results;      /* finished searches kept across a network change (statistics) */
+  karst_int_t n_paused, n_resumed; /* searches paused by a change, and of those resumed */
+  int paused;                      /* searches waiting in spec_check for a change to end */
+  karst_int_t *running;            /* per thread: the pair it is searching, or -1 */
+  int n_threads;
+  atomic_int attention; /* read by the searches without the lock: pause */
 } spec_t;
 
-static int spec_cancelled(void *arg) {
-  return atomic_load_explicit(&((spec_t *)arg)->cancel, memory_order_relaxed);
+/* One thread's search under way, as spec_check sees it. */
+typedef struct {
+  spec_t *sp;
+  karst_search_t *ws;
+  unsigned epoch; /* the network version its search is valid on; dead when it must stop */
+  int dead;
+} spec_run_t;
+
+/* Whether vertex list @p v (n entries) meets a vertex marked after change @p since. */
+static int spec_touched_since(const spec_t *sp, const int32_t *v, karst_int_t n, uint32_t since) {
+  for (karst_int_t i = 0; i < n; i++)
+    if (sp->mark[v[i]] > since) return 1;
+  return 0;
+}
+
+/* The searches' check, every 256 settled vertices (no lock unless a change is pending). When a
+ * commit is changing the network, the search pauses here, at a point where it reads nothing,
+ * until the change is applied; it then goes on if it has touched no vertex the change altered
+ * (everything it read is as on the new network, so it runs on as a search started on the new
+ * network would), else it stops. Returns nonzero to stop. */
+static int spec_check(void *arg) {
+  spec_run_t *run = arg;
+  spec_t *sp = run->sp;
+  if (!atomic_load_explicit(&sp->attention, memory_order_acquire)) return 0;
+  pthread_mutex_lock(&sp->mu);
+  if (sp->mutating && !sp->stop) {
+    const uint32_t since = sp->mark_id;
+    sp->paused++;
+    sp->n_paused++;
+    pthread_cond_broadcast(&sp->cv);
+    while (sp->mutating && !sp->stop)
+      pthread_cond_wait(&sp->cv, &sp->mu);
+    sp->paused--;
+    karst_int_t n = 0;
+    const int32_t *trail = karst_search_trail(run->ws, &n);
+    /* mark_id below since: the marks wrapped and were cleared, so they cannot tell */
+    if (sp->stop || sp->mark_id < since || spec_touched_since(sp, trail, n, since)) {
+      run->dead = 1;
+    } else {
+      run->epoch = sp->epoch;
+      sp->n_resumed++;
+    }
+  }
+  const int stop = run->dead || sp->stop;
+  pthread_mutex_unlock(&sp->mu);
+  return stop;
 }
 
 /* Commit pair sp->commit from its slot. Called with sp->mu held by thread @p tid. */
@@ -446,21 +485,18 @@ static void spec_commit_one(spec_t *sp, int tid) {
   if (err) {
     sp->err = err;
     sp->stop = 1;
-    atomic_store(&sp->cancel, 1);
+    atomic_store_explicit(&sp->attention, 1, memory_order_release);
+    pthread_cond_broadcast(&sp->cv);
     return;
   }
   sp->kept++;
   sp->commit++;
   karst_progress(sp->ctx, "skeleton", (double)sp->commit, (double)sp->n_pairs);
-  const int grew = sp->sk->net.n_edges != e0;
-  sp->n_quiet += sp->change_share > SPEC_MAX_CHANGE_SHARE;
-  sp->change_share += SPEC_CHANGE_WEIGHT * ((double)grew - sp->change_share);
-  if (!grew) return; /* nothing new: every speculative search stays valid */
-  /* The network changed: stop the searches under way and wait for them to leave. */
-  sp->epoch++;
+  if (sp->sk->net.n_edges == e0) return; /* nothing new: every speculative search stays valid */
+  /* The network changes: wait until every search under way has paused (spec_check) or left. */
   sp->mutating = 1;
-  atomic_store(&sp->cancel, 1);
-  while (sp->in_flight > 0)
+  atomic_store_explicit(&sp->attention, 1, memory_order_release);
+  while (sp->in_flight > sp->paused)
     pthread_cond_wait(&sp->cv, &sp->mu);
   flag_path_arcs(sp->L->g, &sl->path, sp->L->flag, P->tag);
   err = karst_paths_lower_distances(sp->ctx, sp->ws[tid], sl->path.n, sl->path.v, sp->L->to_net);
@@ -468,7 +504,7 @@ static void spec_commit_one(spec_t *sp, int tid) {
    * arcs between the path's vertices (read only when one of them is expanded, so touched), the
    * lowered network distances are at the vertices lower_distances touched (read only at a
    * touched vertex). Then the search would have run identically on the new network. */
-  if (++sp->mark_id == 0) { /* wrapped: clear the marks once */
+  if (++sp->mark_id == 0) { /* wrapped: clear the marks once (a paused search then stops) */
     memset(sp->mark, 0, (size_t)sp->L->g->n * sizeof *sp->mark);
     sp->mark_id = 1;
   }
@@ -481,20 +517,20 @@ static void spec_commit_one(spec_t *sp, int tid) {
   for (karst_int_t i = 0; i < sp->window; i++) {
     spec_slot_t *o = &sp->slot[i];
     if (!o->ready) continue;
-    int valid = o->pair >= sp->commit && !o->err && o->n_trail >= 0;
-    for (karst_int_t j = 0; j < o->n_trail && valid; j++)
-      valid = sp->mark[o->trail[j]] != sp->mark_id;
+    int valid = o->pair >= sp->commit && !o->err && o->n_trail >= 0 &&
+                !spec_touched_since(sp, o->trail, o->n_trail, sp->mark_id - 1);
     o->ready = valid;
     sp->n_kept_results += valid;
   }
   sp->next = sp->commit;
+  sp->epoch++;
   sp->mutating = 0;
   if (err) {
     sp->err = err;
     sp->stop = 1;
-  } else {
-    atomic_store(&sp->cancel, 0);
   }
+  atomic_store_explicit(&sp->attention, sp->stop, memory_order_release);
+  pthread_cond_broadcast(&sp->cv);
 }
 
 static void spec_worker(void *arg, int tid, int nthreads) {
@@ -513,21 +549,19 @@ static void spec_worker(void *arg, int tid, int nthreads) {
       pthread_cond_wait(&sp->cv, &sp->mu);
       continue;
     }
-    if (sp->next > sp->commit && sp->change_share > SPEC_MAX_CHANGE_SHARE &&
-        !(sp->slot[sp->next % sp->window].ready &&
-          sp->slot[sp->next % sp->window].pair == sp->next)) {
-      /* searching ahead would most likely be wasted: wait for the commit */
-      pthread_cond_wait(&sp->cv, &sp->mu);
-      continue;
-    }
     const karst_int_t k = sp->next++;
     spec_slot_t *mine = &sp->slot[k % sp->window];
     if (mine->ready && mine->pair == k) continue; /* kept across a network change */
-    const unsigned epoch = sp->epoch;
+    int taken = 0;                                /* by a search that went on across a change */
+    for (int t = 0; t < sp->n_threads; t++)
+      taken |= sp->running[t] == k;
+    if (taken) continue;
+    spec_run_t run = {sp, sp->ws[tid], sp->epoch, 0};
+    sp->running[tid] = k;
     sp->in_flight++;
     pthread_mutex_unlock(&sp->mu);
     karst_error_t err =
-        search_pair(&wctx, sp->ws[tid], sp->L, &sp->pairs[k], spec_cancelled, sp, &local);
+        search_pair(&wctx, sp->ws[tid], sp->L, &sp->pairs[k], spec_check, &run, &local);
     karst_int_t n_trail = 0;
     const int32_t *trail = err ? NULL : karst_search_trail(sp->ws[tid], &n_trail);
     if (trail && n_trail > local_cap) { /* grown outside the lock */
@@ -538,7 +572,12 @@ static void spec_worker(void *arg, int tid, int nthreads) {
     if (have_trail) memcpy(local_trail, trail, (size_t)n_trail * sizeof *trail);
     pthread_mutex_lock(&sp->mu);
     sp->in_flight--;
-    if (epoch == sp->epoch && !sp->stop && k >= sp->commit) {
+    sp->running[tid] = -1;
+    /* Valid on the network as it is (a change pending since is checked when it is applied). */
+    const int valid = !run.dead && run.epoch == sp->epoch;
+    if (!valid && !sp->stop && k >= sp->commit && sp->next > k)
+      sp->next = k; /* stopped by a change it had read: to be searched again */
+    if (valid && !sp->stop && k >= sp->commit) {
       spec_slot_t *sl = &sp->slot[k % sp->window];
       karst_path_t t = sl->path;
       sl->path = local;
@@ -555,7 +594,10 @@ static void spec_worker(void *arg, int tid, int nthreads) {
       sl->trail = local_trail, sl->cap_trail = local_cap;
       sl->n_trail = have_trail ? n_trail : -1;
       local_trail = tt, local_cap = tc;
-      while (!sp->stop && sp->commit < sp->n_pairs && sp->slot[sp->commit % sp->window].ready &&
+      /* Not while another thread's commit waits for the searches to pause: that thread commits
+       * this slot once its change is applied. */
+      while (!sp->stop && !sp->mutating && sp->commit < sp->n_pairs &&
+             sp->slot[sp->commit % sp->window].ready &&
              sp->slot[sp->commit % sp->window].pair == sp->commit)
         spec_commit_one(sp, tid);
     }
@@ -580,13 +622,17 @@ static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const lay_t *L, int T,
   sp.n_pairs = n_pairs;
   sp.sk = sk;
   sp.window = (karst_int_t)T * SPEC_WINDOW_PER_THREAD;
-  atomic_init(&sp.cancel, 0);
+  atomic_init(&sp.attention, 0);
   sp.ws = calloc((size_t)T, sizeof *sp.ws);
   sp.slot = calloc((size_t)sp.window, sizeof *sp.slot);
-  if (!sp.ws || !sp.slot) {
+  sp.running = malloc((size_t)T * sizeof *sp.running);
+  if (!sp.ws || !sp.slot || !sp.running) {
     err = karst_set_error(ctx, KARST_ENOMEM, "skeleton: out of memory");
     goto cleanup;
   }
+  for (int t = 0; t < T; t++)
+    sp.running[t] = -1;
+  sp.n_threads = T;
   for (int t = 0; t < T; t++)
     if ((err = karst_search_create(ctx, L->g, &sp.ws[t])) ||
         (err = karst_search_record_trail(ctx, sp.ws[t])))
@@ -610,9 +656,10 @@ static karst_error_t lay_pairs_parallel(karst_ctx_t *ctx, const lay_t *L, int T,
   pthread_mutex_destroy(&sp.mu);
   err = sp.err;
   karst_log(ctx, KARST_LOG_DEBUG,
-            "skeleton: %lld pairs on %d threads, %lld speculative results kept across a change, "
-            "%lld commits with no search ahead",
-            (long long)n_pairs, T, (long long)sp.n_kept_results, (long long)sp.n_quiet);
+            "skeleton: %lld pairs on %d threads; across a change %lld finished searches kept, "
+            "%lld of %lld paused searches resumed",
+            (long long)n_pairs, T, (long long)sp.n_kept_results, (long long)sp.n_resumed,
+            (long long)sp.n_paused);
 cleanup:
   *kept = sp.kept;
   if (sp.ws)
@@ -624,6 +671,7 @@ cleanup:
       free(sp.slot[i].trail);
     }
   free(sp.mark);
+  free(sp.running);
   free(sp.ws);
   free(sp.slot);
   return err;
