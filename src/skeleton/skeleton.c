@@ -408,7 +408,6 @@ typedef struct {
   /* under mu: */
   karst_int_t next;   /* next pair to hand out */
   karst_int_t commit; /* next pair to commit */
-  unsigned epoch;     /* bumped each time a network change has been applied */
   int in_flight, mutating, stop;
   karst_error_t err;
   karst_int_t kept;
@@ -422,12 +421,14 @@ typedef struct {
   atomic_int attention; /* read by the searches without the lock: pause */
 } spec_t;
 
-/* One thread's search under way, as spec_check sees it. */
+/* One thread's search under way, as spec_check sees it. A search is never running while the
+ * network changes (the change waits until every search under way has paused or left), so unless
+ * a change stopped it (dead) its result holds on the network as it is, a change still pending
+ * being checked on the finished slots when it is applied. */
 typedef struct {
   spec_t *sp;
   karst_search_t *ws;
-  unsigned epoch; /* the network version its search is valid on; dead when it must stop */
-  int dead;
+  int dead; /* stopped: it had touched what a change altered, or the loop stops */
 } spec_run_t;
 
 /* Whether vertex list @p v (n entries) meets a vertex marked after change @p since. */
@@ -461,7 +462,6 @@ static int spec_check(void *arg) {
     if (sp->stop || sp->mark_id < since || spec_touched_since(sp, trail, n, since)) {
       run->dead = 1;
     } else {
-      run->epoch = sp->epoch;
       sp->n_resumed++;
     }
   }
@@ -523,7 +523,6 @@ static void spec_commit_one(spec_t *sp, int tid) {
     sp->n_kept_results += valid;
   }
   sp->next = sp->commit;
-  sp->epoch++;
   sp->mutating = 0;
   if (err) {
     sp->err = err;
@@ -556,7 +555,7 @@ static void spec_worker(void *arg, int tid, int nthreads) {
     for (int t = 0; t < sp->n_threads; t++)
       taken |= sp->running[t] == k;
     if (taken) continue;
-    spec_run_t run = {sp, sp->ws[tid], sp->epoch, 0};
+    spec_run_t run = {sp, sp->ws[tid], 0};
     sp->running[tid] = k;
     sp->in_flight++;
     pthread_mutex_unlock(&sp->mu);
@@ -573,11 +572,9 @@ static void spec_worker(void *arg, int tid, int nthreads) {
     pthread_mutex_lock(&sp->mu);
     sp->in_flight--;
     sp->running[tid] = -1;
-    /* Valid on the network as it is (a change pending since is checked when it is applied). */
-    const int valid = !run.dead && run.epoch == sp->epoch;
-    if (!valid && !sp->stop && k >= sp->commit && sp->next > k)
+    if (run.dead && !sp->stop && k >= sp->commit && sp->next > k)
       sp->next = k; /* stopped by a change it had read: to be searched again */
-    if (valid && !sp->stop && k >= sp->commit) {
+    if (!run.dead && !sp->stop && k >= sp->commit) {
       spec_slot_t *sl = &sp->slot[k % sp->window];
       karst_path_t t = sl->path;
       sl->path = local;
