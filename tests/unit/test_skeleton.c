@@ -448,14 +448,15 @@ static void test_path_sharing_any_thread_count(void **state) {
   pauses_t pauses = {0, 0};
   path_sharing_threads(18, 14, 5, 0.7, threads, (int)(sizeof threads / sizeof *threads), &pauses);
   /* On a lattice of 19 200 vertices the searches settle more than the 256 vertices between two
-   * checks, so a change finds searches under way and pauses them; on the small one they end
-   * first. How many pause, and how many go on, depends on the timing of the threads. */
+   * checks, so a change usually finds searches under way and pauses them (on the small one they
+   * end first), and with a discount of 0.4 a paused search resumed without its check changes the
+   * network. Whether searches pause at all depends on the timing of the threads (none did once
+   * with both cores busy with other tests), so the count is printed, not asserted. */
   pauses_t large = {0, 0};
   const int few[] = {1, 2, 3, 2, 3, 2};
   path_sharing_threads(40, 30, 16, 0.4, few, (int)(sizeof few / sizeof *few), &large);
   printf("path sharing on several threads: %lld searches paused by a change, %lld resumed\n",
          large.paused, large.resumed);
-  assert_true(large.paused > 0);
 }
 
 int main(void) {
