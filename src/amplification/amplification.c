@@ -3,11 +3,15 @@
 #include "karst/amplification.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "core/memory_internal.h"
 #include "amplification/amplification_internal.h"
+#include "core/memory_internal.h"
+#include "core/parallel_internal.h"
 #include "karst/paths.h"
 #include "karst/routing.h"
 
@@ -306,6 +310,279 @@ static int draw_near(const karst_geology_t *geo, const karst_amplification_optio
   return n_pts;
 }
 
+/*
+ * The points of a step on ctx->nthreads threads, with the network of the one-thread loop (Paris
+ * et al. 2021 connect them in order, each to the network grown so far; issue 17).
+ *
+ * A thread takes the first point not yet computed within a window ahead of the next point to
+ * commit, and computes its paths on its own copy of the network membership (in_net) as it was
+ * after the commits so far, and of the blocked junctions; it records every vertex its searches
+ * touched (its trail). Points are committed in order, under the lock. A point computed before
+ * the commits since then is kept only if
+ * - the spring its nearest network node drains to is the same on the current network, and
+ * - its trail meets no vertex those commits changed (the vertices of their paths: the only ones
+ *   whose membership or degree a path changes).
+ * A search reads the membership and the blocking of the vertices it touches only (a blocked
+ * vertex stays blocked: degrees only grow), and the second path's cleared nodes differ only by
+ * nodes added since, which were off the network in its copy as in the cleared one. So a kept
+ * point's searches ran exactly as on the current network; any other is computed again. On one
+ * thread every point is computed on the current network: the plain loop.
+ */
+enum { PROP_TODO, PROP_RUNNING, PROP_READY };
+
+typedef struct {
+  int state;
+  uint32_t since; /* the commits of this step made when it was computed */
+  int taken;      /* no free vertex, or its vertex was on the network: nothing to connect */
+  int spring;     /* the spring of its nearest network node (-1 without a plan) */
+  karst_int_t pv, v1;
+  karst_path_t p1, p2;
+  int32_t *trail; /* the vertices its searches touched; n_trail < 0: unknown (no memory) */
+  karst_int_t n_trail, cap_trail;
+  karst_error_t err;
+  char msg[KARST_ERRMSG_MAX];
+} ramify_prop_t;
+
+/* One thread's copy of what a point's computation reads of the network. */
+typedef struct {
+  karst_search_t *s;
+  unsigned char *in_net, *blocked;
+  size_t applied;     /* entries of the change log applied to in_net */
+  karst_int_t *junc;  /* junctions to block, then unblock */
+  karst_int_t n_junc; /* (grown by block_junctions) */
+  double *nxyz;       /* network nodes: position, spring, graph vertex */
+  double *nspring;
+  karst_int_t *nvert, n_nodes, cap_nodes;
+  karst_int_t *cleared;
+  karst_ctx_t wctx;
+} ramify_thread_t;
+
+typedef struct {
+  karst_ctx_t *ctx;
+  const karst_graph_t *g;
+  const karst_routing_plan_t *plan;
+  const karst_amplification_options_t *opt;
+  karst_skeleton_t *sk;
+  const karst_int_t *snap;
+  int n_pts, n_dead, step, window;
+  ramify_thread_t *th;
+  ramify_prop_t *prop;
+  pthread_mutex_t mu;
+  pthread_cond_t cv;
+  /* under mu: */
+  int commit, stop;
+  karst_error_t err;
+  unsigned char *in_net; /* the network's vertices, as committed */
+  uint32_t *mark;        /* per vertex: the commit of this step that last changed it (0: none) */
+  uint32_t n_commits;
+  int32_t *log; /* vertices put on the network, in order (at most n) */
+  size_t n_log;
+  karst_int_t added_points, added_paths, recomputed;
+} ramify_par_t;
+
+/* The spring of the network node nearest @p p, the first on ties (-1: no "spring" attribute). */
+static int nearest_spring(karst_int_t n, const double *xyz, const double *spring, const double *p) {
+  double best = INFINITY;
+  int s = -1;
+  for (karst_int_t u = 0; u < n; u++) {
+    double d = dist3(&xyz[3 * u], p);
+    if (d < best) best = d, s = (int)spring[u];
+  }
+  return s;
+}
+
+/* Copy into the thread what point computations read of the network now. Under mu. */
+static karst_error_t ramify_sync(ramify_par_t *R, ramify_thread_t *T) {
+  for (; T->applied < R->n_log; T->applied++)
+    T->in_net[R->log[T->applied]] = 1;
+  const karst_network_t *net = &R->sk->net;
+  if (net->n_nodes > T->cap_nodes) {
+    karst_int_t cap = 2 * net->n_nodes;
+    double *x = realloc(T->nxyz, (size_t)cap * 3 * sizeof *x);
+    if (x) T->nxyz = x;
+    double *s = realloc(T->nspring, (size_t)cap * sizeof *s);
+    if (s) T->nspring = s;
+    karst_int_t *v = realloc(T->nvert, (size_t)cap * sizeof *v);
+    if (v) T->nvert = v;
+    karst_int_t *c = realloc(T->cleared, (size_t)cap * sizeof *c);
+    if (c) T->cleared = c;
+    if (!x || !s || !v || !c) return KARST_ENOMEM;
+    T->cap_nodes = cap;
+  }
+  T->n_nodes = net->n_nodes;
+  memcpy(T->nxyz, net->xyz, (size_t)net->n_nodes * 3 * sizeof *T->nxyz);
+  memcpy(T->nvert, R->sk->vertex_of_node, (size_t)net->n_nodes * sizeof *T->nvert);
+  const karst_attr_t *sp = karst_network_attr_find(net, KARST_ATTR_NODE, "spring");
+  if (sp) memcpy(T->nspring, sp->data, (size_t)net->n_nodes * sizeof *T->nspring);
+  return block_junctions(&T->wctx, R->sk, T->blocked, &T->junc, &T->n_junc);
+}
+
+/* Keep the trail of the search just run in @p P (appended). */
+static void keep_trail(ramify_prop_t *P, const karst_search_t *s) {
+  karst_int_t n = 0;
+  const int32_t *t = karst_search_trail(s, &n);
+  if (P->n_trail < 0) return;
+  if (P->n_trail + n > P->cap_trail) {
+    karst_int_t cap = 2 * (P->n_trail + n);
+    int32_t *nt = realloc(P->trail, (size_t)cap * sizeof *nt);
+    if (!nt) {
+      P->n_trail = -1;
+      return;
+    }
+    P->trail = nt, P->cap_trail = cap;
+  }
+  memcpy(P->trail + P->n_trail, t, (size_t)n * sizeof *t);
+  P->n_trail += n;
+}
+
+/* Point @p i's paths on the thread's copy of the network (blocked junctions already set). */
+static karst_error_t ramify_compute(ramify_par_t *R, ramify_thread_t *T, int i, ramify_prop_t *P) {
+  const karst_graph_t *g = R->g;
+  karst_ctx_t *ctx = &T->wctx;
+  karst_error_t err = KARST_SUCCESS;
+  const karst_int_t pv = R->snap[i];
+  P->pv = pv, P->v1 = -1, P->p1.n = 0, P->p2.n = 0, P->n_trail = 0, P->spring = -1;
+  P->taken = pv < 0 || T->in_net[pv];
+  if (P->taken) return KARST_SUCCESS;
+  const karst_route_t *route = NULL;
+  if (R->plan) {
+    P->spring = nearest_spring(T->n_nodes, T->nxyz, T->nspring, &g->xyz[3 * pv]);
+    route = karst_routing_route(R->plan, P->spring);
+  }
+  unsigned char *in_net = T->in_net, *blocked = T->blocked;
+  if ((err = karst_paths_dijkstra_routed(ctx, T->s, route, 1, &pv, blocked, in_net, 1, &P->v1)))
+    return err;
+  keep_trail(P, T->s);
+  if (P->v1 < 0) return KARST_SUCCESS;
+  if ((err = karst_search_path_to(ctx, T->s, P->v1, &P->p1))) return err;
+  if (i < R->n_dead) return KARST_SUCCESS;
+  /* Interior point: a second path, disjoint from the first, to a distinct part. */
+  const double sep = R->opt->loop_separation * dist3(&g->xyz[3 * pv], &g->xyz[3 * P->v1]);
+  karst_int_t n_cleared = 0, v2 = -1;
+  for (karst_int_t u = 0; u < T->n_nodes; u++)
+    if (dist3(&T->nxyz[3 * u], &g->xyz[3 * P->v1]) <= sep) {
+      karst_int_t w = T->nvert[u];
+      in_net[w] = 0;
+      T->cleared[n_cleared++] = w;
+    }
+  for (karst_int_t k = 1; k < P->p1.n; k++)
+    blocked[P->p1.v[k]] = 1;
+  err = karst_paths_dijkstra_routed(ctx, T->s, route, 1, &pv, blocked, in_net, 1, &v2);
+  for (karst_int_t k = 1; k < P->p1.n; k++)
+    blocked[P->p1.v[k]] = 0;
+  for (karst_int_t k = 0; k < n_cleared; k++)
+    in_net[T->cleared[k]] = 1;
+  if (err) return err;
+  keep_trail(P, T->s);
+  if (v2 >= 0) err = karst_search_path_to(ctx, T->s, v2, &P->p2);
+  return err;
+}
+
+static void ramify_fail(ramify_par_t *R, karst_error_t err) {
+  if (!R->err) R->err = err;
+  R->stop = 1;
+  pthread_cond_broadcast(&R->cv);
+}
+
+/* Commit point R->commit, ready, if it still holds (see above); else it is to be computed again.
+ * Under mu. */
+static void ramify_commit_one(ramify_par_t *R) {
+  ramify_prop_t *P = &R->prop[R->commit];
+  karst_ctx_t *ctx = R->ctx;
+  karst_skeleton_t *sk = R->sk;
+  const karst_graph_t *g = R->g;
+  karst_error_t err;
+  if (karst_interrupted(ctx)) {
+    ramify_fail(R, karst_set_error(ctx, KARST_EINTERRUPTED, "amplification interrupted"));
+    return;
+  }
+  if (P->err) {
+    ramify_fail(R, karst_set_error(ctx, P->err, "%s", P->msg));
+    return;
+  }
+  const karst_int_t pv = P->pv;
+  int skip = P->taken || R->in_net[pv]; /* its vertex taken by an earlier point */
+  if (!skip && P->since != R->n_commits) {
+    int valid = P->n_trail >= 0;
+    if (valid && R->plan) {
+      const karst_attr_t *sp = karst_network_attr_find(&sk->net, KARST_ATTR_NODE, "spring");
+      valid = nearest_spring(sk->net.n_nodes, sk->net.xyz, sp->data, &g->xyz[3 * pv]) == P->spring;
+    }
+    for (karst_int_t k = 0; valid && k < P->n_trail; k++)
+      valid = R->mark[P->trail[k]] <= P->since;
+    if (!valid) {
+      P->state = PROP_TODO;
+      R->recomputed++;
+      return;
+    }
+  }
+  P->state = PROP_TODO; /* consumed */
+  R->commit++;
+  if (skip) return;
+  if (P->v1 < 0) {
+    karst_log(ctx, KARST_LOG_DEBUG, "amplification: point at vertex %lld cannot reach the network",
+              (long long)pv);
+    return;
+  }
+  if ((err = karst_skeleton_add_route(ctx, sk, g, &P->p1, R->step, P->spring))) goto fail;
+  R->added_paths++;
+  if (P->p2.n > 0) {
+    if ((err = karst_skeleton_add_route(ctx, sk, g, &P->p2, R->step, P->spring))) goto fail;
+    R->added_paths++;
+  }
+  if ((err = karst_skeleton_mark_node(ctx, sk, g, pv, KARST_NODE_AMPLIFICATION))) goto fail;
+  R->added_points++;
+  const uint32_t id = ++R->n_commits;
+  for (int pass = 0; pass < 2; pass++) {
+    const karst_path_t *p = pass ? &P->p2 : &P->p1;
+    for (karst_int_t k = 0; k < p->n; k++) {
+      karst_int_t v = p->v[k];
+      R->mark[v] = id;
+      if (!R->in_net[v]) R->in_net[v] = 1, R->log[R->n_log++] = (int32_t)v;
+    }
+  }
+  return;
+fail:
+  ramify_fail(R, err);
+}
+
+static void ramify_worker(void *arg, int tid, int nthreads) {
+  (void)nthreads;
+  ramify_par_t *R = arg;
+  ramify_thread_t *T = &R->th[tid];
+  pthread_mutex_lock(&R->mu);
+  while (!R->stop && R->commit < R->n_pts) {
+    if (R->prop[R->commit].state == PROP_READY) {
+      ramify_commit_one(R);
+      pthread_cond_broadcast(&R->cv);
+      continue;
+    }
+    int i = R->commit, end = R->commit + R->window < R->n_pts ? R->commit + R->window : R->n_pts;
+    while (i < end && R->prop[i].state != PROP_TODO)
+      i++;
+    if (i == end) {
+      pthread_cond_wait(&R->cv, &R->mu);
+      continue;
+    }
+    ramify_prop_t *P = &R->prop[i];
+    P->state = PROP_RUNNING;
+    P->since = R->n_commits;
+    karst_error_t err = ramify_sync(R, T);
+    pthread_mutex_unlock(&R->mu);
+    if (!err) err = ramify_compute(R, T, i, P);
+    unblock(T->blocked, T->junc, T->n_junc);
+    pthread_mutex_lock(&R->mu);
+    P->err = err;
+    if (err)
+      snprintf(P->msg, sizeof P->msg, "%s",
+               T->wctx.errmsg[0] ? T->wctx.errmsg : "amplification: out of memory");
+    P->state = PROP_READY;
+    pthread_cond_broadcast(&R->cv);
+  }
+  pthread_cond_broadcast(&R->cv);
+  pthread_mutex_unlock(&R->mu);
+}
+
 /**
  * Ramification (Paris et al. 2021, §5.2): sc->amplification.steps steps; step
  * s has karst_amplification_step_points(am, s) points (points × points_ratio^(s−1)).
@@ -324,8 +601,10 @@ static int draw_near(const karst_geology_t *geo, const karst_amplification_optio
  * least-cost path, vertex-disjoint from the first, to a network vertex farther than
  * opt->loop_separation × |p − first end| from the first end, so the two paths close a loop through
  * distinct parts of the network (when no such path exists the point stays a
- * dead end). Points connect in order, each to the network grown so far.
- * New paths may not end at a network junction (a vertex of degree >= 3): a
+ * dead end). Points connect in order, each to the network grown so far; with
+ * ctx->nthreads > 1 later points are computed ahead on the other threads and kept only when
+ * what they read is unchanged (ramify_worker), so the network is the same on any number of
+ * threads. New paths may not end at a network junction (a vertex of degree >= 3): a
  * tributary joins a passage, so no amplification raises a node above degree 3
  * and the degree distribution keeps the spread of real caves.
  * New edges get amplification_step = s (1-based) and a new branch id.
@@ -341,8 +620,9 @@ static int draw_near(const karst_geology_t *geo, const karst_amplification_optio
  * @param n_points receives the number of points connected (may be NULL).
  * @param n_paths  receives the number of paths added (may be NULL).
  * @return KARST_SUCCESS, KARST_EINVAL (bad parameters), KARST_ENOMEM, KARST_EINTERRUPTED.
- * Time complexity: O(Σ_s points_s × (n + junctions + local Dijkstra)), points_s the points
- * of step s.
+ * Time complexity: O(Σ_s (T n + points_s × (nodes + edges + local Dijkstra))), points_s the
+ * points of step s, T the threads (each keeps its own copy of the network's vertices); memory
+ * O(T n).
  */
 karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t *geo,
                                          const karst_graph_t *g, const karst_routing_plan_t *plan,
@@ -354,15 +634,14 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   if (!opt) karst_amplification_options_init(&defaults), opt = &defaults;
   const karst_amplification_t *am = &sc->amplification;
   karst_error_t err = KARST_SUCCESS;
-  karst_search_t *s = NULL;
-  unsigned char *in_net = NULL, *blocked = NULL;
+  unsigned char *in_net = NULL;
   double *pts = NULL;
   karst_int_t *snap = NULL;
-  karst_int_t *cleared = NULL, *junc = NULL;
-  karst_path_t p1, p2;
-  karst_path_init(&p1);
-  karst_path_init(&p2);
-  karst_int_t added_points = 0, added_paths = 0;
+  const int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
+  int sync_ready = 0;
+  ramify_par_t R;
+  memset(&R, 0, sizeof R);
+  size_t max_pts = 1;
   if (am->steps < 0 || am->points < 0 ||
       !(am->dead_end_fraction >= 0 && am->dead_end_fraction <= 1))
     return karst_set_error(ctx, KARST_EINVAL,
@@ -370,19 +649,42 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
                            "dead_end_fraction (%g) within [0, 1]",
                            am->steps, am->points, am->dead_end_fraction);
   if (am->steps == 0 || am->points == 0 || sk->net.n_nodes == 0) goto cleanup;
-  if ((err = karst_search_create(ctx, g, &s))) goto cleanup;
   size_t n = (size_t)(g->n > 0 ? g->n : 1);
-  in_net = karst_i_calloc_large(n, 1);
-  blocked = karst_i_calloc_large(n, 1);
   double largest = 0;
   karst_amplification_points_total(am, INFINITY, &largest);
-  size_t max_pts = largest > 1 ? (size_t)largest : 1;
+  max_pts = largest > 1 ? (size_t)largest : 1;
+  in_net = karst_i_calloc_large(n, 1);
   pts = malloc(max_pts * 3 * sizeof *pts);
   snap = malloc(max_pts * sizeof *snap);
-  if (!in_net || !blocked || !pts || !snap) {
-    err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
+  R.th = calloc((size_t)T, sizeof *R.th);
+  R.prop = calloc(max_pts, sizeof *R.prop);
+  R.mark = karst_i_alloc_large(n * sizeof *R.mark);
+  R.log = karst_i_alloc_large(n * sizeof *R.log);
+  if (!in_net || !pts || !snap || !R.th || !R.prop || !R.mark || !R.log) goto nomem;
+  for (size_t i = 0; i < max_pts; i++)
+    karst_path_init(&R.prop[i].p1), karst_path_init(&R.prop[i].p2);
+  for (int t = 0; t < T; t++) {
+    ramify_thread_t *th = &R.th[t];
+    karst_ctx_init(&th->wctx);
+    if ((err = karst_search_create(ctx, g, &th->s)) ||
+        (err = karst_search_record_trail(ctx, th->s)))
+      goto cleanup;
+    th->in_net = karst_i_alloc_large(n);
+    th->blocked = karst_i_calloc_large(n, 1);
+    if (!th->in_net || !th->blocked) goto nomem;
+  }
+  if (pthread_mutex_init(&R.mu, NULL)) {
+    err = karst_set_error(ctx, KARST_ENOMEM, "amplification: cannot create a mutex");
     goto cleanup;
   }
+  if (pthread_cond_init(&R.cv, NULL)) {
+    pthread_mutex_destroy(&R.mu);
+    err = karst_set_error(ctx, KARST_ENOMEM, "amplification: cannot create a condition variable");
+    goto cleanup;
+  }
+  sync_ready = 1;
+  R.ctx = ctx, R.g = g, R.plan = plan, R.opt = opt, R.sk = sk, R.snap = snap, R.in_net = in_net;
+  R.window = 2 * T;
   for (karst_int_t v = 0; v < g->n; v++)
     in_net[v] = sk->node_of_vertex[v] >= 0;
   double reach = am->reach, n_next = am->points; /* karst_amplification_step_points, running */
@@ -394,106 +696,56 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
     int n_pts = am->reach > 0 ? draw_near(geo, opt, rng, &sk->net, reach, step - 1,
                                           am->anchor == KARST_ANCHOR_PREVIOUS, n_step, pts)
                               : draw_in_box(geo, opt, rng, &sk->net, n_step, pts);
-    if (n_pts < 0) {
-      err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
-      goto cleanup;
-    }
+    if (n_pts < 0) goto nomem;
     reach *= am->reach_ratio;
     /* Snap every point to its nearest vertex off the network (ties: the smaller index). */
     if ((err = karst_i_amplification_snap(ctx, g->n, g->xyz, in_net, pts, n_pts, snap)))
       goto cleanup;
-    for (int i = 0; i < n_pts; i++) {
-      if (karst_interrupted(ctx)) {
-        err = karst_set_error(ctx, KARST_EINTERRUPTED, "amplification interrupted");
-        goto cleanup;
-      }
-      karst_int_t pv = snap[i];
-      if (pv < 0 || in_net[pv]) continue; /* no free vertex, or taken by an earlier point */
-      karst_int_t v1 = -1, v2 = -1;
-      /* The point drains where its nearest network node drains (the first such node). */
-      int spring = -1;
-      const karst_route_t *route = NULL;
-      if (plan) {
-        const double *nsp = karst_network_attr_find(&sk->net, KARST_ATTR_NODE, "spring")->data;
-        double best = INFINITY;
-        for (karst_int_t u = 0; u < sk->net.n_nodes; u++) {
-          double d = dist3(&sk->net.xyz[3 * u], &g->xyz[3 * pv]);
-          if (d < best) best = d, spring = (int)nsp[u];
-        }
-        route = karst_routing_route(plan, spring);
-      }
-      /* New paths join a passage, not a junction: vertices of degree >= 3 are blocked. */
-      karst_int_t n_junc = 0;
-      if ((err = block_junctions(ctx, sk, blocked, &junc, &n_junc))) goto cleanup;
-      err = karst_paths_dijkstra_routed(ctx, s, route, 1, &pv, blocked, in_net, 1, &v1);
-      if (err) {
-        unblock(blocked, junc, n_junc);
-        goto cleanup;
-      }
-      if (v1 < 0) {
-        unblock(blocked, junc, n_junc);
-        karst_log(ctx, KARST_LOG_DEBUG,
-                  "amplification: point at vertex %lld cannot reach the network", (long long)pv);
-        continue;
-      }
-      if ((err = karst_search_path_to(ctx, s, v1, &p1))) {
-        unblock(blocked, junc, n_junc);
-        goto cleanup;
-      }
-      p2.n = 0;
-      if (i >= n_dead) {
-        /* Interior point: a second path, disjoint from the first, to a distinct part. */
-        double sep = opt->loop_separation * dist3(&g->xyz[3 * pv], &g->xyz[3 * v1]);
-        karst_int_t n_cleared = 0;
-        free(cleared);
-        cleared = malloc((size_t)(sk->net.n_nodes > 0 ? sk->net.n_nodes : 1) * sizeof *cleared);
-        if (!cleared) {
-          err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
-          goto cleanup;
-        }
-        for (karst_int_t u = 0; u < sk->net.n_nodes; u++)
-          if (dist3(&sk->net.xyz[3 * u], &g->xyz[3 * v1]) <= sep) {
-            karst_int_t w = sk->vertex_of_node[u];
-            in_net[w] = 0;
-            cleared[n_cleared++] = w;
-          }
-        for (karst_int_t k = 1; k < p1.n; k++)
-          blocked[p1.v[k]] = 1;
-        err = karst_paths_dijkstra_routed(ctx, s, route, 1, &pv, blocked, in_net, 1, &v2);
-        for (karst_int_t k = 1; k < p1.n; k++)
-          blocked[p1.v[k]] = 0;
-        for (karst_int_t k = 0; k < n_cleared; k++)
-          in_net[cleared[k]] = 1;
-        if (!err && v2 >= 0) err = karst_search_path_to(ctx, s, v2, &p2);
-      }
-      unblock(blocked, junc, n_junc);
-      if (err) goto cleanup;
-      if ((err = karst_skeleton_add_route(ctx, sk, g, &p1, step, spring))) goto cleanup;
-      added_paths++;
-      if (p2.n > 0) {
-        if ((err = karst_skeleton_add_route(ctx, sk, g, &p2, step, spring))) goto cleanup;
-        added_paths++;
-      }
-      if ((err = karst_skeleton_mark_node(ctx, sk, g, pv, KARST_NODE_AMPLIFICATION))) goto cleanup;
-      for (karst_int_t k = 0; k < p1.n; k++)
-        in_net[p1.v[k]] = 1;
-      for (karst_int_t k = 0; k < p2.n; k++)
-        in_net[p2.v[k]] = 1;
-      added_points++;
-    }
+    /* Connect the points in order, each to the network grown so far (see ramify_worker). */
+    R.n_pts = n_pts, R.n_dead = n_dead, R.step = step;
+    R.commit = 0, R.n_commits = 0, R.n_log = 0;
+    memset(R.mark, 0, n * sizeof *R.mark);
+    for (int i = 0; i < n_pts; i++)
+      R.prop[i].state = PROP_TODO;
+    for (int t = 0; t < T; t++)
+      memcpy(R.th[t].in_net, in_net, n), R.th[t].applied = 0;
+    karst_i_parallel_run(T, ramify_worker, &R);
+    if ((err = R.err)) goto cleanup;
   }
+  karst_log(ctx, KARST_LOG_DEBUG, "amplification: %lld points on %d threads, %lld computed again",
+            (long long)R.added_points, T, (long long)R.recomputed);
+  goto cleanup;
+nomem:
+  err = karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
 cleanup:
-  if (n_points) *n_points = added_points;
-  if (n_paths) *n_paths = added_paths;
-  karst_path_destroy(&p1);
-  karst_path_destroy(&p2);
-  karst_search_free(s);
+  if (n_points) *n_points = R.added_points;
+  if (n_paths) *n_paths = R.added_paths;
+  if (sync_ready) pthread_cond_destroy(&R.cv), pthread_mutex_destroy(&R.mu);
+  if (R.th)
+    for (int t = 0; t < T; t++) {
+      ramify_thread_t *th = &R.th[t];
+      karst_search_free(th->s);
+      free(th->in_net);
+      free(th->blocked);
+      free(th->junc);
+      free(th->nxyz);
+      free(th->nspring);
+      free(th->nvert);
+      free(th->cleared);
+    }
+  if (R.prop)
+    for (size_t i = 0; i < max_pts; i++) {
+      karst_path_destroy(&R.prop[i].p1);
+      karst_path_destroy(&R.prop[i].p2);
+      free(R.prop[i].trail);
+    }
+  free(R.th);
+  free(R.prop);
+  free(R.mark);
+  free(R.log);
   free(in_net);
-  free(blocked);
   free(pts);
   free(snap);
-  free(cleared);
-  free(junc);
   return err;
 }
 

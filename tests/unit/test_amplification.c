@@ -9,6 +9,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -17,6 +18,7 @@
 #include "amplification/amplification_internal.h"
 #include "geology_fixture.h"
 #include "graph_fixture.h"
+#include "karst/routing.h"
 #include "test_util.h"
 
 /* θ → the largest displacement as a fraction of the piece split: θ × 0.5, clamped. */
@@ -457,6 +459,128 @@ static void test_snap_matches_scan(void **state) {
   free(xyz), free(pts), free(in_net), free(snap);
 }
 
+static void count_log(void *user, karst_log_level_t level, const char *msg) {
+  (void)level;
+  long long pts = 0, again = 0;
+  int th = 0;
+  if (sscanf(msg, "amplification: %lld points on %d threads, %lld computed again", &pts, &th,
+             &again) == 3)
+    *(long long *)user += again;
+}
+
+/* The ramification of a 30 x 30 x 6 lattice (5 m, k = 14) from a corner-to-corner path, 2 steps
+ * of 60 then 30 points, half of them interior, on @p threads threads: the network, and the
+ * points computed again because an earlier point's paths changed what they had read. */
+/* Horizontal metres cost 1, vertical ones 6: the nearest network node in space is then often not
+ * the one a search reaches first. */
+static double steep_cost(const double *a, const double *b, void *user) {
+  (void)user;
+  double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+  return sqrt(dx * dx + dy * dy + 36 * dz * dz);
+}
+
+static void ramify_on(int threads, int springs, karst_network_t *out, long long *again) {
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  ctx.nthreads = threads;
+  ctx.log = count_log, ctx.log_user = again, ctx.verbosity = KARST_LOG_DEBUG;
+  karst_rng_t r;
+  karst_rng_init(&r, 5, 0);
+  const double o[3] = {0, 0, 0};
+  double *xyz = fx_jittered_grid(30, 30, 6, 5.0, o, 0.3, &r);
+  const karst_int_t n = 30 * 30 * 6;
+  karst_graph_t g;
+  fx_knn_graph(&g, n, xyz, 14, springs ? steep_cost : fx_euclid_cost, NULL);
+  karst_scenario_t sc;
+  karst_scenario_init(&sc);
+  sc.terrain.elevation = 1000;
+  sc.domain_min[0] = sc.domain_min[1] = sc.domain_min[2] = -10;
+  sc.domain_max[0] = sc.domain_max[1] = sc.domain_max[2] = 160;
+  sc.amplification.steps = 2;
+  sc.amplification.points = 60;
+  sc.amplification.points_ratio = 0.5;
+  sc.amplification.dead_end_fraction = 0.5;
+  karst_search_t *s;
+  karst_search_create(&ctx, &g, &s);
+  karst_path_t p;
+  karst_path_init(&p);
+  karst_skeleton_t sk;
+  assert_int_equal(karst_skeleton_init(&ctx, &sk, &g), KARST_SUCCESS);
+  /* One path corner to corner; with springs, a second one across it draining to spring 1. A
+   * plan whose two routes cost what the graph costs: the spring of a point's nearest network
+   * node changes only the "spring" of what the point adds. */
+  const karst_int_t ends[2][2] = {{0, n - 1}, {29, 30 * 29 + 30 * 30 * 5}};
+  for (int k = 0; k < (springs ? 2 : 1); k++) {
+    assert_int_equal(karst_paths_astar(&ctx, s, ends[k][0], ends[k][1], 1.0, &p), KARST_SUCCESS);
+    assert_int_equal(karst_skeleton_add_route(&ctx, &sk, &g, &p, 0, k), KARST_SUCCESS);
+  }
+  karst_route_t routes[2];
+  memset(routes, 0, sizeof routes);
+  for (int k = 0; k < 2; k++)
+    routes[k].arc_fwd = routes[k].arc_bwd = g.cost;
+  karst_routing_plan_t plan;
+  karst_routing_plan_init(&plan);
+  plan.n_springs = 2;
+  plan.routes = routes;
+  karst_rng_t ra;
+  karst_rng_init(&ra, 79, 0);
+  karst_geology_t *geo = geo_make(&sc);
+  assert_int_equal(
+      karst_amplification_ramify(&ctx, geo, &g, springs ? &plan : NULL, &ra, NULL, &sk, NULL, NULL),
+      KARST_SUCCESS);
+  karst_geology_free(geo);
+  karst_network_destroy(out);
+  *out = sk.net;
+  karst_network_init(&sk.net);
+  karst_skeleton_destroy(&sk);
+  karst_path_destroy(&p);
+  karst_search_free(s);
+  fx_graph_free(&g);
+  free(xyz);
+  karst_scenario_destroy(&sc);
+}
+
+/* The points of a step are connected in order, each to the network grown so far; on several
+ * threads they are computed ahead and kept only when what they read is unchanged
+ * (amplification.c, ramify_worker). Expected: the one-thread network, node for node and edge for
+ * edge with every attribute, on 2 and 3 threads, three times each. Dropping the check of the
+ * trails makes the networks differ (the shipped presets differ then; here most runs on a quiet
+ * machine compute points again). Whether any point is computed again depends on the timing of
+ * the threads, so the count is printed, not asserted. */
+static void test_ramify_threads(void **state) {
+  (void)state;
+  for (int springs = 0; springs <= 2; springs += 2) {
+    karst_network_t ref, net;
+    karst_network_init(&ref);
+    karst_network_init(&net);
+    long long again = 0;
+    ramify_on(1, springs, &ref, &again);
+    assert_int_equal(again, 0); /* one thread: every point on the current network */
+    assert_true(ref.n_nodes > 300);
+    for (int threads = 2; threads <= 3; threads++)
+      for (int rep = 0; rep < 3; rep++) {
+        again = 0;
+        ramify_on(threads, springs, &net, &again);
+        print_message("%d springs, %d threads: %lld points computed again\n", springs, threads,
+                      again);
+        assert_int_equal(net.n_nodes, ref.n_nodes);
+        assert_int_equal(net.n_edges, ref.n_edges);
+        assert_memory_equal(net.xyz, ref.xyz, (size_t)ref.n_nodes * 3 * sizeof *ref.xyz);
+        assert_memory_equal(net.edges, ref.edges, (size_t)ref.n_edges * 2 * sizeof *ref.edges);
+        assert_int_equal(net.n_node_attrs, ref.n_node_attrs);
+        assert_int_equal(net.n_edge_attrs, ref.n_edge_attrs);
+        for (int i = 0; i < ref.n_node_attrs; i++)
+          assert_memory_equal(net.node_attrs[i].data, ref.node_attrs[i].data,
+                              (size_t)ref.n_nodes * ref.node_attrs[i].ncomp * sizeof(double));
+        for (int i = 0; i < ref.n_edge_attrs; i++)
+          assert_memory_equal(net.edge_attrs[i].data, ref.edge_attrs[i].data,
+                              (size_t)ref.n_edges * ref.edge_attrs[i].ncomp * sizeof(double));
+      }
+    karst_network_destroy(&ref);
+    karst_network_destroy(&net);
+  }
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_theta_mapping),
@@ -465,6 +589,7 @@ int main(void) {
       cmocka_unit_test(test_ramify),
       cmocka_unit_test(test_ramify_hierarchy),
       cmocka_unit_test(test_snap_matches_scan),
+      cmocka_unit_test(test_ramify_threads),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
