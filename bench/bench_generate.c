@@ -3,9 +3,11 @@
  * with k = 100, and the measurement behind the choice of method for the
  * key-point distance matrix (multi-target Dijkstra rows vs A* pairs).
  * Usage: bench_generate [--threads N] [--runs R] [--skip-large] [--presets-only] [--large-only]
- *                       [--large-samples N]   (the large block's size, default 1.505e6)
- * Without flags: the key-point methods, the presets, and the 400 k and 1.5 M-sample blocks on
- * 1 and 2 threads (every stage's speed-up); --large-only runs one block on --threads. */
+ *                       [--amplification-only] [--large-samples N]   (default 1.505e6)
+ * Without flags: the key-point methods, the presets, the 400 k and 1.5 M-sample blocks on
+ * 1 and 2 threads (every stage's speed-up), and the ramification of the 1.5 M block alone on 1
+ * and 2 threads, alternated; --large-only runs one block on --threads; --amplification-only
+ * runs only the ramification (--runs times on each thread count, at least 3). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -254,8 +256,76 @@ static void scaling(double samples) {
   karst_scenario_destroy(&sc);
 }
 
+/* The ramification alone (issue 17, item 1: every stage on 2 threads), on the block of @p samples
+ * samples: the pipeline once up to the routing plan, then, @p runs times, the skeleton laid again
+ * and the ramification timed on 1 and on 2 threads, alternated (one run of the whole pipeline
+ * per thread count is too noisy for a stage of well under a second). The networks must agree. */
+static void amplification_only(double samples, int runs) {
+  karst_scenario_t sc;
+  large_scenario(&sc, samples);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  ctx.nthreads = 2;
+  karst_geology_t *geo = NULL;
+  karst_samples_t smp;
+  karst_samples_init(&smp);
+  karst_graph_t g;
+  karst_graph_init(&g);
+  karst_routing_plan_t plan;
+  karst_routing_plan_init(&plan);
+  karst_rng_t r;
+  karst_rng_derive(&r, sc.seed, 0, 0);
+  if (karst_geology_create(&ctx, &sc, sc.seed, 0, &geo) ||
+      karst_sampling_run(&ctx, geo, &r, &smp) || karst_graph_build(&ctx, geo, &smp, &g) ||
+      karst_routing_plan(&ctx, geo, &g, sc.reuse >= 1.0, &plan)) {
+    printf("amplification: not run: %s\n", ctx.errmsg);
+    goto done;
+  }
+  const double lb = karst_cost_lower_bound_per_metre(&sc);
+  double best[2] = {INFINITY, INFINITY};
+  karst_int_t nodes[2] = {-1, -1};
+  for (int run = 0; run < runs; run++)
+    for (int t = 0; t < 2; t++) {
+      karst_skeleton_t sk;
+      karst_int_t kept = 0, pts = 0;
+      ctx.nthreads = 2;
+      if (karst_skeleton_init(&ctx, &sk, &g) ||
+          karst_skeleton_build_routes(&ctx, &g, &plan, sc.reuse, lb, &sk, &kept)) {
+        printf("amplification: not run: %s\n", ctx.errmsg);
+        goto done;
+      }
+      karst_rng_t ra;
+      karst_rng_derive(&ra, sc.seed, 0, 99);
+      ctx.nthreads = t + 1;
+      double t0 = karst_i_now();
+      karst_error_t err =
+          karst_amplification_ramify(&ctx, geo, &g, &plan, &ra, NULL, &sk, &pts, NULL);
+      double dt = karst_i_now() - t0;
+      if (err) {
+        printf("amplification: failed: %s\n", ctx.errmsg);
+        karst_skeleton_destroy(&sk);
+        goto done;
+      }
+      printf("amplification %.3gM samples, %lld points, %d thread(s): %.3f s\n", samples / 1e6,
+             (long long)pts, t + 1, dt);
+      fflush(stdout);
+      if (dt < best[t]) best[t] = dt;
+      if (nodes[t] < 0) nodes[t] = sk.net.n_nodes;
+      if (sk.net.n_nodes != nodes[0]) printf("amplification: the networks differ!\n");
+      karst_skeleton_destroy(&sk);
+    }
+  printf("amplification %.3gM samples, fastest of %d: 1 -> 2 threads %.3f -> %.3f s (x%.2f)\n",
+         samples / 1e6, runs, best[0], best[1], best[0] / best[1]);
+done:
+  karst_routing_plan_destroy(&plan);
+  karst_graph_destroy(&g);
+  karst_samples_destroy(&smp);
+  karst_geology_free(geo);
+  karst_scenario_destroy(&sc);
+}
+
 int main(int argc, char **argv) {
-  int threads = 2, skip_large = 0, presets_only = 0, large_only = 0, runs = 5;
+  int threads = 2, skip_large = 0, presets_only = 0, large_only = 0, runs = 5, amp_only = 0;
   double large_samples = LARGE_SAMPLES;
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc) threads = atoi(argv[++i]);
@@ -263,9 +333,15 @@ int main(int argc, char **argv) {
     if (strcmp(argv[i], "--skip-large") == 0) skip_large = 1;
     if (strcmp(argv[i], "--presets-only") == 0) presets_only = skip_large = 1;
     if (strcmp(argv[i], "--large-only") == 0) large_only = presets_only = 1;
+    if (strcmp(argv[i], "--amplification-only") == 0) amp_only = 1;
     if (strcmp(argv[i], "--large-samples") == 0 && i + 1 < argc) large_samples = atof(argv[++i]);
   }
   if (runs < 1) runs = 1;
+  if (amp_only) {
+    if (!(large_samples >= 1e4 && large_samples <= 2e7)) large_samples = LARGE_SAMPLES;
+    amplification_only(large_samples, runs < 3 ? 3 : runs);
+    return 0;
+  }
   printf("bench_generate: %d thread(s), presets run %d times each\n", threads, runs);
   if (!presets_only)
     bench_keypoint_methods(60, 60, 20, 47); /* 72 000 vertices: the presets' size */
@@ -294,6 +370,7 @@ int main(int argc, char **argv) {
   if (!skip_large && !large_only) { /* the default run: the scaling of every stage */
     scaling(4e5);
     scaling(LARGE_SAMPLES);
+    amplification_only(LARGE_SAMPLES, 3);
   }
   if (large_only) {
     karst_ctx_t ctx;
