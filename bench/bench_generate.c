@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 
 #include "generate/generate_internal.h"
 #include "karst.h"
@@ -297,17 +298,20 @@ static void amplification_only(double samples, int runs) {
       karst_rng_t ra;
       karst_rng_derive(&ra, sc.seed, 0, 99);
       ctx.nthreads = t + 1;
+      struct rusage ru0, ru1;
+      getrusage(RUSAGE_SELF, &ru0);
       double t0 = karst_i_now();
       karst_error_t err =
           karst_amplification_ramify(&ctx, geo, &g, &plan, &ra, NULL, &sk, &pts, NULL);
       double dt = karst_i_now() - t0;
+      getrusage(RUSAGE_SELF, &ru1);
       if (err) {
         printf("amplification: failed: %s\n", ctx.errmsg);
         karst_skeleton_destroy(&sk);
         goto done;
       }
-      printf("amplification %.3gM samples, %lld points, %d thread(s): %.3f s\n", samples / 1e6,
-             (long long)pts, t + 1, dt);
+      printf("amplification %.3gM samples, %lld points, %d thread(s): %.3f s, %ld page faults\n",
+             samples / 1e6, (long long)pts, t + 1, dt, ru1.ru_minflt - ru0.ru_minflt);
       fflush(stdout);
       if (dt < best[t]) best[t] = dt;
       if (nodes[t] < 0) nodes[t] = sk.net.n_nodes;

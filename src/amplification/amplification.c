@@ -88,7 +88,7 @@ typedef struct free_grid {
   double lo[3], h;
   long dim[3];
   karst_int_t *start; /* cell c holds item[start[c] .. start[c + 1]) */
-  karst_int_t *item;  /* vertex indices, ascending within a cell */
+  karst_int_t *item;  /* vertex indices (in any order within a cell) */
 } free_grid_t;
 
 static long grid_cell(const free_grid_t *G, const double *p, int k) {
@@ -101,22 +101,79 @@ static long grid_index(const free_grid_t *G, const double *p) {
   return (grid_cell(G, p, 2) * G->dim[1] + grid_cell(G, p, 1)) * G->dim[0] + grid_cell(G, p, 0);
 }
 
-/* Grid of the vertices v with !in_net[v]; *n_free their count. About two per cell.
- * O(n + cells). */
-static karst_error_t grid_build(karst_ctx_t *ctx, karst_int_t n, const double *xyz,
-                                const unsigned char *in_net, free_grid_t *G, karst_int_t *n_free) {
-  double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  memset(G, 0, sizeof *G);
-  G->lo[0] = G->lo[1] = G->lo[2] = INFINITY;
-  karst_int_t m = 0;
-  for (karst_int_t v = 0; v < n; v++) {
-    if (in_net[v]) continue;
-    m++;
-    for (int k = 0; k < 3; k++) {
-      if (xyz[3 * v + k] < G->lo[k]) G->lo[k] = xyz[3 * v + k];
-      if (xyz[3 * v + k] > hi[k]) hi[k] = xyz[3 * v + k];
+/* The passes of grid_build over the vertices, split by index range over the threads. */
+typedef struct {
+  karst_int_t n;
+  const double *xyz;
+  const unsigned char *in_net;
+  free_grid_t *G;
+  int pass; /* 0: extent and count, 1: vertices per cell, 2: placed in their cells */
+  double (*lo)[3], (*hi)[3];
+  karst_int_t *m;    /* per thread (pass 0) */
+  karst_int_t *fill; /* per cell: next free slot (pass 2) */
+} grid_job_t;
+
+static void grid_task(void *arg, int tid, int nth) {
+  grid_job_t *J = arg;
+  const karst_int_t v0 = J->n * tid / nth, v1 = J->n * (tid + 1) / nth;
+  const double *xyz = J->xyz;
+  free_grid_t *G = J->G;
+  const int shared = nth > 1; /* cells written by several threads: atomic increments */
+  if (J->pass == 0) {
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    karst_int_t m = 0;
+    for (karst_int_t v = v0; v < v1; v++) {
+      if (J->in_net[v]) continue;
+      m++;
+      for (int k = 0; k < 3; k++) {
+        if (xyz[3 * v + k] < lo[k]) lo[k] = xyz[3 * v + k];
+        if (xyz[3 * v + k] > hi[k]) hi[k] = xyz[3 * v + k];
+      }
+    }
+    memcpy(J->lo[tid], lo, sizeof lo), memcpy(J->hi[tid], hi, sizeof hi), J->m[tid] = m;
+  } else if (J->pass == 1) {
+    for (karst_int_t v = v0; v < v1; v++) {
+      if (J->in_net[v]) continue;
+      karst_int_t *c = &G->start[grid_index(G, &xyz[3 * v]) + 1];
+      if (shared)
+        __atomic_fetch_add(c, 1, __ATOMIC_RELAXED);
+      else
+        ++*c;
+    }
+  } else {
+    for (karst_int_t v = v0; v < v1; v++) {
+      if (J->in_net[v]) continue;
+      karst_int_t *f = &J->fill[grid_index(G, &xyz[3 * v])];
+      G->item[shared ? __atomic_fetch_add(f, 1, __ATOMIC_RELAXED) : (*f)++] = v;
     }
   }
+}
+
+/* Grid of the vertices v with !in_net[v]; *n_free their count. About two per cell. The order of
+ * the vertices within a cell depends on the threads (grid_nearest does not depend on it).
+ * O(n / threads + cells). */
+static karst_error_t grid_build(karst_ctx_t *ctx, karst_int_t n, const double *xyz,
+                                const unsigned char *in_net, free_grid_t *G, karst_int_t *n_free) {
+  memset(G, 0, sizeof *G);
+  int T = ctx && ctx->nthreads > 1 && n >= 65536 ? ctx->nthreads : 1;
+  if (T > KARST_I_MAX_THREADS) T = KARST_I_MAX_THREADS;
+  grid_job_t J = {n, xyz, in_net, G, 0, NULL, NULL, NULL, NULL};
+  J.lo = malloc((size_t)T * sizeof *J.lo), J.hi = malloc((size_t)T * sizeof *J.hi);
+  J.m = malloc((size_t)T * sizeof *J.m);
+  if (!J.lo || !J.hi || !J.m) {
+    free(J.lo), free(J.hi), free(J.m);
+    return karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
+  }
+  karst_i_parallel_run(T, grid_task, &J);
+  double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  G->lo[0] = G->lo[1] = G->lo[2] = INFINITY;
+  karst_int_t m = 0;
+  for (int t = 0; t < T; t++) {
+    m += J.m[t];
+    for (int k = 0; k < 3; k++)
+      G->lo[k] = fmin(G->lo[k], J.lo[t][k]), hi[k] = fmax(hi[k], J.hi[t][k]);
+  }
+  free(J.lo), free(J.hi), free(J.m);
   *n_free = m;
   if (m == 0) return KARST_SUCCESS;
   double ext[3], vol = 1;
@@ -146,20 +203,16 @@ static karst_error_t grid_build(karst_ctx_t *ctx, karst_int_t n, const double *x
   G->item = malloc((size_t)m * sizeof *G->item);
   if (!G->start || !G->item)
     return karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
-  for (karst_int_t v = 0; v < n; v++) {
-    if (in_net[v]) continue;
-    G->start[grid_index(G, &xyz[3 * v]) + 1]++;
-  }
+  J.pass = 1;
+  karst_i_parallel_run(T, grid_task, &J);
   for (long c = 0; c < cells; c++)
     G->start[c + 1] += G->start[c];
-  karst_int_t *fill = malloc((size_t)cells * sizeof *fill);
-  if (!fill) return karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
-  memcpy(fill, G->start, (size_t)cells * sizeof *fill);
-  for (karst_int_t v = 0; v < n; v++) { /* ascending v: ascending within each cell */
-    if (in_net[v]) continue;
-    G->item[fill[grid_index(G, &xyz[3 * v])]++] = v;
-  }
-  free(fill);
+  J.fill = malloc((size_t)cells * sizeof *J.fill);
+  if (!J.fill) return karst_set_error(ctx, KARST_ENOMEM, "amplification: out of memory");
+  memcpy(J.fill, G->start, (size_t)cells * sizeof *J.fill);
+  J.pass = 2;
+  karst_i_parallel_run(T, grid_task, &J);
+  free(J.fill);
   return KARST_SUCCESS;
 }
 

@@ -451,6 +451,34 @@ static void test_snap_matches_scan(void **state) {
       assert_int_equal(snap[i], best);
     }
   }
+  /* 70 000 vertices on 2 and 3 threads (the grid built in parallel): the scan's vertex. */
+  enum { NB = 70000, NQ = 300 };
+  double *bx = malloc(3 * NB * sizeof *bx);
+  unsigned char *bnet = malloc(NB);
+  assert_non_null(bx && bnet);
+  for (int v = 0; v < NB; v++) {
+    for (int k = 0; k < 3; k++)
+      bx[3 * v + k] = karst_rng_uniform_range(&rng, 0, 100);
+    bnet[v] = karst_rng_uniform(&rng) < 0.2;
+  }
+  for (int threads = 2; threads <= 3; threads++) {
+    karst_ctx_t ctx;
+    karst_ctx_init(&ctx);
+    ctx.nthreads = threads;
+    assert_int_equal(karst_i_amplification_snap(&ctx, NB, bx, bnet, pts, NQ, snap), KARST_SUCCESS);
+    for (int i = 0; i < NQ; i++) {
+      karst_int_t best = -1;
+      double bd = INFINITY;
+      for (int v = 0; v < NB; v++) {
+        if (bnet[v]) continue;
+        double dx = bx[3 * v] - pts[3 * i], dy = bx[3 * v + 1] - pts[3 * i + 1],
+               dz = bx[3 * v + 2] - pts[3 * i + 2], d = sqrt(dx * dx + dy * dy + dz * dz);
+        if (d < bd) bd = d, best = v;
+      }
+      assert_int_equal(snap[i], best);
+    }
+  }
+  free(bx), free(bnet);
   /* every vertex in the network: nothing to snap to */
   memset(in_net, 1, NV);
   assert_int_equal(karst_i_amplification_snap(NULL, NV, xyz, in_net, pts, 5, snap), KARST_SUCCESS);
