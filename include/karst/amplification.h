@@ -27,6 +27,10 @@ typedef struct karst_amplification_options {
   int max_tries;  /**< rejection-sampling attempts for a point in the bedrock: 32 */
   double loop_separation; /**< an interior point's second path must end farther than
                                this × |p − first end| from the first end: 1.0 */
+  long threaded_from;     /**< the ramification uses ctx->nthreads threads on graphs of at least
+                               this many vertices, one below (the points' searches there cost
+                               less than handing them between threads): 200 000. The network
+                               does not depend on it. */
 } karst_amplification_options_t;
 
 void karst_amplification_options_init(karst_amplification_options_t *opt);

@@ -4,6 +4,7 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,6 +15,13 @@
 #include "core/parallel_internal.h"
 #include "karst/paths.h"
 #include "karst/routing.h"
+#include "paths/paths_internal.h"
+
+/* Below this many graph vertices the points are connected on one thread. On the presets (about
+ * 50 000 vertices) a point's searches settle a few hundred vertices, less than handing points
+ * between threads costs: the looping cave's 759 points took 0.016-0.017 s on 1 thread and
+ * 0.026-0.028 s on 2; the 402 k-sample block of bench_generate gained 1.7x. */
+#define RAMIFY_MIN_VERTICES_THREADED 200000
 
 /** Fill @p opt with the documented defaults (see the field comments). O(1). */
 void karst_amplification_options_init(karst_amplification_options_t *opt) {
@@ -22,6 +30,7 @@ void karst_amplification_options_init(karst_amplification_options_t *opt) {
   opt->max_levels = 3;
   opt->max_tries = 32;
   opt->loop_separation = 1.0;
+  opt->threaded_from = RAMIFY_MIN_VERTICES_THREADED;
 }
 
 /**
@@ -387,6 +396,7 @@ typedef struct {
   int state;
   uint32_t since; /* the commits of this step made when it was computed */
   int taken;      /* no free vertex, or its vertex was on the network: nothing to connect */
+  int dead;       /* stopped: an earlier point's paths met what its searches had read */
   int spring;     /* the spring of its nearest network node (-1 without a plan) */
   karst_int_t pv, v1;
   karst_path_t p1, p2;
@@ -408,6 +418,7 @@ typedef struct {
   karst_int_t *nvert, n_nodes, cap_nodes;
   karst_int_t *cleared;
   karst_ctx_t wctx;
+  karst_error_t setup_err;
 } ramify_thread_t;
 
 typedef struct {
@@ -431,6 +442,7 @@ typedef struct {
   int32_t *log; /* vertices put on the network, in order (at most n) */
   size_t n_log;
   karst_int_t added_points, added_paths, recomputed;
+  atomic_uint commits_now; /* n_commits, read by the searches without the lock */
 } ramify_par_t;
 
 /* The spring of the network node nearest @p p, the first on ties (-1: no "spring" attribute). */
@@ -462,11 +474,14 @@ static karst_error_t ramify_sync(ramify_par_t *R, ramify_thread_t *T) {
     if (!x || !s || !v || !c) return KARST_ENOMEM;
     T->cap_nodes = cap;
   }
-  T->n_nodes = net->n_nodes;
-  memcpy(T->nxyz, net->xyz, (size_t)net->n_nodes * 3 * sizeof *T->nxyz);
-  memcpy(T->nvert, R->sk->vertex_of_node, (size_t)net->n_nodes * sizeof *T->nvert);
+  /* Nodes are only appended, and a node's position, vertex and spring never change: copy the
+   * new ones. */
+  const karst_int_t from = T->n_nodes, add = net->n_nodes - from;
+  memcpy(T->nxyz + 3 * from, net->xyz + 3 * from, (size_t)add * 3 * sizeof *T->nxyz);
+  memcpy(T->nvert + from, R->sk->vertex_of_node + from, (size_t)add * sizeof *T->nvert);
   const karst_attr_t *sp = karst_network_attr_find(net, KARST_ATTR_NODE, "spring");
-  if (sp) memcpy(T->nspring, sp->data, (size_t)net->n_nodes * sizeof *T->nspring);
+  if (sp) memcpy(T->nspring + from, sp->data + from, (size_t)add * sizeof *T->nspring);
+  T->n_nodes = net->n_nodes;
   return block_junctions(&T->wctx, R->sk, T->blocked, &T->junc, &T->n_junc);
 }
 
@@ -488,13 +503,50 @@ static void keep_trail(ramify_prop_t *P, const karst_search_t *s) {
   P->n_trail += n;
 }
 
-/* Point @p i's paths on the thread's copy of the network (blocked junctions already set). */
+/* A point's search under way, as ramify_check sees it. */
+typedef struct {
+  ramify_par_t *R;
+  ramify_prop_t *P;
+  const karst_search_t *s;
+  uint32_t seen;    /* the commits its trail has been checked against */
+  karst_int_t upto; /* entries of the search's trail checked against them */
+} ramify_run_t;
+
+/* Polled by a point's searches every 256 settled vertices. Once paths have been committed since
+ * the point's copy of the network, whether they meet what its searches have touched so far
+ * (then it would be computed again anyway: stop now): after each new commit the whole trail,
+ * else the entries added since the last poll. Non-zero to stop. */
+static int ramify_check(void *arg) {
+  ramify_run_t *run = arg;
+  ramify_par_t *R = run->R;
+  ramify_prop_t *P = run->P;
+  const uint32_t c = atomic_load_explicit(&R->commits_now, memory_order_acquire);
+  if (c == P->since) return 0; /* nothing committed since its copy */
+  karst_int_t n = 0, from = run->upto;
+  const int32_t *t = karst_search_trail(run->s, &n);
+  pthread_mutex_lock(&R->mu);
+  int dead = R->stop;
+  if (c != run->seen) {                                   /* a new commit: everything read so far */
+    for (karst_int_t k = 0; !dead && k < P->n_trail; k++) /* the first search's (in the second) */
+      dead = R->mark[P->trail[k]] > P->since;
+    from = 0;
+  }
+  for (karst_int_t k = from; !dead && k < n; k++)
+    dead = R->mark[t[k]] > P->since;
+  pthread_mutex_unlock(&R->mu);
+  run->seen = c, run->upto = n;
+  return P->dead = dead;
+}
+
+/* Point @p i's paths on the thread's copy of the network (blocked junctions already set); if
+ * ramify_check stops a search, P->dead. */
 static karst_error_t ramify_compute(ramify_par_t *R, ramify_thread_t *T, int i, ramify_prop_t *P) {
   const karst_graph_t *g = R->g;
   karst_ctx_t *ctx = &T->wctx;
   karst_error_t err = KARST_SUCCESS;
   const karst_int_t pv = R->snap[i];
-  P->pv = pv, P->v1 = -1, P->p1.n = 0, P->p2.n = 0, P->n_trail = 0, P->spring = -1;
+  P->pv = pv, P->v1 = -1, P->p1.n = 0, P->p2.n = 0, P->n_trail = 0, P->spring = -1, P->dead = 0;
+  ramify_run_t run = {R, P, T->s, P->since, 0};
   P->taken = pv < 0 || T->in_net[pv];
   if (P->taken) return KARST_SUCCESS;
   const karst_route_t *route = NULL;
@@ -503,8 +555,10 @@ static karst_error_t ramify_compute(ramify_par_t *R, ramify_thread_t *T, int i, 
     route = karst_routing_route(R->plan, P->spring);
   }
   unsigned char *in_net = T->in_net, *blocked = T->blocked;
-  if ((err = karst_paths_dijkstra_routed(ctx, T->s, route, 1, &pv, blocked, in_net, 1, &P->v1)))
-    return err;
+  err = karst_i_paths_dijkstra_checked(ctx, T->s, route, 1, &pv, blocked, in_net, 1, &P->v1,
+                                       ramify_check, &run);
+  if (P->dead) return KARST_SUCCESS;
+  if (err) return err;
   keep_trail(P, T->s);
   if (P->v1 < 0) return KARST_SUCCESS;
   if ((err = karst_search_path_to(ctx, T->s, P->v1, &P->p1))) return err;
@@ -520,11 +574,14 @@ static karst_error_t ramify_compute(ramify_par_t *R, ramify_thread_t *T, int i, 
     }
   for (karst_int_t k = 1; k < P->p1.n; k++)
     blocked[P->p1.v[k]] = 1;
-  err = karst_paths_dijkstra_routed(ctx, T->s, route, 1, &pv, blocked, in_net, 1, &v2);
+  run.upto = 0, run.seen = P->since; /* the second search's trail, and the first's again */
+  err = karst_i_paths_dijkstra_checked(ctx, T->s, route, 1, &pv, blocked, in_net, 1, &v2,
+                                       ramify_check, &run);
   for (karst_int_t k = 1; k < P->p1.n; k++)
     blocked[P->p1.v[k]] = 0;
   for (karst_int_t k = 0; k < n_cleared; k++)
     in_net[T->cleared[k]] = 1;
+  if (P->dead) return KARST_SUCCESS;
   if (err) return err;
   keep_trail(P, T->s);
   if (v2 >= 0) err = karst_search_path_to(ctx, T->s, v2, &P->p2);
@@ -594,9 +651,28 @@ static void ramify_commit_one(ramify_par_t *R) {
       if (!R->in_net[v]) R->in_net[v] = 1, R->log[R->n_log++] = (int32_t)v;
     }
   }
+  atomic_store_explicit(&R->commits_now, id, memory_order_release);
   return;
 fail:
   ramify_fail(R, err);
+}
+
+/* Each thread makes its own workspace and copies (their pages first touched on that thread). */
+static void ramify_setup(void *arg, int tid, int nthreads) {
+  (void)nthreads;
+  ramify_par_t *R = arg;
+  ramify_thread_t *T = &R->th[tid];
+  const size_t n = (size_t)(R->g->n > 0 ? R->g->n : 1);
+  karst_ctx_init(&T->wctx);
+  karst_error_t err = karst_search_create(&T->wctx, R->g, &T->s);
+  if (!err) err = karst_search_record_trail(&T->wctx, T->s);
+  if (!err) {
+    T->in_net = karst_i_alloc_large(n);
+    T->blocked = karst_i_calloc_large(n, 1);
+    if (!T->in_net || !T->blocked)
+      err = karst_set_error(&T->wctx, KARST_ENOMEM, "amplification: out of memory");
+  }
+  T->setup_err = err;
 }
 
 static void ramify_worker(void *arg, int tid, int nthreads) {
@@ -604,6 +680,9 @@ static void ramify_worker(void *arg, int tid, int nthreads) {
   ramify_par_t *R = arg;
   ramify_thread_t *T = &R->th[tid];
   pthread_mutex_lock(&R->mu);
+  /* The network's vertices as they stand (another thread may have committed already). */
+  memcpy(T->in_net, R->in_net, (size_t)(R->g->n > 0 ? R->g->n : 1));
+  T->applied = R->n_log;
   while (!R->stop && R->commit < R->n_pts) {
     if (R->prop[R->commit].state == PROP_READY) {
       ramify_commit_one(R);
@@ -629,7 +708,8 @@ static void ramify_worker(void *arg, int tid, int nthreads) {
     if (err)
       snprintf(P->msg, sizeof P->msg, "%s",
                T->wctx.errmsg[0] ? T->wctx.errmsg : "amplification: out of memory");
-    P->state = PROP_READY;
+    P->state = P->dead ? PROP_TODO : PROP_READY; /* stopped: to be computed again */
+    R->recomputed += P->dead;
     pthread_cond_broadcast(&R->cv);
   }
   pthread_cond_broadcast(&R->cv);
@@ -690,7 +770,10 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   unsigned char *in_net = NULL;
   double *pts = NULL;
   karst_int_t *snap = NULL;
-  const int T = ctx && ctx->nthreads > 1 ? ctx->nthreads : 1;
+  /* On a small graph a point's searches cost less than handing the points between threads. */
+  const int T = ctx && ctx->nthreads > 1 && g->n >= opt->threaded_from
+                    ? (ctx->nthreads < KARST_I_MAX_THREADS ? ctx->nthreads : KARST_I_MAX_THREADS)
+                    : 1;
   int sync_ready = 0;
   ramify_par_t R;
   memset(&R, 0, sizeof R);
@@ -716,16 +799,13 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   if (!in_net || !pts || !snap || !R.th || !R.prop || !R.mark || !R.log) goto nomem;
   for (size_t i = 0; i < max_pts; i++)
     karst_path_init(&R.prop[i].p1), karst_path_init(&R.prop[i].p2);
-  for (int t = 0; t < T; t++) {
-    ramify_thread_t *th = &R.th[t];
-    karst_ctx_init(&th->wctx);
-    if ((err = karst_search_create(ctx, g, &th->s)) ||
-        (err = karst_search_record_trail(ctx, th->s)))
+  R.g = g;
+  karst_i_parallel_run(T, ramify_setup, &R);
+  for (int t = 0; t < T; t++)
+    if (R.th[t].setup_err) {
+      err = karst_set_error(ctx, R.th[t].setup_err, "%s", R.th[t].wctx.errmsg);
       goto cleanup;
-    th->in_net = karst_i_alloc_large(n);
-    th->blocked = karst_i_calloc_large(n, 1);
-    if (!th->in_net || !th->blocked) goto nomem;
-  }
+    }
   if (pthread_mutex_init(&R.mu, NULL)) {
     err = karst_set_error(ctx, KARST_ENOMEM, "amplification: cannot create a mutex");
     goto cleanup;
@@ -737,7 +817,7 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
   }
   sync_ready = 1;
   R.ctx = ctx, R.g = g, R.plan = plan, R.opt = opt, R.sk = sk, R.snap = snap, R.in_net = in_net;
-  R.window = 2 * T;
+  R.window = 3 * T;
   for (karst_int_t v = 0; v < g->n; v++)
     in_net[v] = sk->node_of_vertex[v] >= 0;
   double reach = am->reach, n_next = am->points; /* karst_amplification_step_points, running */
@@ -757,11 +837,10 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
     /* Connect the points in order, each to the network grown so far (see ramify_worker). */
     R.n_pts = n_pts, R.n_dead = n_dead, R.step = step;
     R.commit = 0, R.n_commits = 0, R.n_log = 0;
+    atomic_store(&R.commits_now, 0);
     memset(R.mark, 0, n * sizeof *R.mark);
     for (int i = 0; i < n_pts; i++)
       R.prop[i].state = PROP_TODO;
-    for (int t = 0; t < T; t++)
-      memcpy(R.th[t].in_net, in_net, n), R.th[t].applied = 0;
     karst_i_parallel_run(T, ramify_worker, &R);
     if ((err = R.err)) goto cleanup;
   }

@@ -11,6 +11,7 @@
 #include "core/memory_internal.h"
 #include "core/parallel_internal.h"
 #include "graph/graph_internal.h"
+#include "paths/paths_internal.h"
 
 /*
  * Per-vertex search state. What every arc relaxation reads (g and whether
@@ -342,6 +343,8 @@ typedef struct {
   int want_pred;
   int backward;               /* relax arcs w → v (least cost TO the sources) */
   const karst_route_t *route; /* routed costs, or NULL */
+  int (*check)(void *arg);    /* polled every 256 settled vertices: non-zero stops, or NULL */
+  void *check_arg;
 } search_opts_t;
 
 /*
@@ -379,7 +382,7 @@ __attribute__((always_inline))
 static inline karst_error_t
 run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
                 const karst_int_t *sources, const search_opts_t *o, const int with_route,
-                const int with_blocked) {
+                const int with_blocked, const int with_check) {
   const karst_graph_t *g = s->g;
   const karst_int_t target = o->target;
   const double lb = o->lb;
@@ -416,7 +419,8 @@ run_search_loop(karst_ctx_t *ctx, karst_search_t *s, karst_int_t n_sources,
     const double gv = node[v].dist;
     if (settled[v] != s->cur) {
       settled[v] = s->cur;
-      s->n_settled++;
+      if ((++s->n_settled & 255) == 0 && with_check && o->check(o->check_arg))
+        return karst_set_error(ctx, KARST_EINTERRUPTED, "search stopped by its caller");
     }
     if (v == target) {
       if (o->last_target) *o->last_target = v;
@@ -455,11 +459,14 @@ static karst_error_t run_search(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
                                 const karst_int_t *sources, const search_opts_t *o) {
   /* Tabulated routed costs replace the formula (see run_search_loop). */
   const int with_route = o->route && !(o->backward ? o->route->arc_bwd : o->route->arc_fwd);
+  if (o->check) /* the amplification's speculative searches (karst_i_paths_dijkstra_checked) */
+    return with_route ? run_search_loop(ctx, s, n_sources, sources, o, 1, o->blocked != NULL, 1)
+                      : run_search_loop(ctx, s, n_sources, sources, o, 0, o->blocked != NULL, 1);
   if (o->blocked)
-    return with_route ? run_search_loop(ctx, s, n_sources, sources, o, 1, 1)
-                      : run_search_loop(ctx, s, n_sources, sources, o, 0, 1);
-  return with_route ? run_search_loop(ctx, s, n_sources, sources, o, 1, 0)
-                    : run_search_loop(ctx, s, n_sources, sources, o, 0, 0);
+    return with_route ? run_search_loop(ctx, s, n_sources, sources, o, 1, 1, 0)
+                      : run_search_loop(ctx, s, n_sources, sources, o, 0, 1, 0);
+  return with_route ? run_search_loop(ctx, s, n_sources, sources, o, 1, 0, 0)
+                    : run_search_loop(ctx, s, n_sources, sources, o, 0, 0, 0);
 }
 
 /**
@@ -494,7 +501,7 @@ karst_error_t karst_paths_astar(karst_ctx_t *ctx, karst_search_t *s, karst_int_t
     return karst_set_error(ctx, KARST_EINVAL,
                            "A*: the cost lower bound per metre must be finite and >= 0, got %g",
                            lb_per_metre);
-  const search_opts_t o = {target, lb_per_metre, NULL, NULL, NULL, 0, NULL, 1, 0, NULL};
+  const search_opts_t o = {target, lb_per_metre, NULL, NULL, NULL, 0, NULL, 1, 0, NULL, NULL, NULL};
   karst_error_t err = run_search(ctx, s, 1, &source, &o);
   if (err) return err;
   if (!is_settled(s, target))
@@ -534,7 +541,21 @@ karst_error_t karst_paths_dijkstra_routed(karst_ctx_t *ctx, karst_search_t *s,
                                           karst_int_t *last_target) {
   if (n_sources < 1 || !sources)
     return karst_set_error(ctx, KARST_EINVAL, "Dijkstra: no source given");
-  const search_opts_t o = {-1, 0.0, blocked, NULL, is_target, stop_after, last_target, 1, 0, route};
+  const search_opts_t o = {-1,          0.0, blocked, NULL,  is_target, stop_after,
+                           last_target, 1,   0,       route, NULL,      NULL};
+  return run_search(ctx, s, n_sources, sources, &o);
+}
+
+/* karst_paths_dijkstra_routed that polls @p check(@p arg) every 256 settled vertices and stops
+ * with KARST_EINTERRUPTED when it returns non-zero (paths_internal.h). */
+karst_error_t karst_i_paths_dijkstra_checked(
+    karst_ctx_t *ctx, karst_search_t *s, const karst_route_t *route, karst_int_t n_sources,
+    const karst_int_t *sources, const unsigned char *blocked, const unsigned char *is_target,
+    karst_int_t stop_after, karst_int_t *last_target, int (*check)(void *), void *arg) {
+  if (n_sources < 1 || !sources)
+    return karst_set_error(ctx, KARST_EINVAL, "Dijkstra: no source given");
+  const search_opts_t o = {-1,          0.0, blocked, NULL,  is_target, stop_after,
+                           last_target, 1,   0,       route, check,     arg};
   return run_search(ctx, s, n_sources, sources, &o);
 }
 
@@ -776,7 +797,8 @@ static void *rows_worker(void *arg) {
       for (karst_int_t j = i + 1; j < t->n_keys; j++)
         if (!mask[t->keys[j]]) mask[t->keys[j]] = 1, want++;
       /* The bound rows need no predecessors. */
-      const search_opts_t o = {-1, 0.0, NULL, NULL, mask, want, NULL, t->pred != NULL, 0, NULL};
+      const search_opts_t o = {-1, 0.0,  NULL, NULL, mask, want, NULL, t->pred != NULL,
+                               0,  NULL, NULL, NULL};
       t->err = run_search(&t->ctx, s, 1, &ki, &o);
       for (karst_int_t j = i + 1; j < t->n_keys; j++)
         mask[t->keys[j]] = 0;
@@ -1061,7 +1083,8 @@ static void *trows_worker(void *arg) {
                              NULL, t->closed,
                              mask, want,
                              NULL, t->succ != NULL,
-                             1,    t->routes ? t->routes[i] : NULL};
+                             1,    t->routes ? t->routes[i] : NULL,
+                             NULL, NULL};
     t->err = run_search(&t->ctx, s, 1, &ti, &o);
     for (karst_int_t j = 0; j < t->n_sources; j++)
       mask[t->sources[j]] = 0;

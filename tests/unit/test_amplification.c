@@ -553,8 +553,12 @@ static void ramify_on(int threads, int springs, karst_network_t *out, long long 
   karst_rng_t ra;
   karst_rng_init(&ra, 79, 0);
   karst_geology_t *geo = geo_make(&sc);
+  karst_amplification_options_t opt;
+  karst_amplification_options_init(&opt);
+  assert_int_equal(opt.threaded_from, 200000);
+  opt.threaded_from = 0; /* threads on this small lattice too */
   assert_int_equal(
-      karst_amplification_ramify(&ctx, geo, &g, springs ? &plan : NULL, &ra, NULL, &sk, NULL, NULL),
+      karst_amplification_ramify(&ctx, geo, &g, springs ? &plan : NULL, &ra, &opt, &sk, NULL, NULL),
       KARST_SUCCESS);
   karst_geology_free(geo);
   karst_network_destroy(out);
