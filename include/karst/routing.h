@@ -65,6 +65,10 @@ typedef struct karst_routing_plan {
 void karst_routing_plan_init(karst_routing_plan_t *plan);
 void karst_routing_plan_destroy(karst_routing_plan_t *plan);
 
+/** Free the plan's rows (bound, succ), which only the skeleton reads, so that the stages after
+ *  it (the amplification's workspaces) do not add to them: n × targets × 4 bytes. O(1). */
+void karst_routing_plan_drop_rows(karst_routing_plan_t *plan);
+
 /** The route (routed costs) of spring @p spring in @p plan. */
 const karst_route_t *karst_routing_route(const karst_routing_plan_t *plan, int spring);
 

@@ -195,6 +195,7 @@ static karst_error_t run_generation(karst_ctx_t *ctx, const karst_geology_t *geo
     stats->n_skeleton_paths += kept;
     stats->stage_seconds[KARST_STAGE_SKELETON] += karst_i_now() - t;
   }
+  karst_routing_plan_drop_rows(&plan); /* the skeleton's alone: memory for the amplification */
   karst_progress(ctx, "amplification", 0, 1);
   t = karst_i_now();
   if ((err = karst_amplification_ramify(ctx, geo_g, g, &plan, r_amp, NULL, sk, NULL, NULL)))

@@ -35,6 +35,13 @@ void karst_routing_plan_destroy(karst_routing_plan_t *plan) {
   memset(plan, 0, sizeof *plan);
 }
 
+void karst_routing_plan_drop_rows(karst_routing_plan_t *plan) {
+  free(plan->bound);
+  free(plan->succ);
+  plan->bound = NULL;
+  plan->succ = NULL;
+}
+
 const karst_route_t *karst_routing_route(const karst_routing_plan_t *plan, int spring) {
   return spring >= 0 && spring < plan->n_springs ? &plan->routes[spring] : NULL;
 }

@@ -396,6 +396,14 @@ static void test_connectivity(void **state) {
   assert_true(s1A && s3A && s3B);
   assert_int_equal(plan.key_spring[0], 0);
   assert_int_equal(plan.key_spring[3], 1);
+  /* The rows go once the skeleton is laid (generate.c); the routes and the springs stay. */
+  assert_true(plan.bound != NULL || plan.succ != NULL);
+  karst_routing_plan_drop_rows(&plan);
+  assert_null(plan.bound);
+  assert_null(plan.succ);
+  assert_ptr_equal(karst_routing_route(&plan, 1), &plan.routes[1]);
+  assert_int_equal(plan.key_spring[3], 1);
+  karst_routing_plan_drop_rows(&plan); /* twice: nothing left to free */
   karst_routing_plan_destroy(&plan);
   karst_graph_destroy(&gr);
   karst_samples_destroy(&s);
