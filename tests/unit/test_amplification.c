@@ -402,6 +402,20 @@ static void test_displacement_scale_invariant(void **state) {
   }
 }
 
+/* The vertex off the network nearest to @p p by a scan of all, the first on ties. */
+static karst_int_t scan_nearest(int nv, const double *xyz, const unsigned char *in_net,
+                                const double *p) {
+  karst_int_t best = -1;
+  double bd = INFINITY;
+  for (int v = 0; v < nv; v++) {
+    if (in_net[v]) continue;
+    double dx = xyz[3 * v] - p[0], dy = xyz[3 * v + 1] - p[1], dz = xyz[3 * v + 2] - p[2],
+           d = sqrt(dx * dx + dy * dy + dz * dz);
+    if (d < bd) bd = d, best = v;
+  }
+  return best;
+}
+
 /* The snap of amplification points to free graph vertices (a grid searched in shells) against the
  * independent method it replaced: a scan of every vertex in ascending order with a strict '<'.
  * Three clouds: random vertices with random points inside and outside their box; a lattice with
@@ -437,14 +451,7 @@ static void test_snap_matches_scan(void **state) {
     assert_int_equal(karst_i_amplification_snap(NULL, NV, xyz, in_net, pts, NP, snap),
                      KARST_SUCCESS);
     for (int i = 0; i < NP; i++) {
-      karst_int_t best = -1;
-      double bd = INFINITY;
-      for (int v = 0; v < NV; v++) {
-        if (in_net[v]) continue;
-        double dx = xyz[3 * v] - pts[3 * i], dy = xyz[3 * v + 1] - pts[3 * i + 1],
-               dz = xyz[3 * v + 2] - pts[3 * i + 2], d = sqrt(dx * dx + dy * dy + dz * dz);
-        if (d < bd) bd = d, best = v;
-      }
+      const karst_int_t best = scan_nearest(NV, xyz, in_net, &pts[3 * i]);
       if (snap[i] != best)
         print_error("cloud %d point %d: grid %lld, scan %lld\n", cloud, i, (long long)snap[i],
                     (long long)best);
@@ -466,17 +473,8 @@ static void test_snap_matches_scan(void **state) {
     karst_ctx_init(&ctx);
     ctx.nthreads = threads;
     assert_int_equal(karst_i_amplification_snap(&ctx, NB, bx, bnet, pts, NQ, snap), KARST_SUCCESS);
-    for (int i = 0; i < NQ; i++) {
-      karst_int_t best = -1;
-      double bd = INFINITY;
-      for (int v = 0; v < NB; v++) {
-        if (bnet[v]) continue;
-        double dx = bx[3 * v] - pts[3 * i], dy = bx[3 * v + 1] - pts[3 * i + 1],
-               dz = bx[3 * v + 2] - pts[3 * i + 2], d = sqrt(dx * dx + dy * dy + dz * dz);
-        if (d < bd) bd = d, best = v;
-      }
-      assert_int_equal(snap[i], best);
-    }
+    for (int i = 0; i < NQ; i++)
+      assert_int_equal(snap[i], scan_nearest(NB, bx, bnet, &pts[3 * i]));
   }
   free(bx), free(bnet);
   /* every vertex in the network: nothing to snap to */
