@@ -160,6 +160,16 @@ static karst_int_t cyclomatic(const karst_network_t *net, karst_int_t *component
   return net->n_edges - net->n_nodes + c;
 }
 
+/* A scenario around a lattice of side up to @p hi - 10 m: the box [-10, hi]^3 under a terrain at
+ * 1000 m, two amplification steps. */
+static void lattice_scenario(karst_scenario_t *sc, double hi) {
+  karst_scenario_init(sc);
+  sc->terrain.elevation = 1000;
+  sc->domain_min[0] = sc->domain_min[1] = sc->domain_min[2] = -10;
+  sc->domain_max[0] = sc->domain_max[1] = sc->domain_max[2] = hi;
+  sc->amplification.steps = 2;
+}
+
 /* Ramification on a jittered 3-D lattice (Euclidean cost) from a straight skeleton path. */
 static void run_ramify(double dead_fraction, karst_int_t *cyc, karst_int_t *comp, karst_int_t *npts,
                        karst_int_t *namp, int *max_amp_step) {
@@ -173,10 +183,7 @@ static void run_ramify(double dead_fraction, karst_int_t *cyc, karst_int_t *comp
   karst_graph_t g;
   fx_knn_graph(&g, n, xyz, 14, fx_euclid_cost, NULL);
   karst_scenario_t sc;
-  karst_scenario_init(&sc);
-  sc.terrain.elevation = 1000;
-  sc.domain_min[0] = sc.domain_min[1] = sc.domain_min[2] = -10;
-  sc.domain_max[0] = sc.domain_max[1] = sc.domain_max[2] = 110;
+  lattice_scenario(&sc, 110);
   sc.amplification.steps = 2;
   sc.amplification.points = 6;
   sc.amplification.dead_end_fraction = dead_fraction;
@@ -265,10 +272,7 @@ static void run_hierarchy(double reach, double *far, int *n2, int *max_degree) {
   karst_graph_t g;
   fx_knn_graph(&g, n, xyz, 14, fx_euclid_cost, NULL);
   karst_scenario_t sc;
-  karst_scenario_init(&sc);
-  sc.terrain.elevation = 1000;
-  sc.domain_min[0] = sc.domain_min[1] = sc.domain_min[2] = -10;
-  sc.domain_max[0] = sc.domain_max[1] = sc.domain_max[2] = 110;
+  lattice_scenario(&sc, 110);
   sc.amplification.steps = 2;
   sc.amplification.points = 8;
   sc.amplification.points_ratio = 4;
@@ -518,10 +522,7 @@ static void ramify_on(int threads, int springs, karst_network_t *out, long long 
   karst_graph_t g;
   fx_knn_graph(&g, n, xyz, 14, springs ? steep_cost : fx_euclid_cost, NULL);
   karst_scenario_t sc;
-  karst_scenario_init(&sc);
-  sc.terrain.elevation = 1000;
-  sc.domain_min[0] = sc.domain_min[1] = sc.domain_min[2] = -10;
-  sc.domain_max[0] = sc.domain_max[1] = sc.domain_max[2] = 160;
+  lattice_scenario(&sc, 160);
   sc.amplification.steps = 2;
   sc.amplification.points = 60;
   sc.amplification.points_ratio = 0.5;
