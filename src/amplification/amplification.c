@@ -471,7 +471,8 @@ static karst_error_t ramify_sync(ramify_par_t *R, ramify_thread_t *T) {
     if (v) T->nvert = v;
     karst_int_t *c = realloc(T->cleared, (size_t)cap * sizeof *c);
     if (c) T->cleared = c;
-    if (!x || !s || !v || !c) return KARST_ENOMEM;
+    if (!x || !s || !v || !c)
+      return karst_set_error(&T->wctx, KARST_ENOMEM, "amplification: out of memory");
     T->cap_nodes = cap;
   }
   /* Nodes are only appended, and a node's position, vertex and spring never change: copy the
