@@ -438,11 +438,12 @@ typedef struct {
   karst_error_t err;
   unsigned char *in_net; /* the network's vertices, as committed */
   uint32_t *mark;        /* per vertex: the commit of this step that last changed it (0: none) */
-  uint32_t n_commits;
+  /* commits of this step that changed the network: written under mu, also read without it by
+   * the searches (ramify_check) */
+  atomic_uint n_commits;
   int32_t *log; /* vertices put on the network, in order (at most n) */
   size_t n_log;
   karst_int_t added_points, added_paths, recomputed;
-  atomic_uint commits_now; /* n_commits, read by the searches without the lock */
 } ramify_par_t;
 
 /* The spring of the network node nearest @p p, the first on ties (-1: no "spring" attribute). */
@@ -521,7 +522,7 @@ static int ramify_check(void *arg) {
   ramify_run_t *run = arg;
   ramify_par_t *R = run->R;
   ramify_prop_t *P = run->P;
-  const uint32_t c = atomic_load_explicit(&R->commits_now, memory_order_acquire);
+  const uint32_t c = atomic_load_explicit(&R->n_commits, memory_order_acquire);
   if (c == P->since) return 0; /* nothing committed since its copy */
   karst_int_t n = 0, from = run->upto;
   const int32_t *t = karst_search_trail(run->s, &n);
@@ -613,7 +614,7 @@ static void ramify_commit_one(ramify_par_t *R) {
   }
   const karst_int_t pv = P->pv;
   int skip = P->taken || R->in_net[pv]; /* its vertex taken by an earlier point */
-  if (!skip && P->since != R->n_commits) {
+  if (!skip && P->since != atomic_load_explicit(&R->n_commits, memory_order_relaxed)) {
     int valid = P->n_trail >= 0;
     if (valid && R->plan) {
       const karst_attr_t *sp = karst_network_attr_find(&sk->net, KARST_ATTR_NODE, "spring");
@@ -643,7 +644,7 @@ static void ramify_commit_one(ramify_par_t *R) {
   }
   if ((err = karst_skeleton_mark_node(ctx, sk, g, pv, KARST_NODE_AMPLIFICATION))) goto fail;
   R->added_points++;
-  const uint32_t id = ++R->n_commits;
+  const uint32_t id = atomic_load_explicit(&R->n_commits, memory_order_relaxed) + 1;
   for (int pass = 0; pass < 2; pass++) {
     const karst_path_t *p = pass ? &P->p2 : &P->p1;
     for (karst_int_t k = 0; k < p->n; k++) {
@@ -652,7 +653,7 @@ static void ramify_commit_one(ramify_par_t *R) {
       if (!R->in_net[v]) R->in_net[v] = 1, R->log[R->n_log++] = (int32_t)v;
     }
   }
-  atomic_store_explicit(&R->commits_now, id, memory_order_release);
+  atomic_store_explicit(&R->n_commits, id, memory_order_release);
   return;
 fail:
   ramify_fail(R, err);
@@ -699,7 +700,7 @@ static void ramify_worker(void *arg, int tid, int nthreads) {
     }
     ramify_prop_t *P = &R->prop[i];
     P->state = PROP_RUNNING;
-    P->since = R->n_commits;
+    P->since = atomic_load_explicit(&R->n_commits, memory_order_relaxed);
     karst_error_t err = ramify_sync(R, T);
     pthread_mutex_unlock(&R->mu);
     if (!err) err = ramify_compute(R, T, i, P);
@@ -817,7 +818,7 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
     goto cleanup;
   }
   sync_ready = 1;
-  R.ctx = ctx, R.g = g, R.plan = plan, R.opt = opt, R.sk = sk, R.snap = snap, R.in_net = in_net;
+  R.ctx = ctx, R.plan = plan, R.opt = opt, R.sk = sk, R.snap = snap, R.in_net = in_net;
   R.window = 3 * T;
   for (karst_int_t v = 0; v < g->n; v++)
     in_net[v] = sk->node_of_vertex[v] >= 0;
@@ -837,8 +838,8 @@ karst_error_t karst_amplification_ramify(karst_ctx_t *ctx, const karst_geology_t
       goto cleanup;
     /* Connect the points in order, each to the network grown so far (see ramify_worker). */
     R.n_pts = n_pts, R.n_dead = n_dead, R.step = step;
-    R.commit = 0, R.n_commits = 0, R.n_log = 0;
-    atomic_store(&R.commits_now, 0);
+    R.commit = 0, R.n_log = 0;
+    atomic_store(&R.n_commits, 0);
     memset(R.mark, 0, n * sizeof *R.mark);
     for (int i = 0; i < n_pts; i++)
       R.prop[i].state = PROP_TODO;
