@@ -246,7 +246,12 @@ karst_error_t karst_routing_plan(karst_ctx_t *ctx, const karst_geology_t *geo,
     err = karst_set_error(ctx, KARST_ENOMEM, "routing: out of memory");
     goto cleanup;
   }
-  /* 1. One backward search per spring: every sink's and waypoint's cost to it. */
+  /* 1. One backward search per spring: every sink's and waypoint's cost to it. With one spring,
+   *    every waypoint drains to it (step 2), so its row and the waypoints' are all on its costs:
+   *    tabulated now, its own row reads the table too instead of evaluating the formula on
+   *    every arc (the same values: karst_route_tabulate). */
+  if (n_spring_targets == 1)
+    tabulate_spring(ctx, g, &P, tspring[0], T, KARST_ROUTING_TABULATE_MIN_ROWS);
   for (int t = 0; t < n_spring_targets; t++)
     tv[t] = P.targets[t], troutes[t] = &P.routes[tspring[t]];
   karst_progress(ctx, "paths", 0, 1);

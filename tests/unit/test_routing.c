@@ -446,8 +446,63 @@ static void test_connectivity(void **state) {
   karst_scenario_destroy(&sc);
 }
 
+/* With one spring every waypoint drains to it, so the plan tabulates the spring's routed costs
+ * before any row, the spring's own row included. That row must be the one the formula gives: it
+ * is computed here again by karst_paths_target_rows on the same route without its tables (the
+ * routed cost of each arc evaluated as the search relaxes it), and every vertex's bound must be
+ * equal, bit for bit, to the plan's. */
+static void test_one_spring_rows_on_tables(void **state) {
+  (void)state;
+  karst_scenario_t sc;
+  base(&sc);
+  add_key(&sc, "w1", KARST_KEYPOINT_WAYPOINT, 150, 100, 60);
+  add_key(&sc, "w2", KARST_KEYPOINT_WAYPOINT, 100, 200, 80);
+  add_key(&sc, "s2", KARST_KEYPOINT_SINK, 250, 60, 148);
+  karst_ctx_t ctx;
+  karst_ctx_init(&ctx);
+  karst_geology_t *g = geo_make(&sc);
+  karst_samples_t s;
+  karst_samples_init(&s);
+  karst_rng_t r;
+  karst_rng_derive(&r, 5, 0, 0);
+  assert_int_equal(karst_sampling_run(&ctx, g, &r, &s), KARST_SUCCESS);
+  karst_graph_t gr;
+  karst_graph_init(&gr);
+  assert_int_equal(karst_graph_build(&ctx, g, &s, &gr), KARST_SUCCESS);
+  karst_routing_plan_t plan;
+  karst_routing_plan_init(&plan);
+  assert_int_equal(karst_routing_plan(&ctx, g, &gr, 0, &plan), KARST_SUCCESS);
+  assert_int_equal(plan.n_targets, 3); /* the spring, then the two waypoints */
+  assert_int_equal(plan.targets[0], 1);
+  assert_non_null(plan.routes[0].arc_bwd); /* tabulated */
+  assert_non_null(plan.bound);
+  karst_route_t formula = plan.routes[0];
+  formula.arc_fwd = formula.arc_bwd = NULL;
+  const karst_route_t *routes[1] = {&formula};
+  const karst_int_t target = plan.targets[0], sources[4] = {0, 2, 3, 4};
+  double dist[4];
+  float *row = malloc(sizeof *row * (size_t)gr.n);
+  assert_non_null(row);
+  assert_int_equal(karst_paths_target_rows(&ctx, &gr, 1, &target, routes, plan.closed, 4, sources,
+                                           dist, row, NULL),
+                   KARST_SUCCESS);
+  karst_int_t differ = 0;
+  for (karst_int_t v = 0; v < gr.n; v++)
+    differ += memcmp(&row[v], &plan.bound[v], sizeof *row) != 0;
+  assert_int_equal(differ, 0);
+  for (int j = 0; j < 4; j++)
+    assert_true(isfinite(dist[j]) && dist[j] > 0);
+  free(row);
+  karst_routing_plan_destroy(&plan);
+  karst_graph_destroy(&gr);
+  karst_samples_destroy(&s);
+  karst_geology_free(g);
+  karst_scenario_destroy(&sc);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
+      cmocka_unit_test(test_one_spring_rows_on_tables),
       cmocka_unit_test(test_vadose_then_phreatic),    cmocka_unit_test(test_own_water_tables),
       cmocka_unit_test(test_exclusion_box_avoided),   cmocka_unit_test(test_faults),
       cmocka_unit_test(test_folded_horizon_followed), cmocka_unit_test(test_connectivity),
