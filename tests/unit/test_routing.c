@@ -353,6 +353,24 @@ static void test_folded_horizon_followed(void **state) {
  * s1: [2, 0] (A required, B never), s2: [0, 1] (only B allowed), s3: [2, 2] (both required).
  * The plan lays no route from s1 to B nor from s2 to A, routes from s1 to A and from s3 to both;
  * in the network s3 is joined to both springs and the sinks' spring attribute is allowed. */
+/* The routing plan of @p sc on the graph of the pipeline's own sampling (stream (seed, 0, 0)):
+ * its geology (returned), samples, graph and plan, all to be freed by the caller. */
+static karst_geology_t *plan_on_own_graph(karst_scenario_t *sc, uint64_t seed, karst_ctx_t *ctx,
+                                          karst_samples_t *s, karst_graph_t *gr,
+                                          karst_routing_plan_t *plan) {
+  karst_ctx_init(ctx);
+  karst_geology_t *g = geo_make(sc);
+  karst_samples_init(s);
+  karst_rng_t r;
+  karst_rng_derive(&r, seed, 0, 0);
+  assert_int_equal(karst_sampling_run(ctx, g, &r, s), KARST_SUCCESS);
+  karst_graph_init(gr);
+  assert_int_equal(karst_graph_build(ctx, g, s, gr), KARST_SUCCESS);
+  karst_routing_plan_init(plan);
+  assert_int_equal(karst_routing_plan(ctx, g, gr, 0, plan), KARST_SUCCESS);
+  return g;
+}
+
 static void test_connectivity(void **state) {
   (void)state;
   karst_scenario_t sc;
@@ -370,19 +388,10 @@ static void test_connectivity(void **state) {
   memcpy(c->matrix, M, 6);
   /* The plan, on the graph of the pipeline's own sampling. */
   karst_ctx_t ctx;
-  karst_ctx_init(&ctx);
-  karst_geology_t *g = geo_make(&sc);
   karst_samples_t s;
-  karst_samples_init(&s);
-  karst_rng_t r;
-  karst_rng_derive(&r, 3, 0, 0);
-  assert_int_equal(karst_sampling_run(&ctx, g, &r, &s), KARST_SUCCESS);
   karst_graph_t gr;
-  karst_graph_init(&gr);
-  assert_int_equal(karst_graph_build(&ctx, g, &s, &gr), KARST_SUCCESS);
   karst_routing_plan_t plan;
-  karst_routing_plan_init(&plan);
-  assert_int_equal(karst_routing_plan(&ctx, g, &gr, 0, &plan), KARST_SUCCESS);
+  karst_geology_t *g = plan_on_own_graph(&sc, 3, &ctx, &s, &gr, &plan);
   int s1A = 0, s3A = 0, s3B = 0;
   for (int i = 0; i < plan.n_pairs; i++) {
     const karst_route_pair_t *P = &plan.pairs[i];
@@ -459,19 +468,10 @@ static void test_one_spring_rows_on_tables(void **state) {
   add_key(&sc, "w2", KARST_KEYPOINT_WAYPOINT, 100, 200, 80);
   add_key(&sc, "s2", KARST_KEYPOINT_SINK, 250, 60, 148);
   karst_ctx_t ctx;
-  karst_ctx_init(&ctx);
-  karst_geology_t *g = geo_make(&sc);
   karst_samples_t s;
-  karst_samples_init(&s);
-  karst_rng_t r;
-  karst_rng_derive(&r, 5, 0, 0);
-  assert_int_equal(karst_sampling_run(&ctx, g, &r, &s), KARST_SUCCESS);
   karst_graph_t gr;
-  karst_graph_init(&gr);
-  assert_int_equal(karst_graph_build(&ctx, g, &s, &gr), KARST_SUCCESS);
   karst_routing_plan_t plan;
-  karst_routing_plan_init(&plan);
-  assert_int_equal(karst_routing_plan(&ctx, g, &gr, 0, &plan), KARST_SUCCESS);
+  karst_geology_t *g = plan_on_own_graph(&sc, 5, &ctx, &s, &gr, &plan);
   assert_int_equal(plan.n_targets, 3); /* the spring, then the two waypoints */
   assert_int_equal(plan.targets[0], 1);
   assert_non_null(plan.routes[0].arc_bwd); /* tabulated */
