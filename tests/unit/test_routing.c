@@ -503,9 +503,12 @@ static void test_one_spring_rows_on_tables(void **state) {
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(test_one_spring_rows_on_tables),
-      cmocka_unit_test(test_vadose_then_phreatic),    cmocka_unit_test(test_own_water_tables),
-      cmocka_unit_test(test_exclusion_box_avoided),   cmocka_unit_test(test_faults),
-      cmocka_unit_test(test_folded_horizon_followed), cmocka_unit_test(test_connectivity),
+      cmocka_unit_test(test_vadose_then_phreatic),
+      cmocka_unit_test(test_own_water_tables),
+      cmocka_unit_test(test_exclusion_box_avoided),
+      cmocka_unit_test(test_faults),
+      cmocka_unit_test(test_folded_horizon_followed),
+      cmocka_unit_test(test_connectivity),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }
