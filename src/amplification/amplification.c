@@ -20,7 +20,8 @@
 /* Below this many graph vertices the points are connected on one thread. On the presets (about
  * 50 000 vertices) a point's searches settle a few hundred vertices, less than handing points
  * between threads costs: the looping cave's 759 points took 0.016-0.017 s on 1 thread and
- * 0.026-0.028 s on 2; the 402 k-sample block of bench_generate gained 1.7x. */
+ * 0.026-0.028 s on 2; the ramification of the 402 k-sample block of bench_generate alone gained
+ * 1.4-1.8x (docs/performance.md, "Both cores"). */
 #define RAMIFY_MIN_VERTICES_THREADED 200000
 
 /** Fill @p opt with the documented defaults (see the field comments). O(1). */
