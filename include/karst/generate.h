@@ -42,7 +42,7 @@ typedef struct karst_generate_stats {
                                    ramified branches */
   double skeleton_length;       /**< total length (m) of S before amplification (the same) */
   double stage_seconds[KARST_STAGE_COUNT];
-  size_t peak_bytes; /**< peak resident memory of the process (getrusage), for benchmarks */
+  size_t peak_bytes; /**< peak resident memory of the process (VmHWM), for benchmarks */
   uint64_t seed, realisation; /**< of the realisation */
   int n_generations;          /**< generations run (1 without a generations section) */
   karst_generation_stats_t generations[KARST_SCENARIO_MAX_GENERATIONS];

@@ -34,8 +34,28 @@ double karst_i_now(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* The kernel's VmHWM (peak resident set of this address space) from /proc/self/status, or 0.
+ * getrusage's ru_maxrss is not that: Linux carries it over execve from the address space the
+ * program replaced, so a process started by posix_spawn or vfork from a large one (a notebook,
+ * a benchmark, an MPI launcher) reports its parent's resident set as its own peak. */
+static size_t vm_hwm_bytes(void) {
+  FILE *fp = fopen("/proc/self/status", "r");
+  if (!fp) return 0;
+  char line[256];
+  unsigned long long kib = 0;
+  while (fgets(line, sizeof line, fp))
+    if (strncmp(line, "VmHWM:", 6) == 0) {
+      if (sscanf(line + 6, "%llu", &kib) != 1) kib = 0;
+      break;
+    }
+  fclose(fp);
+  return (size_t)kib * 1024u;
+}
+
 size_t karst_i_peak_bytes(void) {
-  struct rusage ru;
+  size_t hwm = vm_hwm_bytes();
+  if (hwm > 0) return hwm;
+  struct rusage ru; /* no /proc: the rusage figure (see above) */
   if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
   return (size_t)ru.ru_maxrss * 1024u; /* Linux reports kilobytes */
 }

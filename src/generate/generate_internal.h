@@ -38,7 +38,8 @@ karst_error_t karst_i_generate_network(karst_ctx_t *ctx, const karst_geology_t *
 
 /* Seconds on a monotonic clock. */
 double karst_i_now(void);
-/* Peak resident memory of the process in bytes (getrusage). */
+/* Peak resident memory of the process in bytes (VmHWM of /proc/self/status; getrusage without
+ * /proc). */
 size_t karst_i_peak_bytes(void);
 
 #endif
