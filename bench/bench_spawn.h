@@ -50,7 +50,9 @@ static inline double bench_now_s(void) {
  * @p quiet: its wall time in seconds, its peak resident memory (KiB, *rss_kib) and its page
  * faults (*faults, minor and major; may be NULL), or -1 when it could not start or did not exit
  * with 0. The peak is the child's ru_maxrss, which Linux starts from this process's resident set
- * at the spawn (it carries over execve): the benchmarks that call this stay small. */
+ * at the spawn (it carries over execve): it is the child's own only when this process is small
+ * (bench_peers, bench_massif); bench_generate, large by then, ignores it and lets the child
+ * print its own (VmHWM). */
 static inline double bench_run_counted(char *const argv[], int quiet, long *rss_kib, long *faults) {
   posix_spawn_file_actions_t fa;
   if (posix_spawn_file_actions_init(&fa) != 0) return -1;

@@ -349,10 +349,6 @@ static void test_folded_horizon_followed(void **state) {
   karst_scenario_destroy(&sc);
 }
 
-/* The connectivity matrix: sinks s1, s2, s3 and springs A (270, 270, 40), B (270, 30, 40);
- * s1: [2, 0] (A required, B never), s2: [0, 1] (only B allowed), s3: [2, 2] (both required).
- * The plan lays no route from s1 to B nor from s2 to A, routes from s1 to A and from s3 to both;
- * in the network s3 is joined to both springs and the sinks' spring attribute is allowed. */
 /* The routing plan of @p sc on the graph of the pipeline's own sampling (stream (seed, 0, 0)):
  * its geology (returned), samples, graph and plan, all to be freed by the caller. */
 static karst_geology_t *plan_on_own_graph(karst_scenario_t *sc, uint64_t seed, karst_ctx_t *ctx,
@@ -371,6 +367,10 @@ static karst_geology_t *plan_on_own_graph(karst_scenario_t *sc, uint64_t seed, k
   return g;
 }
 
+/* The connectivity matrix: sinks s1, s2, s3 and springs A (270, 270, 40), B (270, 30, 40);
+ * s1: [2, 0] (A required, B never), s2: [0, 1] (only B allowed), s3: [2, 2] (both required).
+ * The plan lays no route from s1 to B nor from s2 to A, routes from s1 to A and from s3 to both;
+ * in the network s3 is joined to both springs and the sinks' spring attribute is allowed. */
 static void test_connectivity(void **state) {
   (void)state;
   karst_scenario_t sc;
