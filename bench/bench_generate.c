@@ -374,7 +374,7 @@ int main(int argc, char **argv) {
     karst_scenario_destroy(&sc);
   }
   if (!skip_large && !large_only) { /* the default run: the scaling of every stage */
-    scaling(2.6e4); /* the small end of the per-sample cost (issue 17, item 2) */
+    scaling(2.6e4);                 /* the small end of the per-sample cost (issue 17, item 2) */
     scaling(4e5);
     scaling(LARGE_SAMPLES);
     amplification_only(LARGE_SAMPLES, 3);

@@ -310,10 +310,8 @@ int main(int argc, char **argv) {
     return 0;
   }
   const struct CMUnitTest tests[] = {
-      cmocka_unit_test(test_peak_bytes_own_process),
-      cmocka_unit_test(test_pipeline_after_graph),
-      cmocka_unit_test(test_unreachable_key_point),
-      cmocka_unit_test(test_single_key_point),
+      cmocka_unit_test(test_peak_bytes_own_process), cmocka_unit_test(test_pipeline_after_graph),
+      cmocka_unit_test(test_unreachable_key_point),  cmocka_unit_test(test_single_key_point),
       cmocka_unit_test(test_generate_end_to_end),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
